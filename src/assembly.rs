@@ -1,0 +1,201 @@
+//! Global assembly of K and M on one sparsity pattern.
+//!
+//! The pattern is built once from the node graph (two nodes are adjacent when they share an
+//! element) and the DOF map. Element matrices are computed in parallel (rayon) in chunks,
+//! and scattered into the global values serially in element order, so the sums never
+//! depend on thread scheduling: results are bit-identical for any thread count.
+
+use crate::dof::DofMap;
+use crate::sparse::{Pattern, SymMatrix};
+use crate::Result;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// A set of elements that assembly can iterate over.
+///
+/// Each element has a node list and writes dense, row-major element matrices of size
+/// `(ndpn·n)²`, node-major: local DOF `a·ndpn + c` is component `c` of its `a`-th node.
+pub trait ElementSet: Sync {
+    /// Number of elements.
+    fn len(&self) -> usize;
+    /// True if there are no elements.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Dense node indices of element `e`.
+    fn nodes(&self, e: usize) -> &[u32];
+    /// Components per node this set's elements use (3: translations; 6: with rotations).
+    fn dofs_per_node(&self) -> usize;
+    /// Element stiffness `ke` and mass `me` (each `(ndpn·n)²`, row-major). `me` may be left
+    /// zero when `want_mass` is false.
+    fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()>;
+}
+
+/// Node adjacency graph in CSR form (each node is adjacent to itself).
+#[derive(Clone, Debug)]
+pub struct NodeGraph {
+    /// Offsets, length `n_nodes + 1`.
+    pub ptr: Vec<usize>,
+    /// Adjacent nodes, sorted per node.
+    pub adj: Vec<u32>,
+}
+
+impl NodeGraph {
+    /// Build the graph of nodes sharing an element, over all element sets.
+    pub fn build(n_nodes: usize, sets: &[&dyn ElementSet]) -> NodeGraph {
+        // One packed (a, b) key per ordered node pair of each element; sort and dedup.
+        let mut keys: Vec<u64> = sets
+            .iter()
+            .flat_map(|s| {
+                (0..s.len()).into_par_iter().flat_map_iter(move |e| {
+                    let nodes = s.nodes(e);
+                    nodes.iter().flat_map(move |&a| nodes.iter().map(move |&b| ((a as u64) << 32) | b as u64))
+                })
+                .collect::<Vec<u64>>()
+            })
+            .collect();
+        // Isolated nodes (in no element) still get their diagonal.
+        keys.extend((0..n_nodes as u64).map(|a| (a << 32) | a));
+        keys.par_sort_unstable();
+        keys.dedup();
+        let mut ptr = vec![0usize; n_nodes + 1];
+        for &k in &keys {
+            ptr[(k >> 32) as usize + 1] += 1;
+        }
+        for a in 0..n_nodes {
+            ptr[a + 1] += ptr[a];
+        }
+        let adj = keys.iter().map(|&k| (k & 0xffff_ffff) as u32).collect();
+        NodeGraph { ptr, adj }
+    }
+
+    /// Neighbours of node `a` (including `a`).
+    pub fn neighbours(&self, a: usize) -> &[u32] {
+        &self.adj[self.ptr[a]..self.ptr[a + 1]]
+    }
+}
+
+/// Build the full (both triangles) DOF pattern from the node graph and DOF map.
+pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Pattern {
+    let n_nodes = dofs.n_nodes();
+    // Column counts first, then fill: each column of node b lists the free DOFs of all
+    // neighbours a in node order, which is equation order.
+    let counts: Vec<usize> = (0..n_nodes)
+        .into_par_iter()
+        .map(|b| {
+            graph.neighbours(b).iter().map(|&a| dofs.first[a as usize + 1] - dofs.first[a as usize]).sum()
+        })
+        .collect();
+    let n = dofs.n_free;
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    col_ptr.push(0usize);
+    for b in 0..n_nodes {
+        for _ in dofs.first[b]..dofs.first[b + 1] {
+            let last = *col_ptr.last().unwrap_or(&0);
+            col_ptr.push(last + counts[b]);
+        }
+    }
+    let nnz = *col_ptr.last().unwrap_or(&0);
+    let mut row_idx = vec![0usize; nnz];
+    // Fill per node in parallel: the columns of node b are a contiguous slice of row_idx.
+    let mut slices: Vec<&mut [usize]> = Vec::with_capacity(n_nodes);
+    let mut rest = row_idx.as_mut_slice();
+    for b in 0..n_nodes {
+        let len = counts[b] * (dofs.first[b + 1] - dofs.first[b]);
+        let (head, tail) = rest.split_at_mut(len);
+        slices.push(head);
+        rest = tail;
+    }
+    slices.into_par_iter().enumerate().for_each(|(b, out)| {
+        let ncol = dofs.first[b + 1] - dofs.first[b];
+        if ncol == 0 {
+            return;
+        }
+        let len = counts[b];
+        for c in 0..ncol {
+            let mut k = c * len;
+            for &a in graph.neighbours(b) {
+                for e in dofs.first[a as usize]..dofs.first[a as usize + 1] {
+                    out[k] = e;
+                    k += 1;
+                }
+            }
+        }
+    });
+    Pattern { n, col_ptr, row_idx }
+}
+
+/// Assembled stiffness and mass on one shared pattern.
+pub struct Assembled {
+    /// Stiffness.
+    pub k: SymMatrix,
+    /// Mass (all zero if not requested).
+    pub m: SymMatrix,
+}
+
+/// Assemble K (and M) of all element sets on `pattern`.
+///
+/// Elements are processed in chunks: each chunk's element matrices are computed in
+/// parallel, then scattered in element order. Fixed DOFs are skipped (eliminated).
+pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], want_mass: bool) -> Result<Assembled> {
+    let mut k = SymMatrix::zeros(pattern.clone());
+    let mut m = SymMatrix::zeros(pattern.clone());
+    const CHUNK: usize = 2048;
+    for set in sets {
+        let ndpn = set.dofs_per_node();
+        for start in (0..set.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(set.len());
+            let mats: Vec<(Vec<f64>, Vec<f64>)> = (start..end)
+                .into_par_iter()
+                .map(|e| {
+                    let nd = ndpn * set.nodes(e).len();
+                    let mut ke = vec![0.0; nd * nd];
+                    let mut me = vec![0.0; if want_mass { nd * nd } else { 0 }];
+                    set.matrices(e, &mut ke, &mut me, want_mass)?;
+                    Ok((ke, me))
+                })
+                .collect::<Result<_>>()?;
+            for (off, (ke, me)) in mats.iter().enumerate() {
+                scatter(&pattern, dofs, set.nodes(start + off), ndpn, ke, &mut k.values);
+                if want_mass {
+                    scatter(&pattern, dofs, set.nodes(start + off), ndpn, me, &mut m.values);
+                }
+            }
+        }
+    }
+    Ok(Assembled { k, m })
+}
+
+/// Add one element matrix into global values.
+///
+/// For each node pair (a, b) and free component of b, the free DOFs of node a are
+/// consecutive in the column, so one binary search per (a, b, component) finds the run.
+fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f64], vals: &mut [f64]) {
+    let nd = ndpn * nodes.len();
+    for (lb, &b) in nodes.iter().enumerate() {
+        let b = b as usize;
+        for cb in 0..ndpn {
+            let Some(col) = dofs.eq_of(b, cb) else { continue };
+            let s = pattern.col_ptr[col];
+            let rows = &pattern.row_idx[s..pattern.col_ptr[col + 1]];
+            for (la, &a) in nodes.iter().enumerate() {
+                let a = a as usize;
+                let f0 = dofs.first[a];
+                if dofs.first[a + 1] == f0 {
+                    continue;
+                }
+                let Ok(k0) = rows.binary_search(&f0) else { continue };
+                let mut pos = s + k0;
+                for ca in 0..6 {
+                    if let Some(row) = dofs.eq_of(a, ca) {
+                        if ca < ndpn {
+                            debug_assert_eq!(pattern.row_idx[pos], row);
+                            vals[pos] += me[(la * ndpn + ca) * nd + lb * ndpn + cb];
+                        }
+                        pos += 1;
+                    }
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,120 @@
+//! Error type of the whole crate.
+//!
+//! Every variant carries the context a user needs to find the problem in their own input:
+//! the file, line and section of a mesh, the group or element id, the material key. The
+//! binary maps each variant to a documented exit code (see [`Error::exit_code`]).
+
+use std::path::PathBuf;
+
+/// Result alias used across the crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// All errors vibrofem reports.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be opened, read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+    /// A mesh file is malformed or truncated.
+    #[error("{path}: {section}{}: {msg}", line.map(|l| format!(", line {l}")).unwrap_or_default())]
+    MeshParse {
+        /// The mesh file.
+        path: PathBuf,
+        /// The section being read (`$Nodes`, `$Elements`, ...).
+        section: String,
+        /// 1-based line number where known (ASCII files).
+        line: Option<usize>,
+        /// What is wrong.
+        msg: String,
+    },
+    /// A gmsh element type that vibrofem does not support.
+    #[error("{path}: unsupported gmsh element type {gmsh_type} ({name}) in {group}")]
+    UnsupportedElement {
+        /// The mesh file.
+        path: PathBuf,
+        /// gmsh element type id.
+        gmsh_type: i32,
+        /// gmsh's name for it, when known.
+        name: String,
+        /// Physical group (or entity) the element belongs to.
+        group: String,
+    },
+    /// A group named on the command line or in a scene does not exist in the mesh.
+    #[error("unknown group '{name}' (the mesh has: {available})")]
+    UnknownGroup {
+        /// The requested name.
+        name: String,
+        /// Comma-separated list of the groups that exist.
+        available: String,
+    },
+    /// An element whose Jacobian determinant is zero or negative at an integration point.
+    #[error("element {element} ({kind}) has a non-positive Jacobian determinant {det:.3e}: inverted or degenerate")]
+    InvertedElement {
+        /// gmsh element tag.
+        element: u64,
+        /// Cell kind name.
+        kind: &'static str,
+        /// The offending determinant.
+        det: f64,
+    },
+    /// A material with invalid constants.
+    #[error("invalid material {name}: {msg}")]
+    InvalidMaterial {
+        /// Material name or the group it is assigned to.
+        name: String,
+        /// What is wrong.
+        msg: String,
+    },
+    /// The model has no element the analysis can use.
+    #[error("{what}")]
+    EmptyModel {
+        /// Description, naming the file.
+        what: String,
+    },
+    /// Any other invalid user input (option, value, combination).
+    #[error("{0}")]
+    InvalidInput(String),
+    /// The eigen solver did not converge.
+    #[error("eigen solve did not converge: {0}")]
+    EigenNotConverged(String),
+    /// The verification of an eigen solution failed (a mode missed, or accuracy lost).
+    #[error("eigen solution failed verification: {0}")]
+    Verification(String),
+    /// A sparse factorisation failed (singular or indefinite where it must not be).
+    #[error("factorization failed: {0}")]
+    Factorization(String),
+}
+
+impl Error {
+    /// Process exit code for this error: 1 for bad input, 2 for a numerical failure.
+    ///
+    /// | code | meaning |
+    /// |---|---|
+    /// | 0 | success |
+    /// | 1 | input error (file, mesh, option, material, group) |
+    /// | 2 | numerical failure (no convergence, failed verification, singular model) |
+    /// | 3 | batch run in which some cases failed |
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Io { .. }
+            | Error::MeshParse { .. }
+            | Error::UnsupportedElement { .. }
+            | Error::UnknownGroup { .. }
+            | Error::InvertedElement { .. }
+            | Error::InvalidMaterial { .. }
+            | Error::EmptyModel { .. }
+            | Error::InvalidInput(_) => 1,
+            Error::EigenNotConverged(_) | Error::Verification(_) | Error::Factorization(_) => 2,
+        }
+    }
+
+    /// Shorthand for an [`Error::Io`].
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+}

@@ -1,0 +1,23 @@
+//! vibrofem: finite-element modal and stiffness analysis for vibrating machines.
+//!
+//! Data flows one way: mesh file → [`mesh::Mesh`] → [`model::Model`] (materials, fixes) →
+//! [`dof::DofMap`] → [`assembly`] (K, M on one pattern) → [`solve::eigen`] (verified
+//! shift-invert block Lanczos) → [`post::modal`] → writers in [`io`].
+//!
+//! Units are SI throughout (m, kg, s, N, Pa); a mesh drawn in millimetres is scaled on reading.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod mesh;
+pub mod io;
+pub mod quadrature;
+pub mod shape;
+pub mod material;
+pub mod element;
+
+pub use error::{Error, Result};
+pub mod dof;
+pub mod sparse;
+pub mod assembly;
+pub mod ordering;
+pub mod solve;

@@ -1,0 +1,1 @@
+//! Structured mesh generators.

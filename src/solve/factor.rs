@@ -1,0 +1,163 @@
+//! Sparse LDLᵀ factorisation of symmetric matrices (faer supernodal), with inertia.
+//!
+//! One [`SymbolicFactor`] (ordering + elimination structure) serves every numeric
+//! factorisation on the same pattern: K − σM for the eigen shift and for the Sturm checks.
+//! LDLᵀ without pivoting is used for both SPD and indefinite matrices; its count of negative
+//! pivots is the inertia that the Sturm-sequence check needs (Sylvester's law of inertia).
+
+use crate::sparse::{Pattern, SymMatrix};
+use crate::{Error, Result};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
+};
+use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
+use faer::{Conj, MatMut, Par, Side};
+use std::sync::Arc;
+
+/// Ordering and elimination structure, computed once per pattern.
+pub struct SymbolicFactor {
+    sym: SymbolicCholesky<usize>,
+    /// Floating-point operations of one numeric factorisation (multiply and add counted
+    /// separately: Σ_j c_j² over the columns of L, c_j its entries including the diagonal).
+    pub flops: f64,
+    /// Entries of L.
+    pub nnz_l: usize,
+}
+
+impl SymbolicFactor {
+    /// Symbolic analysis of `pattern` with the permutation `fwd` (`fwd[new] = old`).
+    pub fn new(pattern: &Pattern, perm: Option<(&[usize], &[usize])>) -> Result<Self> {
+        let ord = match perm {
+            Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, pattern.n)),
+            None => SymmetricOrdering::Amd,
+        };
+        let sym = factorize_symbolic_cholesky(pattern.symbolic(), Side::Upper, ord, CholeskySymbolicParams::default())
+            .map_err(|e| Error::Factorization(format!("symbolic analysis: {e:?}")))?;
+        let (flops, nnz_l) = count_flops(&sym);
+        Ok(SymbolicFactor { sym, flops, nnz_l })
+    }
+
+    /// Bytes the numeric factor's values will take.
+    pub fn factor_bytes(&self) -> usize {
+        self.sym.len_val() * std::mem::size_of::<f64>()
+    }
+}
+
+/// Column counts of L from the symbolic structure, and the resulting flop count.
+fn count_flops(sym: &SymbolicCholesky<usize>) -> (f64, usize) {
+    let mut flops = 0.0f64;
+    let mut nnz = 0usize;
+    match sym.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let cp = s.col_ptr();
+            for j in 0..s.nrows() {
+                let c = (cp[j + 1] - cp[j]) as f64;
+                flops += c * c;
+                nnz += cp[j + 1] - cp[j];
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            for k in 0..s.n_supernodes() {
+                let w = s.supernode_end()[k] - s.supernode_begin()[k];
+                let p = s.supernode(k).pattern().len();
+                for i in 0..w {
+                    let c = (w - i + p) as f64;
+                    flops += c * c;
+                    nnz += w - i + p;
+                }
+            }
+        }
+    }
+    (flops, nnz)
+}
+
+/// A numeric LDLᵀ factorisation.
+pub struct Factor {
+    sym: Arc<SymbolicFactor>,
+    values: Vec<f64>,
+    /// Number of negative pivots (eigenvalues of the factored matrix below zero).
+    pub negative_pivots: usize,
+    /// Smallest and largest pivot magnitude (a ratio near machine precision means the
+    /// matrix is numerically singular).
+    pub pivot_range: (f64, f64),
+}
+
+impl Factor {
+    /// Factor `a` (stored symmetric, upper triangle read).
+    pub fn new(sym: Arc<SymbolicFactor>, a: &SymMatrix) -> Result<Self> {
+        let mut values = Vec::new();
+        values.try_reserve_exact(sym.sym.len_val()).map_err(|_| {
+            Error::Factorization(format!(
+                "cannot allocate the factor ({:.1} GiB)",
+                sym.factor_bytes() as f64 / (1u64 << 30) as f64
+            ))
+        })?;
+        values.resize(sym.sym.len_val(), 0.0);
+        let par = Par::rayon(0);
+        let req = sym.sym.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
+        let mut mem = MemBuffer::try_new(req).map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
+        let stack = MemStack::new(&mut mem);
+        sym.sym
+            .factorize_numeric_ldlt(
+                &mut values,
+                a.as_faer(),
+                Side::Upper,
+                LdltRegularization::default(),
+                par,
+                stack,
+                Default::default(),
+            )
+            .map_err(|e| Error::Factorization(format!("LDLᵀ: {e:?}")))?;
+        let d = diagonal(&sym.sym, &values);
+        let negative_pivots = d.iter().filter(|&&x| x < 0.0).count();
+        let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+        for &x in &d {
+            lo = lo.min(x.abs());
+            hi = hi.max(x.abs());
+        }
+        if d.iter().any(|x| !x.is_finite()) {
+            return Err(Error::Factorization("non-finite pivot (singular matrix at this shift)".into()));
+        }
+        Ok(Factor { sym, values, negative_pivots, pivot_range: (lo, hi) })
+    }
+
+    /// Solve `A X = B` in place for a block of right-hand sides.
+    pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let par = Par::Seq;
+        let req = self.sym.sym.solve_in_place_scratch::<f64>(rhs.ncols(), par);
+        let mut mem = MemBuffer::new(req);
+        let stack = MemStack::new(&mut mem);
+        LdltRef::new(&self.sym.sym, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
+    }
+
+    /// The symbolic part.
+    pub fn symbolic(&self) -> &Arc<SymbolicFactor> {
+        &self.sym
+    }
+}
+
+/// The pivots D of an LDLᵀ factor (in elimination order).
+fn diagonal(sym: &SymbolicCholesky<usize>, values: &[f64]) -> Vec<f64> {
+    match sym.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            // Each column of L stores its diagonal (the pivot) first.
+            let cp = s.col_ptr();
+            (0..s.nrows()).map(|j| values[cp[j]]).collect()
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let l = SupernodalLdltRef::new(s, values);
+            let mut d = Vec::with_capacity(s.nrows());
+            for k in 0..s.n_supernodes() {
+                let m = l.supernode(k).val();
+                for i in 0..m.ncols() {
+                    d.push(m[(i, i)]);
+                }
+            }
+            d
+        }
+    }
+}

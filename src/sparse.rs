@@ -1,0 +1,159 @@
+//! Symmetric sparse matrices stored in full (both triangles) compressed sparse columns.
+//!
+//! K, M and K − σM share one [`Pattern`]. Storing both triangles doubles the memory of the
+//! values but makes the matrix–vector product a parallel, deterministic gather (each output
+//! row is a dot product of one column), and faer's factorisation reads just the upper triangle.
+
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{MatMut, MatRef};
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// A square sparsity pattern in CSC form, rows sorted within each column.
+#[derive(Debug)]
+pub struct Pattern {
+    /// Dimension.
+    pub n: usize,
+    /// Column pointers, length `n + 1`.
+    pub col_ptr: Vec<usize>,
+    /// Row indices.
+    pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+    /// faer view of the structure.
+    pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
+    }
+    /// Position of entry `(row, col)` in the value array, if stored.
+    pub fn position(&self, row: usize, col: usize) -> Option<usize> {
+        let s = self.col_ptr[col];
+        let rows = &self.row_idx[s..self.col_ptr[col + 1]];
+        rows.binary_search(&row).ok().map(|k| s + k)
+    }
+}
+
+/// A symmetric matrix on a shared pattern (both triangles stored).
+#[derive(Clone, Debug)]
+pub struct SymMatrix {
+    /// The structure.
+    pub pattern: Arc<Pattern>,
+    /// Values, one per pattern entry.
+    pub values: Vec<f64>,
+}
+
+impl SymMatrix {
+    /// Zero matrix on `pattern`.
+    pub fn zeros(pattern: Arc<Pattern>) -> Self {
+        let nnz = pattern.nnz();
+        SymMatrix { pattern, values: vec![0.0; nnz] }
+    }
+    /// Dimension.
+    pub fn n(&self) -> usize {
+        self.pattern.n
+    }
+    /// faer view.
+    pub fn as_faer(&self) -> SparseColMatRef<'_, usize, f64> {
+        SparseColMatRef::new(self.pattern.symbolic(), &self.values)
+    }
+    /// `self − s·other` (same pattern).
+    pub fn sub_scaled(&self, s: f64, other: &SymMatrix) -> SymMatrix {
+        debug_assert!(Arc::ptr_eq(&self.pattern, &other.pattern));
+        let values = self.values.par_iter().zip(&other.values).map(|(a, b)| a - s * b).collect();
+        SymMatrix { pattern: self.pattern.clone(), values }
+    }
+    /// Diagonal entries.
+    pub fn diagonal(&self) -> Vec<f64> {
+        (0..self.n()).map(|j| self.pattern.position(j, j).map_or(0.0, |p| self.values[p])).collect()
+    }
+    /// `y = A x` for a block of vectors (columns of `x`). Parallel over rows, deterministic.
+    pub fn mul_block(&self, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {
+        let n = self.n();
+        let b = x.ncols();
+        assert!(x.nrows() == n && y.nrows() == n && y.ncols() == b);
+        // Row-major scratch so each parallel task writes one contiguous chunk.
+        let mut tmp = vec![0.0f64; n * b];
+        let p = &*self.pattern;
+        let vals = &self.values;
+        tmp.par_chunks_mut(b).enumerate().with_min_len(256).for_each(|(j, out)| {
+            // Symmetric: row j of A equals column j.
+            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                let i = p.row_idx[k];
+                let a = vals[k];
+                for c in 0..b {
+                    out[c] += a * x[(i, c)];
+                }
+            }
+        });
+        for c in 0..b {
+            for j in 0..n {
+                y[(j, c)] = tmp[j * b + c];
+            }
+        }
+    }
+    /// `y = A x` for one vector.
+    pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
+        let p = &*self.pattern;
+        (0..self.n())
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|j| {
+                let mut s = 0.0;
+                for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                    s += self.values[k] * x[p.row_idx[k]];
+                }
+                s
+            })
+            .collect()
+    }
+}
+
+impl SymMatrix {
+    /// Build from triplets `(i, j, v)` of the upper or lower triangle (each off-diagonal pair
+    /// given once; it is mirrored). Duplicates are summed. For tests and small models.
+    pub fn from_triplets(n: usize, t: &[(usize, usize, f64)]) -> SymMatrix {
+        let mut cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+        for &(i, j, v) in t {
+            cols[j].push((i, v));
+            if i != j {
+                cols[i].push((j, v));
+            }
+        }
+        let mut col_ptr = vec![0usize];
+        let mut row_idx = Vec::new();
+        let mut values = Vec::new();
+        for c in cols.iter_mut() {
+            c.sort_by_key(|e| e.0);
+            let mut last: Option<usize> = None;
+            for &(i, v) in c.iter() {
+                if last == Some(i) {
+                    *values.last_mut().unwrap() += v;
+                } else {
+                    row_idx.push(i);
+                    values.push(v);
+                    last = Some(i);
+                }
+            }
+            col_ptr.push(row_idx.len());
+        }
+        SymMatrix { pattern: Arc::new(Pattern { n, col_ptr, row_idx }), values }
+    }
+
+    /// Same values on another pattern that contains this one's (entries not stored here are 0).
+    pub fn on_pattern(&self, pattern: Arc<Pattern>) -> SymMatrix {
+        let mut out = SymMatrix::zeros(pattern.clone());
+        let p = &*self.pattern;
+        for j in 0..p.n {
+            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                if let Some(pos) = pattern.position(p.row_idx[k], j) {
+                    out.values[pos] = self.values[k];
+                }
+            }
+        }
+        out
+    }
+}
