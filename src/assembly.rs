@@ -5,9 +5,9 @@
 //! and scattered into the global values serially in element order, so the sums never
 //! depend on thread scheduling: results are bit-identical for any thread count.
 
+use crate::Result;
 use crate::dof::DofMap;
 use crate::sparse::{Pattern, SymMatrix};
-use crate::Result;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -47,11 +47,15 @@ impl NodeGraph {
         let mut keys: Vec<u64> = sets
             .iter()
             .flat_map(|s| {
-                (0..s.len()).into_par_iter().flat_map_iter(move |e| {
-                    let nodes = s.nodes(e);
-                    nodes.iter().flat_map(move |&a| nodes.iter().map(move |&b| ((a as u64) << 32) | b as u64))
-                })
-                .collect::<Vec<u64>>()
+                (0..s.len())
+                    .into_par_iter()
+                    .flat_map_iter(move |e| {
+                        let nodes = s.nodes(e);
+                        nodes
+                            .iter()
+                            .flat_map(move |&a| nodes.iter().map(move |&b| ((a as u64) << 32) | b as u64))
+                    })
+                    .collect::<Vec<u64>>()
             })
             .collect();
         // Isolated nodes (in no element) still get their diagonal.
@@ -83,7 +87,11 @@ pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Pattern {
     let counts: Vec<usize> = (0..n_nodes)
         .into_par_iter()
         .map(|b| {
-            graph.neighbours(b).iter().map(|&a| dofs.first[a as usize + 1] - dofs.first[a as usize]).sum()
+            graph
+                .neighbours(b)
+                .iter()
+                .map(|&a| dofs.first[a as usize + 1] - dofs.first[a as usize])
+                .sum()
         })
         .collect();
     let n = dofs.n_free;
@@ -175,7 +183,9 @@ fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f
     for (lb, &b) in nodes.iter().enumerate() {
         let b = b as usize;
         for cb in 0..ndpn {
-            let Some(col) = dofs.eq_of(b, cb) else { continue };
+            let Some(col) = dofs.eq_of(b, cb) else {
+                continue;
+            };
             let s = pattern.col_ptr[col];
             let rows = &pattern.row_idx[s..pattern.col_ptr[col + 1]];
             for (la, &a) in nodes.iter().enumerate() {
@@ -184,7 +194,9 @@ fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f
                 if dofs.first[a + 1] == f0 {
                     continue;
                 }
-                let Ok(k0) = rows.binary_search(&f0) else { continue };
+                let Ok(k0) = rows.binary_search(&f0) else {
+                    continue;
+                };
                 let mut pos = s + k0;
                 for ca in 0..6 {
                     if let Some(row) = dofs.eq_of(a, ca) {

@@ -68,7 +68,13 @@ impl DofMap {
             }
         }
         first.push(next);
-        DofMap { active, fixed, eq, first, n_free: next }
+        DofMap {
+            active,
+            fixed,
+            eq,
+            first,
+            n_free: next,
+        }
     }
 
     /// Number of nodes.

@@ -7,17 +7,21 @@
 //! Units are SI throughout (m, kg, s, N, Pa); a mesh drawn in millimetres is scaled on reading.
 #![warn(missing_docs)]
 
+pub mod element;
 pub mod error;
-pub mod mesh;
 pub mod io;
+pub mod material;
+pub mod mesh;
 pub mod quadrature;
 pub mod shape;
-pub mod material;
-pub mod element;
 
 pub use error::{Error, Result};
-pub mod dof;
-pub mod sparse;
+pub mod analysis;
 pub mod assembly;
+pub mod dof;
+pub mod model;
 pub mod ordering;
+pub mod post;
+pub mod report;
 pub mod solve;
+pub mod sparse;

@@ -50,7 +50,10 @@ impl SymMatrix {
     /// Zero matrix on `pattern`.
     pub fn zeros(pattern: Arc<Pattern>) -> Self {
         let nnz = pattern.nnz();
-        SymMatrix { pattern, values: vec![0.0; nnz] }
+        SymMatrix {
+            pattern,
+            values: vec![0.0; nnz],
+        }
     }
     /// Dimension.
     pub fn n(&self) -> usize {
@@ -63,35 +66,55 @@ impl SymMatrix {
     /// `self − s·other` (same pattern).
     pub fn sub_scaled(&self, s: f64, other: &SymMatrix) -> SymMatrix {
         debug_assert!(Arc::ptr_eq(&self.pattern, &other.pattern));
-        let values = self.values.par_iter().zip(&other.values).map(|(a, b)| a - s * b).collect();
-        SymMatrix { pattern: self.pattern.clone(), values }
+        let values = self
+            .values
+            .par_iter()
+            .zip(&other.values)
+            .map(|(a, b)| a - s * b)
+            .collect();
+        SymMatrix {
+            pattern: self.pattern.clone(),
+            values,
+        }
     }
     /// Diagonal entries.
     pub fn diagonal(&self) -> Vec<f64> {
-        (0..self.n()).map(|j| self.pattern.position(j, j).map_or(0.0, |p| self.values[p])).collect()
+        (0..self.n())
+            .map(|j| self.pattern.position(j, j).map_or(0.0, |p| self.values[p]))
+            .collect()
     }
     /// `y = A x` for a block of vectors (columns of `x`). Parallel over rows, deterministic.
     pub fn mul_block(&self, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {
         let n = self.n();
         let b = x.ncols();
         assert!(x.nrows() == n && y.nrows() == n && y.ncols() == b);
-        // Row-major scratch so each parallel task writes one contiguous chunk.
+        // Row-major copies: each row of x is then contiguous, and each parallel task writes
+        // one contiguous chunk of the output.
+        let mut xr = vec![0.0f64; n * b];
+        for c in 0..b {
+            for (i, v) in x.col(c).iter().enumerate() {
+                xr[i * b + c] = *v;
+            }
+        }
         let mut tmp = vec![0.0f64; n * b];
         let p = &*self.pattern;
         let vals = &self.values;
-        tmp.par_chunks_mut(b).enumerate().with_min_len(256).for_each(|(j, out)| {
-            // Symmetric: row j of A equals column j.
-            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-                let i = p.row_idx[k];
-                let a = vals[k];
-                for c in 0..b {
-                    out[c] += a * x[(i, c)];
+        tmp.par_chunks_mut(b)
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(j, out)| {
+                // Symmetric: row j of A equals column j.
+                let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+                for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+                    let xi = &xr[i * b..i * b + b];
+                    for (o, &xv) in out.iter_mut().zip(xi) {
+                        *o += a * xv;
+                    }
                 }
-            }
-        });
+            });
         for c in 0..b {
-            for j in 0..n {
-                y[(j, c)] = tmp[j * b + c];
+            for (j, v) in y.as_mut().col_mut(c).iter_mut().enumerate() {
+                *v = tmp[j * b + c];
             }
         }
     }
@@ -140,7 +163,10 @@ impl SymMatrix {
             }
             col_ptr.push(row_idx.len());
         }
-        SymMatrix { pattern: Arc::new(Pattern { n, col_ptr, row_idx }), values }
+        SymMatrix {
+            pattern: Arc::new(Pattern { n, col_ptr, row_idx }),
+            values,
+        }
     }
 
     /// Same values on another pattern that contains this one's (entries not stored here are 0).

@@ -5,7 +5,7 @@
 //! exact to rounding; copies of the chain give eigenvalues of exact multiplicity.
 
 use std::sync::Arc;
-use vibrofem::solve::eigen::{solve, EigenParams, Target};
+use vibrofem::solve::eigen::{EigenParams, Target, solve};
 use vibrofem::solve::factor::{Factor, SymbolicFactor};
 use vibrofem::sparse::SymMatrix;
 
@@ -60,7 +60,11 @@ fn lanczos_finds_triple_roots_of_three_identical_chains() {
     // Free–free: 3 zero eigenvalues (one per chain), then triples.
     let (k, m) = chains(400, 3, 1.0e6, 2.0);
     let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
-    let p = EigenParams { target: Target::Nearest(30), dense_below: 0, ..Default::default() };
+    let p = EigenParams {
+        target: Target::Nearest(30),
+        dense_below: 0,
+        ..Default::default()
+    };
     let sol = solve(&k, &m, &sym, &p).unwrap();
     let ex = exact(400, 3, 1.0e6, 2.0);
     assert_eq!(sol.lambda.len(), 30);
@@ -81,7 +85,11 @@ fn band_search_returns_every_mode_in_the_band() {
     let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
     let ex = exact(300, 2, 1.0, 1.0);
     let (lo, hi) = (0.05, 0.09);
-    let p = EigenParams { target: Target::Band(lo, hi), dense_below: 0, ..Default::default() };
+    let p = EigenParams {
+        target: Target::Band(lo, hi),
+        dense_below: 0,
+        ..Default::default()
+    };
     let sol = solve(&k, &m, &sym, &p).unwrap();
     let want: Vec<f64> = ex.iter().copied().filter(|&l| l >= lo && l <= hi).collect();
     assert_eq!(sol.lambda.len(), want.len());
@@ -95,8 +103,28 @@ fn band_search_returns_every_mode_in_the_band() {
 fn dense_path_agrees_with_lanczos() {
     let (k, m) = chains(200, 2, 3.0, 0.5);
     let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
-    let a = solve(&k, &m, &sym, &EigenParams { target: Target::Nearest(10), dense_below: 0, ..Default::default() }).unwrap();
-    let b = solve(&k, &m, &sym, &EigenParams { target: Target::Nearest(10), dense_below: 1000, ..Default::default() }).unwrap();
+    let a = solve(
+        &k,
+        &m,
+        &sym,
+        &EigenParams {
+            target: Target::Nearest(10),
+            dense_below: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let b = solve(
+        &k,
+        &m,
+        &sym,
+        &EigenParams {
+            target: Target::Nearest(10),
+            dense_below: 1000,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     for (x, y) in a.lambda.iter().zip(&b.lambda) {
         assert!((x - y).abs() <= 1e-9 * y.abs().max(a.lambda[2]));
     }

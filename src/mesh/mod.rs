@@ -23,7 +23,11 @@ pub struct CellBlock {
 impl CellBlock {
     /// A new empty block.
     pub fn new(kind: CellKind) -> Self {
-        CellBlock { kind, conn: Vec::new(), tags: Vec::new() }
+        CellBlock {
+            kind,
+            conn: Vec::new(),
+            tags: Vec::new(),
+        }
     }
     /// Number of cells.
     pub fn len(&self) -> usize {
@@ -89,7 +93,11 @@ impl Mesh {
 
     /// Number of cells of dimension `dim`.
     pub fn n_cells_of_dim(&self, dim: usize) -> usize {
-        self.blocks.iter().filter(|b| b.kind.dim() == dim).map(|b| b.len()).sum()
+        self.blocks
+            .iter()
+            .filter(|b| b.kind.dim() == dim)
+            .map(|b| b.len())
+            .sum()
     }
 
     /// The block of `kind`, creating it if needed; returns its index.
@@ -103,10 +111,13 @@ impl Mesh {
 
     /// The group named `name`.
     pub fn group(&self, name: &str) -> crate::Result<&Group> {
-        self.groups.iter().find(|g| g.name == name).ok_or_else(|| crate::Error::UnknownGroup {
-            name: name.to_string(),
-            available: self.group_names(),
-        })
+        self.groups
+            .iter()
+            .find(|g| g.name == name)
+            .ok_or_else(|| crate::Error::UnknownGroup {
+                name: name.to_string(),
+                available: self.group_names(),
+            })
     }
 
     /// Comma-separated group names, for messages.
@@ -114,7 +125,11 @@ impl Mesh {
         if self.groups.is_empty() {
             return "no physical groups".into();
         }
-        self.groups.iter().map(|g| g.name.as_str()).collect::<Vec<_>>().join(", ")
+        self.groups
+            .iter()
+            .map(|g| g.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// Sorted, deduplicated dense node indices of the cells of a group.

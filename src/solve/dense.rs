@@ -30,7 +30,10 @@ pub fn eigen_all(k: &SymMatrix, m: &SymMatrix, sigma: f64) -> Result<(Vec<f64>, 
     let a = &kd - &md * sigma;
     let (mut pairs, l) = if let Some(ch) = a.clone().cholesky() {
         let l = ch.l();
-        let linv = l.clone().try_inverse().ok_or_else(|| Error::Factorization("dense L not invertible".into()))?;
+        let linv = l
+            .clone()
+            .try_inverse()
+            .ok_or_else(|| Error::Factorization("dense L not invertible".into()))?;
         let c = &linv * &md * linv.transpose();
         let c = (&c + c.transpose()) * 0.5;
         let eig = c.symmetric_eigen();
@@ -42,10 +45,14 @@ pub fn eigen_all(k: &SymMatrix, m: &SymMatrix, sigma: f64) -> Result<(Vec<f64>, 
         // x = L⁻ᵀ y
         (pairs, (linv.transpose() * eig.eigenvectors))
     } else {
-        let ch = md.clone().cholesky().ok_or_else(|| {
-            Error::Factorization("dense oracle: neither K − σM nor M is positive definite".into())
-        })?;
-        let linv = ch.l().try_inverse().ok_or_else(|| Error::Factorization("dense L_M not invertible".into()))?;
+        let ch = md
+            .clone()
+            .cholesky()
+            .ok_or_else(|| Error::Factorization("dense oracle: neither K − σM nor M is positive definite".into()))?;
+        let linv = ch
+            .l()
+            .try_inverse()
+            .ok_or_else(|| Error::Factorization("dense L_M not invertible".into()))?;
         let c = &linv * &kd * linv.transpose();
         let c = (&c + c.transpose()) * 0.5;
         let eig = c.symmetric_eigen();

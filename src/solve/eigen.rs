@@ -124,8 +124,12 @@ pub struct EigenSolution {
 pub fn default_shift(k: &SymMatrix, m: &SymMatrix) -> f64 {
     let dk = k.diagonal();
     let dm = m.diagonal();
-    let mut r: Vec<f64> =
-        dk.iter().zip(&dm).filter(|(a, b)| **b > 0.0 && **a > 0.0).map(|(a, b)| a / b).collect();
+    let mut r: Vec<f64> = dk
+        .iter()
+        .zip(&dm)
+        .filter(|(a, b)| **b > 0.0 && **a > 0.0)
+        .map(|(a, b)| a / b)
+        .collect();
     if r.is_empty() {
         return -1.0;
     }
@@ -160,7 +164,11 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
                 return Err(Error::InvalidInput(format!("empty band [{lo}, {hi}]")));
             }
             // Factor just below the band's lower end; its inertia is the lower Sturm count.
-            let s = p.shift.unwrap_or(if lo <= 0.0 { default_shift(k, m).min(lo - lo.abs() * 1e-9 - 1e-9) } else { lo * (1.0 - 1e-9) });
+            let s = p.shift.unwrap_or(if lo <= 0.0 {
+                default_shift(k, m).min(lo - lo.abs() * 1e-9 - 1e-9)
+            } else {
+                lo * (1.0 - 1e-9)
+            });
             (s, Some((lo, hi)))
         }
         Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
@@ -186,7 +194,13 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             vectors: Mat::zeros(n, 0),
             rel_residual: vec![],
             m_orthonormality: 0.0,
-            sturm: SturmCheck { lower: (sigma, fa.negative_pivots), upper: (sigma, fa.negative_pivots), expected: 0, found: 0, complete: true },
+            sturm: SturmCheck {
+                lower: (sigma, fa.negative_pivots),
+                upper: (sigma, fa.negative_pivots),
+                expected: 0,
+                found: 0,
+                complete: true,
+            },
             shift: sigma,
             applications: 0,
             factorizations,
@@ -199,9 +213,10 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     let ti = Instant::now();
     let mut applications = 0usize;
     let mut attempt = 0;
+    let mut lz = Lanczos::new(n, want, p, &fa, m, band.is_some());
     loop {
         attempt += 1;
-        let mut lz = Lanczos::new(n, want, p, &fa, m, band.is_some());
+        lz.set_want(want);
         let (lambda, x) = if n <= p.dense_below {
             let (l, x) = super::dense::eigen_all(k, m, sigma)?;
             lz.last_theta = l.iter().map(|l| 1.0 / (l - sigma)).collect();
@@ -223,16 +238,23 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let upper_pt = match band {
             Some((_, hi)) => hi,
             None => {
-                let next = lz.next_estimate_above(lam_max, sigma);
-                let gap_pt = next.map(|nx| lam_max + 0.5 * (nx - lam_max));
-                let tiny = lam_max.abs().max(sigma.abs()) * 1e-6;
-                match gap_pt {
-                    Some(pt) if pt > lam_max + tiny * 1e-3 => pt,
-                    _ => lam_max + tiny,
+                // Just above the highest mode found: a small relative step, or half the way to
+                // the next Ritz estimate if that is closer. (Ritz estimates of unconverged
+                // values lie above the true ones, so a far point could pass an eigenvalue that
+                // is simply the next one, costing an extra round of iteration.)
+                let scale = lam_max.abs().max(sigma.abs());
+                let mut step = 1e-4 * scale;
+                if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
+                    step = step.min(0.5 * (nx - lam_max));
                 }
+                lam_max + step.max(1e-9 * scale)
             }
         };
-        let lower_pt = if lam_min >= sigma { sigma } else { lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6) };
+        let lower_pt = if lam_min >= sigma {
+            sigma
+        } else {
+            lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6)
+        };
         let lower_count = if lower_pt == sigma {
             fa.negative_pivots
         } else {
@@ -245,8 +267,9 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let expected = upper_count.saturating_sub(lower_count);
         time_verify += tv.elapsed().as_secs_f64();
         if expected > n_between && attempt < 4 && band.is_none() {
-            // A mode was missed (or sits just above the last one found): iterate for more.
-            want = want + (expected - n_between) + p.block.min(4);
+            // A mode was missed (or sits just above the last one found): continue the same
+            // iteration for more modes.
+            want = (want + (expected - n_between) + p.block.min(4)).min(n);
             continue;
         }
         let sturm = SturmCheck {
@@ -294,7 +317,13 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
 }
 
 /// Factor K − σM; if σ sits exactly on an eigenvalue (zero pivot), nudge it.
-fn factor_at(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, sigma: f64, count: &mut usize) -> Result<(Factor, f64)> {
+fn factor_at(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    sigma: f64,
+    count: &mut usize,
+) -> Result<(Factor, f64)> {
     let mut s = sigma;
     let mut last_err = None;
     for i in 0..4 {
@@ -302,7 +331,11 @@ fn factor_at(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, sigma: f64
         let a = k.sub_scaled(s, m);
         match Factor::new(sym.clone(), &a) {
             Ok(f) if f.pivot_range.0 > f.pivot_range.1 * 1e-14 => return Ok((f, s)),
-            Ok(_) => last_err = Some(Error::Factorization(format!("K − σM numerically singular at σ = {s:.6e}"))),
+            Ok(_) => {
+                last_err = Some(Error::Factorization(format!(
+                    "K − σM numerically singular at σ = {s:.6e}"
+                )))
+            }
             Err(e) => last_err = Some(e),
         }
         // Move off the eigenvalue by a relative amount that grows each try.
@@ -332,7 +365,11 @@ pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, 
         }
         // Rigid-body modes (λ ≈ 0) have Kx ≈ 0: normalise by a representative stiffness
         // scale instead, so the number still measures accuracy.
-        let denom = if lambda[c].abs() < 1e-6 * lam_ref { sigma.abs().max(1e-6 * lam_ref) * m2.sqrt() } else { k2.sqrt() };
+        let denom = if lambda[c].abs() < 1e-6 * lam_ref {
+            sigma.abs().max(1e-6 * lam_ref) * m2.sqrt()
+        } else {
+            k2.sqrt()
+        };
         res.push(if denom > 0.0 { r2.sqrt() / denom } else { r2.sqrt() });
     }
     let mut g = Mat::zeros(nc, nc);
@@ -367,6 +404,8 @@ struct Lanczos {
     positive_only: bool,
     /// Last Ritz values θ, for estimates of the next eigenvalue.
     last_theta: Vec<f64>,
+    /// The start block has been built.
+    started: bool,
 }
 
 impl Lanczos {
@@ -386,6 +425,7 @@ impl Lanczos {
             rng: Rng(p.seed | 1),
             positive_only,
             last_theta: Vec::new(),
+            started: false,
         }
     }
 
@@ -398,8 +438,9 @@ impl Lanczos {
         w
     }
 
-    /// Orthogonalise `w` against basis columns `0..upto` (twice) and return the coefficients.
-    fn orthogonalise(&self, w: &mut Mat<f64>, upto: usize) -> Mat<f64> {
+    /// Orthogonalise `w` (and its M-image `mw`) against basis columns `0..upto`, twice;
+    /// returns the summed coefficients.
+    fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, upto: usize) -> Mat<f64> {
         let bw = w.ncols();
         let mut coef = Mat::zeros(upto, bw);
         if upto == 0 {
@@ -407,30 +448,54 @@ impl Lanczos {
         }
         for _ in 0..2 {
             let mut c = Mat::zeros(upto, bw);
-            matmul(c.as_mut(), Accum::Replace, self.mv.get(.., 0..upto).transpose(), w.as_ref(), 1.0, Par::Seq);
-            matmul(w.as_mut(), Accum::Add, self.v.get(.., 0..upto), c.as_ref(), -1.0, Par::Seq);
+            matmul(
+                c.as_mut(),
+                Accum::Replace,
+                self.mv.get(.., 0..upto).transpose(),
+                w.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            matmul(
+                w.as_mut(),
+                Accum::Add,
+                self.v.get(.., 0..upto),
+                c.as_ref(),
+                -1.0,
+                Par::Seq,
+            );
+            matmul(
+                mw.as_mut(),
+                Accum::Add,
+                self.mv.get(.., 0..upto),
+                c.as_ref(),
+                -1.0,
+                Par::Seq,
+            );
             coef += &c;
         }
         coef
     }
 
-    /// M-orthonormalise `w` (already orthogonal to the basis columns `0..upto`) in place.
-    /// Returns R with W_old = W_new·R, and the M-image of the new block. Directions whose
-    /// M-norm² fell below 1e-20 of `scale2` (the largest M-norm² before orthogonalisation)
-    /// carry no new information: they are replaced by random vectors orthogonal to
-    /// everything, and their rows of R are zero.
-    fn normalise(&mut self, w: &mut Mat<f64>, m: &SymMatrix, upto: usize, scale2: f64) -> (Mat<f64>, Mat<f64>) {
+    /// M-orthonormalise `w` (already orthogonal to the basis columns `0..upto`; `mw` is its
+    /// M-image) in place. Returns R with W_old = W_new·R; `mw` is recomputed fresh at the end.
+    /// Directions whose M-norm² fell below 1e-20 of `scale2` (the largest M-norm² before
+    /// orthogonalisation) carry no new information: they are replaced by random vectors
+    /// orthogonal to everything, and their rows of R are zero.
+    fn normalise(&mut self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize, scale2: f64) -> Mat<f64> {
         let bw = w.ncols();
         let mut r_total = Mat::<f64>::identity(bw, bw);
-        let mut mw = Mat::zeros(self.n, bw);
         for pass in 0..3 {
-            m.mul_block(w.as_ref(), mw.as_mut());
             let mut g = Mat::zeros(bw, bw);
             matmul(g.as_mut(), Accum::Replace, w.transpose(), mw.as_ref(), 1.0, Par::Seq);
             let gs = nalgebra::DMatrix::from_fn(bw, bw, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
             let eig = nalgebra::SymmetricEigen::new(gs);
             let smax = eig.eigenvalues.iter().fold(0.0f64, |a, &s| a.max(s));
-            let floor = if pass == 0 && scale2 > 0.0 { scale2 * 1e-20 } else { smax * 1e-20 };
+            let floor = if pass == 0 && scale2 > 0.0 {
+                scale2 * 1e-20
+            } else {
+                smax * 1e-20
+            };
             let mut deficient = Vec::new();
             let mut u = Mat::zeros(bw, bw);
             let mut r = Mat::zeros(bw, bw);
@@ -448,21 +513,28 @@ impl Lanczos {
             }
             let mut wn = Mat::zeros(self.n, bw);
             matmul(wn.as_mut(), Accum::Replace, w.as_ref(), u.as_ref(), 1.0, Par::Seq);
-            for &k in &deficient {
-                for i in 0..self.n {
-                    wn[(i, k)] = self.rng.next();
-                }
-            }
+            let mut mwn = Mat::zeros(self.n, bw);
+            matmul(mwn.as_mut(), Accum::Replace, mw.as_ref(), u.as_ref(), 1.0, Par::Seq);
             *w = wn;
+            *mw = mwn;
             r_total = &r * &r_total;
-            if deficient.is_empty() && pass >= 1 {
+            if !deficient.is_empty() {
+                for &k in &deficient {
+                    for i in 0..self.n {
+                        w[(i, k)] = self.rng.next();
+                    }
+                }
+                m.mul_block(w.as_ref(), mw.as_mut());
+            } else if pass >= 1 {
                 break;
             }
             // Second pass: clean rounding (and orthogonalise random replacements).
-            let _ = self.orthogonalise(w, upto);
+            let _ = self.orthogonalise(w, mw, upto);
         }
+        // A fresh M-image: the algebraic updates above lose accuracy when a block is nearly
+        // in the span of the basis (its scaling amplifies their rounding).
         m.mul_block(w.as_ref(), mw.as_mut());
-        (r_total, mw)
+        r_total
     }
 
     /// Ritz values θ and vectors Y of the current projected matrix (size `cur`), sorted by
@@ -480,9 +552,20 @@ impl Lanczos {
     }
 
     /// Run until the wanted Ritz pairs converge. Returns (λ, X) of the converged pairs.
-    fn run(&mut self, p: &EigenParams, fa: &Factor, m: &SymMatrix, sigma: f64, apps: &mut usize) -> Result<(Vec<f64>, Mat<f64>)> {
+    fn run(
+        &mut self,
+        p: &EigenParams,
+        fa: &Factor,
+        m: &SymMatrix,
+        sigma: f64,
+        apps: &mut usize,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
         let n = self.n;
         let b = self.b;
+        if self.started {
+            return self.iterate(p, fa, m, sigma, apps);
+        }
+        self.started = true;
         // Start block: Op applied to random vectors (removes components in the null space
         // of M, which matters for massless DOFs), then M-orthonormalised.
         let mut x0 = Mat::zeros(n, b);
@@ -492,20 +575,69 @@ impl Lanczos {
             }
         }
         let mut w = Self::apply(fa, m, x0.as_ref(), apps);
-        let (_, mw) = self.normalise(&mut w, m, 0, 0.0);
+        let mut mw = Mat::zeros(n, b);
+        m.mul_block(w.as_ref(), mw.as_mut());
+        let _ = self.normalise(&mut w, &mut mw, m, 0, 0.0);
         self.v.get_mut(.., 0..b).copy_from(&w);
         self.mv.get_mut(.., 0..b).copy_from(&mw);
         // `cur` columns have images in T; the block at cur..cur+b is the next to apply.
         self.cur = 0;
+        self.iterate(p, fa, m, sigma, apps)
+    }
+
+    /// Grow the wanted count (and the basis capacity), keeping the current state.
+    fn set_want(&mut self, want: usize) {
+        if want <= self.want && self.started {
+            return;
+        }
+        self.want = want.max(self.want);
+        let b = self.b;
+        let m_max = (self.want * 2 + 4 * b)
+            .max(self.want + 6 * b)
+            .min(self.n)
+            .max(b.min(self.n));
+        if m_max > self.m_max {
+            let cols = m_max + b;
+            let mut v = Mat::zeros(self.n, cols);
+            let mut mv = Mat::zeros(self.n, cols);
+            let mut t = Mat::zeros(cols, cols);
+            let old = self.v.ncols();
+            v.get_mut(.., 0..old).copy_from(&self.v);
+            mv.get_mut(.., 0..old).copy_from(&self.mv);
+            t.get_mut(0..old, 0..old).copy_from(&self.t);
+            self.v = v;
+            self.mv = mv;
+            self.t = t;
+            self.m_max = m_max;
+        }
+    }
+
+    /// The iteration proper, from the current state.
+    fn iterate(
+        &mut self,
+        p: &EigenParams,
+        fa: &Factor,
+        m: &SymMatrix,
+        sigma: f64,
+        apps: &mut usize,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
+        let n = self.n;
+        let b = self.b;
         loop {
             let blk = self.cur;
-            let vb = self.v.get(.., blk..blk + b).to_owned();
-            let mut w = Self::apply(fa, m, vb.as_ref(), apps);
-            let scale2 = m_norm2_max(m, &w);
-            let coef = self.orthogonalise(&mut w, blk + b);
+            // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
+            let mut w = self.mv.get(.., blk..blk + b).to_owned();
+            fa.solve_in_place(w.as_mut());
+            *apps += b;
+            let mut mw = Mat::zeros(n, b);
+            m.mul_block(w.as_ref(), mw.as_mut());
+            let scale2 = (0..b)
+                .map(|c| (0..n).map(|i| w[(i, c)] * mw[(i, c)]).sum::<f64>())
+                .fold(0.0, f64::max);
+            let coef = self.orthogonalise(&mut w, &mut mw, blk + b);
             // Column block `blk` of T: rows 0..blk+b.
             self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
-            let (r, mw) = self.normalise(&mut w, m, blk + b, scale2);
+            let r = self.normalise(&mut w, &mut mw, m, blk + b, scale2);
             self.cur = blk + b;
             // The new block goes after the basis; R is T's subdiagonal block.
             let nb = self.cur;
@@ -548,7 +680,14 @@ impl Lanczos {
                 let mut x = Mat::zeros(n, take.len());
                 let mut lam = Vec::with_capacity(take.len());
                 let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
-                matmul(x.as_mut(), Accum::Replace, self.v.get(.., 0..c), yk.as_ref(), 1.0, Par::Seq);
+                matmul(
+                    x.as_mut(),
+                    Accum::Replace,
+                    self.v.get(.., 0..c),
+                    yk.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
                 for &k in &take {
                     lam.push(sigma + 1.0 / theta[k]);
                 }
@@ -567,11 +706,32 @@ impl Lanczos {
                 let yk = y.get(.., 0..keep).to_owned();
                 let mut xk = Mat::zeros(n, keep);
                 let mut mxk = Mat::zeros(n, keep);
-                matmul(xk.as_mut(), Accum::Replace, self.v.get(.., 0..c), yk.as_ref(), 1.0, Par::Seq);
-                matmul(mxk.as_mut(), Accum::Replace, self.mv.get(.., 0..c), yk.as_ref(), 1.0, Par::Seq);
+                matmul(
+                    xk.as_mut(),
+                    Accum::Replace,
+                    self.v.get(.., 0..c),
+                    yk.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                matmul(
+                    mxk.as_mut(),
+                    Accum::Replace,
+                    self.mv.get(.., 0..c),
+                    yk.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
                 // R·E_lastᵀ·Y: coupling of the kept Ritz vectors to the next block.
                 let mut coup = Mat::zeros(b, keep);
-                matmul(coup.as_mut(), Accum::Replace, r.as_ref(), yk.get(blk..blk + b, ..), 1.0, Par::Seq);
+                matmul(
+                    coup.as_mut(),
+                    Accum::Replace,
+                    r.as_ref(),
+                    yk.get(blk..blk + b, ..),
+                    1.0,
+                    Par::Seq,
+                );
                 let nextv = self.v.get(.., nb..nb + b).to_owned();
                 let nextmv = self.mv.get(.., nb..nb + b).to_owned();
                 self.v.get_mut(.., 0..keep).copy_from(&xk);
@@ -598,15 +758,6 @@ impl Lanczos {
             .filter(|&l| l > lam * (1.0 + 1e-9) + 1e-300)
             .min_by(f64::total_cmp)
     }
-}
-
-/// Largest M-norm² of the columns of `w`.
-fn m_norm2_max(m: &SymMatrix, w: &Mat<f64>) -> f64 {
-    let mut mw = Mat::zeros(w.nrows(), w.ncols());
-    m.mul_block(w.as_ref(), mw.as_mut());
-    (0..w.ncols())
-        .map(|c| (0..w.nrows()).map(|i| w[(i, c)] * mw[(i, c)]).sum::<f64>())
-        .fold(0.0, f64::max)
 }
 
 /// Convenience for tests: a view of column `j` as a slice-backed vector.

@@ -10,11 +10,11 @@ use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::perm::PermRef;
-use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering,
-};
 use faer::sparse::linalg::cholesky::supernodal::SupernodalLdltRef;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
@@ -99,7 +99,8 @@ impl Factor {
         values.resize(sym.sym.len_val(), 0.0);
         let par = Par::rayon(0);
         let req = sym.sym.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
-        let mut mem = MemBuffer::try_new(req).map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
+        let mut mem =
+            MemBuffer::try_new(req).map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
         let stack = MemStack::new(&mut mem);
         sym.sym
             .factorize_numeric_ldlt(
@@ -120,9 +121,16 @@ impl Factor {
             hi = hi.max(x.abs());
         }
         if d.iter().any(|x| !x.is_finite()) {
-            return Err(Error::Factorization("non-finite pivot (singular matrix at this shift)".into()));
+            return Err(Error::Factorization(
+                "non-finite pivot (singular matrix at this shift)".into(),
+            ));
         }
-        Ok(Factor { sym, values, negative_pivots, pivot_range: (lo, hi) })
+        Ok(Factor {
+            sym,
+            values,
+            negative_pivots,
+            pivot_range: (lo, hi),
+        })
     }
 
     /// Solve `A X = B` in place for a block of right-hand sides.

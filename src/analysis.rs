@@ -1,0 +1,319 @@
+//! Orchestration of analyses: mesh → model → assembly → solve → report. No formatting here.
+
+use crate::assembly::{NodeGraph, assemble, dof_pattern};
+use crate::mesh::Mesh;
+use crate::model::{Model, ModelSpec};
+use crate::ordering::{Ordering, nested_dissection};
+use crate::post::modal::{ParticipationTable, count_rigid, hz, lambda_of_hz, participation};
+use crate::solve::eigen::{self, EigenParams, SturmCheck, Target};
+use crate::solve::factor::SymbolicFactor;
+use crate::{Error, Result};
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What a modal analysis computes.
+#[derive(Clone, Debug)]
+pub struct ModalOptions {
+    /// Model definition.
+    pub spec: ModelSpec,
+    /// Number of modes nearest the shift (lowest, by default), or a band in Hz.
+    pub target: ModalTarget,
+    /// Shift in Hz (negative means a negative λ shift, −(2πf)²); `None` for the default.
+    pub shift_hz: Option<f64>,
+    /// Lanczos block size.
+    pub block: usize,
+    /// Fill-reducing ordering.
+    pub ordering: Ordering,
+    /// Refuse to factorise if the factor would need more than this many bytes.
+    pub max_memory: Option<u64>,
+}
+
+impl Default for ModalOptions {
+    fn default() -> Self {
+        ModalOptions {
+            spec: ModelSpec::default(),
+            target: ModalTarget::Modes(12),
+            shift_hz: None,
+            block: 6,
+            ordering: Ordering::Metis,
+            max_memory: None,
+        }
+    }
+}
+
+/// Which modes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ModalTarget {
+    /// The lowest N modes (rigid-body modes included), or the N nearest a user shift.
+    Modes(usize),
+    /// All modes with frequency in [lo, hi] Hz.
+    Band(f64, f64),
+}
+
+/// One mode of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModeRow {
+    /// 1-based mode number (rigid-body modes first, as commercial codes number them).
+    pub mode: usize,
+    /// Frequency in Hz.
+    pub frequency_hz: f64,
+    /// Eigenvalue ω² (rad²/s²).
+    pub eigenvalue: f64,
+    /// `"rigid"` or `"elastic"`.
+    pub kind: &'static str,
+    /// Relative residual ‖Kx − λMx‖/‖Kx‖.
+    pub rel_residual: f64,
+    /// Participation factors (X, Y, Z, RX, RY, RZ).
+    pub participation: [f64; 6],
+    /// Effective masses (kg, kg·m²).
+    pub effective_mass: [f64; 6],
+    /// Cumulative effective-mass ratio after this mode.
+    pub cumulative_ratio: [f64; 6],
+}
+
+/// Wall time per phase, seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    /// Reading the mesh.
+    pub read: f64,
+    /// Building the model, pattern and K, M.
+    pub assemble: f64,
+    /// Ordering and symbolic factorisation.
+    pub order: f64,
+    /// Numeric factorisation of K − σM.
+    pub factor: f64,
+    /// Lanczos iteration.
+    pub solve: f64,
+    /// Residuals, orthonormality and Sturm counts.
+    pub verify: f64,
+    /// Post-processing (participation).
+    pub post: f64,
+    /// Total.
+    pub total: f64,
+}
+
+/// Everything a modal run reports (the `--json` document).
+#[derive(Clone, Debug, Serialize)]
+pub struct ModalReport {
+    /// Mesh file.
+    pub mesh: String,
+    /// Nodes in the mesh.
+    pub nodes: usize,
+    /// Solid cells per kind.
+    pub cells: Vec<(String, usize)>,
+    /// Free DOFs (equations).
+    pub dofs: usize,
+    /// Total volume, m³.
+    pub volume_m3: f64,
+    /// Total mass, kg.
+    pub mass_kg: f64,
+    /// `"consistent"` or `"lumped"`.
+    pub mass_matrix: &'static str,
+    /// Shift used, λ units.
+    pub shift: f64,
+    /// Frequencies of all reported modes, Hz, ascending.
+    pub frequencies_hz: Vec<f64>,
+    /// Number of rigid-body modes among them.
+    pub n_rigid: usize,
+    /// Per-mode rows.
+    pub modes: Vec<ModeRow>,
+    /// Sturm-sequence check.
+    pub sturm: SturmCheck,
+    /// No mode was missed.
+    pub complete: bool,
+    /// Every residual below the verification tolerance and the modes M-orthonormal.
+    pub accurate: bool,
+    /// Largest relative residual.
+    pub max_rel_residual: f64,
+    /// max |XᵀMX − I|.
+    pub m_orthonormality: f64,
+    /// Total participating mass per direction and the centre of mass.
+    pub participation_total: [f64; 6],
+    /// Centre of mass, m.
+    pub centre_of_mass: [f64; 3],
+    /// Phase timings.
+    pub timings_s: Timings,
+    /// Peak resident memory of the process, bytes (Linux VmHWM), if known.
+    pub peak_memory_bytes: Option<u64>,
+    /// Flops of one numeric factorisation.
+    pub factor_flops: f64,
+    /// Achieved factorisation rate, GFLOP/s.
+    pub factor_gflops: f64,
+    /// Entries of the factor L.
+    pub factor_nnz: usize,
+    /// Numeric factorisations done (shift plus Sturm points).
+    pub factorizations: usize,
+    /// Operator applications (vectors) in the iteration.
+    pub operator_applications: usize,
+    /// Notes and warnings for the user.
+    pub notes: Vec<String>,
+}
+
+/// A modal solution with its shapes, for writers.
+pub struct ModalRun {
+    /// The report.
+    pub report: ModalReport,
+    /// Mode shapes expanded to nodes: per mode, 3 components per node (node-major), M-normalised.
+    pub shapes: Vec<Vec<f64>>,
+}
+
+/// Peak resident set size of this process (bytes), from /proc/self/status.
+pub fn peak_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Run a modal analysis on a mesh already in memory. `source` names it in messages.
+pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64) -> Result<ModalRun> {
+    let t_all = Instant::now();
+    let mut tm = Timings {
+        read: read_time,
+        ..Default::default()
+    };
+    let t = Instant::now();
+    let model = Model::build(mesh, &opts.spec, source)?;
+    let (volume, mass) = model.volume_and_mass()?;
+    let sets = model.element_sets();
+    let graph = NodeGraph::build(mesh.n_nodes(), &sets);
+    let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
+    let km = assemble(pattern.clone(), &model.dofs, &sets, true)?;
+    tm.assemble = t.elapsed().as_secs_f64();
+    if model.dofs.n_free == 0 {
+        return Err(Error::InvalidInput(format!(
+            "{source}: every degree of freedom is fixed; nothing to solve"
+        )));
+    }
+
+    let t = Instant::now();
+    let sym = match opts.ordering {
+        Ordering::Metis => {
+            let (fwd, inv) = nested_dissection(&graph, &model.dofs)?;
+            SymbolicFactor::new(&pattern, Some((&fwd, &inv)))?
+        }
+        Ordering::Amd => SymbolicFactor::new(&pattern, None)?,
+        Ordering::Natural => {
+            let id: Vec<usize> = (0..pattern.n).collect();
+            SymbolicFactor::new(&pattern, Some((&id, &id)))?
+        }
+    };
+    tm.order = t.elapsed().as_secs_f64();
+    if let Some(limit) = opts.max_memory {
+        // Factor values plus K, M, the shifted copy, and the Lanczos basis.
+        let need = sym.factor_bytes() as u64 + 3 * 16 * pattern.nnz() as u64;
+        if need > limit {
+            return Err(Error::InvalidInput(format!(
+                "{source}: the factorisation needs about {:.2} GiB (factor {:.2} GiB, {} entries) but --max-memory is {:.2} GiB",
+                need as f64 / 1073741824.0,
+                sym.factor_bytes() as f64 / 1073741824.0,
+                sym.nnz_l,
+                limit as f64 / 1073741824.0
+            )));
+        }
+    }
+    let sym = Arc::new(sym);
+    let target = match opts.target {
+        ModalTarget::Modes(n) => Target::Nearest(n),
+        ModalTarget::Band(lo, hi) => {
+            if !(lo < hi) {
+                return Err(Error::InvalidInput(format!(
+                    "--band: lower frequency {lo} must be below the upper {hi}"
+                )));
+            }
+            Target::Band(lambda_of_hz(lo), lambda_of_hz(hi))
+        }
+    };
+    let params = EigenParams {
+        target,
+        shift: opts.shift_hz.map(lambda_of_hz),
+        block: opts.block,
+        ..Default::default()
+    };
+    let sol = eigen::solve(&km.k, &km.m, &sym, &params)?;
+    tm.factor = sol.time_factor;
+    tm.solve = sol.time_iterate;
+    tm.verify = sol.time_verify;
+
+    let t = Instant::now();
+    let nodes = &mesh.nodes;
+    let part: ParticipationTable = participation(&km.m, &model.dofs, nodes, sol.vectors.as_ref());
+    let n_rigid = if opts.shift_hz.is_none() && matches!(opts.target, ModalTarget::Modes(_)) {
+        count_rigid(&sol.lambda)
+    } else {
+        sol.lambda.iter().take_while(|&&l| hz(l).abs() < 1e-2).count()
+    };
+    let mut modes = Vec::with_capacity(sol.lambda.len());
+    for (i, &l) in sol.lambda.iter().enumerate() {
+        modes.push(ModeRow {
+            mode: i + 1,
+            frequency_hz: hz(l),
+            eigenvalue: l,
+            kind: if i < n_rigid { "rigid" } else { "elastic" },
+            rel_residual: sol.rel_residual[i],
+            participation: part.modes[i].factor,
+            effective_mass: part.modes[i].effective,
+            cumulative_ratio: part.cumulative_ratio[i],
+        });
+    }
+    let shapes: Vec<Vec<f64>> = (0..sol.vectors.ncols())
+        .map(|c| model.dofs.expand(&eigen::column(&sol.vectors, c), 3))
+        .collect();
+    tm.post = t.elapsed().as_secs_f64();
+    tm.total = t_all.elapsed().as_secs_f64() + read_time;
+
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
+    let accurate = max_res <= params.verify_tol && sol.m_orthonormality <= 1e-8;
+    let mut notes = model.notes.clone();
+    if !accurate {
+        notes.push(format!(
+            "accuracy not guaranteed: largest residual {max_res:.2e} (tolerance {:.0e}), M-orthonormality error {:.2e}",
+            params.verify_tol, sol.m_orthonormality
+        ));
+    }
+    if !sol.sturm.complete {
+        notes.push(format!(
+            "Sturm check failed: {} modes expected between {:.6e} and {:.6e} rad²/s², {} found",
+            sol.sturm.expected, sol.sturm.lower.0, sol.sturm.upper.0, sol.sturm.found
+        ));
+    }
+    let factor_flops = sym.flops;
+    let report = ModalReport {
+        mesh: source.to_string(),
+        nodes: mesh.n_nodes(),
+        cells: model
+            .cell_counts()
+            .iter()
+            .map(|(k, n)| (k.name().to_string(), *n))
+            .collect(),
+        dofs: model.dofs.n_free,
+        volume_m3: volume,
+        mass_kg: mass,
+        mass_matrix: opts.spec.lumping.name(),
+        shift: sol.shift,
+        frequencies_hz: sol.lambda.iter().map(|&l| hz(l)).collect(),
+        n_rigid,
+        modes,
+        complete: sol.sturm.complete,
+        sturm: sol.sturm,
+        accurate,
+        max_rel_residual: max_res,
+        m_orthonormality: sol.m_orthonormality,
+        participation_total: part.total,
+        centre_of_mass: part.centre_of_mass,
+        timings_s: tm.clone(),
+        peak_memory_bytes: peak_memory(),
+        factor_flops,
+        factor_gflops: if tm.factor > 0.0 {
+            factor_flops / tm.factor / 1e9
+        } else {
+            0.0
+        },
+        factor_nnz: sym.nnz_l,
+        factorizations: sol.factorizations,
+        operator_applications: sol.applications,
+        notes,
+    };
+    Ok(ModalRun { report, shapes })
+}

@@ -1,0 +1,288 @@
+//! gmsh MSH reader: format 4.1 and 2.2, ASCII and binary.
+//!
+//! The version is detected from `$MeshFormat`. Both versions are read by our own small
+//! parsers (`msh4` and `msh2` below) over one bounds-checked `cursor`: that is what lets
+//! every error name the section and line, keeps allocations bounded by the file's size
+//! whatever its headers claim, and reads 4.1 files saved with parametric node coordinates
+//! (`Mesh.SaveParametric = 1`), which `mshio` 0.4 rejects. (`mshio` also `unwrap`s in its
+//! header parser and preallocates nothing we could bound; the tests use it as an independent
+//! cross-check on 4.1 files instead.)
+//!
+//! What the reader produces:
+//! - nodes renumbered densely in file order, with the file's tags kept in
+//!   [`Mesh::node_tags`]; coordinates multiplied by `length_scale`;
+//! - one [`CellBlock`](crate::mesh::CellBlock) per [`CellKind`] present, of every dimension,
+//!   connectivity in gmsh node order, element tags kept;
+//! - one [`Group`] per physical group: named from `$PhysicalNames`, else `"<dim>:<tag>"`. In
+//!   MSH 4.1 a physical group is attached to entities (`$Entities`), and every element of an
+//!   entity belongs to all of the entity's groups; in MSH 2.2 the first element tag is the
+//!   physical tag. A file without physical groups gives a mesh without groups.
+//!
+//! Element types outside [`CellKind`] (pyramids, 18-node prisms, ...) are rejected with
+//! [`Error::UnsupportedElement`].
+
+mod cursor;
+mod msh2;
+mod msh4;
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+use crate::mesh::{CellKind, CellRef, Group, Mesh, cell::gmsh_type_name};
+use crate::{Error, Result};
+use cursor::{BinaryLayout, Cursor, shown};
+
+/// Read a gmsh mesh file (MSH 4.1 or 2.2, ASCII or binary).
+///
+/// `length_scale` multiplies all coordinates (e.g. `1e-3` for a mesh drawn in millimetres).
+///
+/// # Errors
+/// [`Error::Io`] if the file cannot be read, [`Error::MeshParse`] for a malformed or truncated
+/// file, [`Error::UnsupportedElement`] for an element type vibrofem does not know,
+/// [`Error::EmptyModel`] for a file without elements, [`Error::InvalidInput`] for a
+/// non-positive `length_scale`.
+pub fn read(path: &Path, length_scale: f64) -> Result<Mesh> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    read_bytes(&bytes, path, length_scale)
+}
+
+/// Read a gmsh mesh from the bytes of a file; `path` is used in messages only.
+///
+/// See [`read`].
+pub fn read_bytes(bytes: &[u8], path: &Path, length_scale: f64) -> Result<Mesh> {
+    if !(length_scale.is_finite() && length_scale > 0.0) {
+        return Err(Error::InvalidInput(format!(
+            "{}: length scale must be a positive number, got {length_scale}",
+            path.display()
+        )));
+    }
+    let mut cur = Cursor::new(bytes, path);
+    let header = read_header(&mut cur)?;
+    let mut b = Builder::default();
+    match header.version {
+        Version::V2 => msh2::read(&mut cur, &header, &mut b)?,
+        Version::V41 => msh4::read(&mut cur, &header, &mut b)?,
+    }
+    b.finish(path, length_scale)
+}
+
+/// The two supported format versions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Version {
+    /// MSH 2.x (2.0, 2.1, 2.2 share the layout read here).
+    V2,
+    /// MSH 4.1.
+    V41,
+}
+
+/// What `$MeshFormat` says.
+struct Header {
+    version: Version,
+    /// Binary layout of binary files, `None` for ASCII files.
+    binary: Option<BinaryLayout>,
+}
+
+/// Read `$MeshFormat ... $EndMeshFormat`.
+fn read_header(cur: &mut Cursor) -> Result<Header> {
+    cur.set_section("$MeshFormat");
+    match cur.next_token() {
+        Some(t) if t == b"$MeshFormat" => {}
+        Some(t) => {
+            return Err(cur.err(format!(
+                "not a gmsh MSH file: expected $MeshFormat at the start, found '{}'",
+                shown(t)
+            )));
+        }
+        None => return Err(cur.err("empty file: expected $MeshFormat")),
+    }
+    let v = cur.token("the format version")?;
+    let version = match v {
+        b"4.1" => Version::V41,
+        b"2" | b"2.0" | b"2.1" | b"2.2" => Version::V2,
+        _ => {
+            return Err(cur.err(format!(
+                "unsupported MSH format version '{}': vibrofem reads 4.1 and 2.2 \
+                 (re-save the mesh in gmsh with Mesh.MshFileVersion = 4.1)",
+                shown(v)
+            )));
+        }
+    };
+    let file_type = cur.tok_i32("file type (0 = ASCII, 1 = binary)")?;
+    let data_size = cur.tok_i32("data size")?;
+    let binary = match file_type {
+        0 => None,
+        1 => {
+            // MSH 4.1: data-size is sizeof(size_t); MSH 2.2: sizeof(double), must be 8.
+            let size_t = match (version, data_size) {
+                (Version::V41, 4 | 8) => data_size as usize,
+                (Version::V2, 8) => 8,
+                _ => return Err(cur.err(format!("unsupported binary data size {data_size}"))),
+            };
+            cur.end_of_line()?;
+            cur.set_file_binary(true);
+            let big_endian = cur.endianness()?;
+            Some(BinaryLayout { big_endian, size_t })
+        }
+        t => {
+            return Err(cur.err(format!("file type must be 0 (ASCII) or 1 (binary), found {t}")));
+        }
+    };
+    cur.expect("$EndMeshFormat")?;
+    Ok(Header { version, binary })
+}
+
+/// Read `$PhysicalNames` (always ASCII): `n` lines `dim tag "name"`.
+fn read_physical_names(cur: &mut Cursor, b: &mut Builder) -> Result<()> {
+    // A record is at least `d t "x"` (7 bytes with separators).
+    let n = cur.tok_count("physical names", 7)?;
+    for _ in 0..n {
+        let dim = cur.tok_i32("physical group dimension")?;
+        let dim = check_dim(cur, dim)?;
+        let tag = cur.tok_i32("physical tag")?;
+        let raw = cur.rest_of_line();
+        let name = raw
+            .strip_prefix(b"\"")
+            .and_then(|r| r.strip_suffix(b"\""))
+            .unwrap_or(raw);
+        if name.is_empty() {
+            return Err(cur.err(format!("physical group {dim}:{tag} has an empty name")));
+        }
+        b.names.insert((dim, tag), String::from_utf8_lossy(name).into_owned());
+    }
+    cur.expect("$EndPhysicalNames")
+}
+
+/// An entity or group dimension, which must be 0..=3.
+fn check_dim(cur: &Cursor, dim: i32) -> Result<u8> {
+    match u8::try_from(dim) {
+        Ok(d) if d <= 3 => Ok(d),
+        _ => Err(cur.err(format!("dimension must be 0, 1, 2 or 3, found {dim}"))),
+    }
+}
+
+/// Dimension of a gmsh element type, including types vibrofem does not support (for the
+/// group lookup of the error message).
+fn gmsh_type_dim(t: i32) -> Option<u8> {
+    if let Some(k) = CellKind::from_gmsh_type(t) {
+        return Some(k.dim() as u8);
+    }
+    match t {
+        7 | 13 | 14 | 19 | 29..=31 | 92 | 93 => Some(3),
+        20..=25 | 36 | 37 => Some(2),
+        26..=28 => Some(1),
+        _ => None,
+    }
+}
+
+/// Accumulates what the section readers find and turns it into a [`Mesh`].
+#[derive(Default)]
+struct Builder {
+    mesh: Mesh,
+    /// File node tag → dense index.
+    index: HashMap<u64, u32>,
+    /// `$PhysicalNames`: (dim, tag) → name.
+    names: HashMap<(u8, i32), String>,
+    /// Physical group (dim, tag) → its cells.
+    members: BTreeMap<(u8, i32), Vec<CellRef>>,
+}
+
+impl Builder {
+    /// Reserve room for `n` more nodes (`n` already checked against the file size).
+    fn reserve_nodes(&mut self, n: usize) {
+        self.mesh.nodes.reserve(n);
+        self.mesh.node_tags.reserve(n);
+        self.index.reserve(n);
+    }
+
+    /// Add a node; its dense index is the number of nodes read before it.
+    fn add_node(&mut self, cur: &Cursor, tag: u64, x: [f64; 3]) -> Result<()> {
+        let i =
+            u32::try_from(self.mesh.nodes.len()).map_err(|_| cur.err("more than 2^32 - 1 nodes are not supported"))?;
+        if self.index.insert(tag, i).is_some() {
+            return Err(cur.err(format!("node {tag} is defined twice")));
+        }
+        self.mesh.nodes.push(x);
+        self.mesh.node_tags.push(tag);
+        Ok(())
+    }
+
+    /// Dense index of node `tag`, referenced by element `elem`.
+    fn node(&self, cur: &Cursor, elem: u64, tag: u64) -> Result<u32> {
+        self.index
+            .get(&tag)
+            .copied()
+            .ok_or_else(|| cur.err(format!("element {elem} references node {tag}, which is not in $Nodes")))
+    }
+
+    /// Append a cell of `kind` with dense node indices `nodes`.
+    fn add_cell(&mut self, cur: &Cursor, kind: CellKind, tag: u64, nodes: &[u32]) -> Result<CellRef> {
+        let block = self.mesh.block_index_mut(kind);
+        let blk = &mut self.mesh.blocks[block];
+        let index =
+            u32::try_from(blk.len()).map_err(|_| cur.err("more than 2^32 - 1 cells of one kind are not supported"))?;
+        blk.push(nodes, tag);
+        Ok(CellRef {
+            block: block as u32,
+            index,
+        })
+    }
+
+    /// Record that `cell` belongs to physical group (`dim`, `tag`).
+    fn add_to_group(&mut self, dim: u8, tag: i32, cell: CellRef) {
+        self.members.entry((dim, tag)).or_default().push(cell);
+    }
+
+    /// Label of a physical group for messages: its name, else `"<dim>:<tag>"`.
+    fn group_label(&self, dim: u8, tag: i32) -> String {
+        self.names
+            .get(&(dim, tag))
+            .cloned()
+            .unwrap_or_else(|| format!("{dim}:{tag}"))
+    }
+
+    /// The error for an element type outside [`CellKind`].
+    fn unsupported(&self, path: &Path, gmsh_type: i32, group: String) -> Error {
+        Error::UnsupportedElement {
+            path: path.to_path_buf(),
+            gmsh_type,
+            name: gmsh_type_name(gmsh_type).to_string(),
+            group,
+        }
+    }
+
+    /// Build the mesh: groups from names and memberships, scaled coordinates.
+    fn finish(self, path: &Path, length_scale: f64) -> Result<Mesh> {
+        let Builder {
+            mut mesh,
+            names,
+            mut members,
+            ..
+        } = self;
+        if mesh.blocks.iter().all(|b| b.is_empty()) {
+            return Err(Error::EmptyModel {
+                what: format!("{}: the mesh file contains no elements", path.display()),
+            });
+        }
+        // Groups named in $PhysicalNames but without elements are kept (empty), so that a
+        // scene naming them gets a clear message later rather than "unknown group".
+        for key in names.keys() {
+            members.entry(*key).or_default();
+        }
+        mesh.groups = members
+            .into_iter()
+            .map(|((dim, tag), mut cells)| {
+                cells.sort_unstable();
+                cells.dedup();
+                let name = names
+                    .get(&(dim, tag))
+                    .cloned()
+                    .unwrap_or_else(|| format!("{dim}:{tag}"));
+                Group { name, dim, tag, cells }
+            })
+            .collect();
+        if length_scale != 1.0 {
+            mesh.scale(length_scale);
+        }
+        Ok(mesh)
+    }
+}

@@ -1,0 +1,261 @@
+//! `vibrofem` command-line program. Exit codes: 0 success, 1 input error, 2 numerical failure
+//! (no convergence, a missed mode, accuracy not guaranteed), 3 batch with failed cases.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use vibrofem::analysis::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::dof::parse_components;
+use vibrofem::element::MassLumping;
+use vibrofem::io;
+use vibrofem::material::Material;
+use vibrofem::model::ModelSpec;
+use vibrofem::ordering::Ordering;
+use vibrofem::{Error, Result};
+
+#[derive(Parser)]
+#[command(
+    name = "vibrofem",
+    version,
+    about = "Finite-element modal and stiffness analysis for vibrating machines"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+    /// Worker threads (default: all cores).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Natural frequencies and mode shapes of a solid mesh (gmsh MSH 2.2 or 4.1).
+    Modes(ModesArgs),
+    /// Groups, cell kinds and counts, bounding box, volume and mass of a mesh.
+    MeshInfo(MeshInfoArgs),
+}
+
+#[derive(clap::Args)]
+struct ModesArgs {
+    /// gmsh mesh file.
+    mesh: PathBuf,
+    /// Number of modes (the lowest ones, rigid-body modes included; nearest the shift if --shift).
+    #[arg(long, conflicts_with = "band")]
+    modes: Option<usize>,
+    /// All modes with frequency in [F_LO, F_HI] Hz.
+    #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"])]
+    band: Option<Vec<f64>>,
+    /// Material of all volume cells: `steel` or `E,NU,RHO` in Pa, -, kg/m³.
+    #[arg(long, default_value = "steel")]
+    material: String,
+    /// Material of one group: `GROUP=steel` or `GROUP=E,NU,RHO` (repeatable).
+    #[arg(long = "group-material", value_name = "GROUP=MAT")]
+    group_material: Vec<String>,
+    /// Fix a group's nodes: `GROUP` (all components) or `GROUP:ux,uy,uz` (repeatable).
+    #[arg(long, value_name = "GROUP[:COMPONENTS]")]
+    fix: Vec<String>,
+    /// Mass matrix: consistent (default) or lumped (HRZ).
+    #[arg(long, default_value = "consistent")]
+    mass: String,
+    /// Length unit of the mesh coordinates: m (default) or mm.
+    #[arg(long = "length-unit", default_value = "m")]
+    length_unit: String,
+    /// Shift in Hz: find the modes nearest this frequency (negative: a negative λ shift).
+    #[arg(long, allow_negative_numbers = true)]
+    shift: Option<f64>,
+    /// Lanczos block size (at least the largest multiplicity expected).
+    #[arg(long, default_value_t = 6)]
+    block: usize,
+    /// Fill-reducing ordering: metis (default) or amd.
+    #[arg(long, default_value = "metis")]
+    ordering: String,
+    /// Refuse models whose factorisation needs more memory than this (e.g. 8G, 500M).
+    #[arg(long = "max-memory")]
+    max_memory: Option<String>,
+    /// Print the JSON report on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write mode shapes as a VTU file (ParaView).
+    #[arg(long)]
+    vtu: Option<PathBuf>,
+    /// Write the mesh with one $NodeData view per mode (gmsh).
+    #[arg(long = "msh-out")]
+    msh_out: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct MeshInfoArgs {
+    /// gmsh mesh file.
+    mesh: PathBuf,
+    /// Length unit of the mesh coordinates: m (default) or mm.
+    #[arg(long = "length-unit", default_value = "m")]
+    length_unit: String,
+    /// Material for the mass: `steel` or `E,NU,RHO`.
+    #[arg(long, default_value = "steel")]
+    material: String,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+fn length_scale(u: &str) -> Result<f64> {
+    match u {
+        "m" => Ok(1.0),
+        "mm" => Ok(1e-3),
+        "cm" => Ok(1e-2),
+        _ => Err(Error::InvalidInput(format!(
+            "--length-unit: unknown unit '{u}' (use m or mm)"
+        ))),
+    }
+}
+
+fn parse_bytes(s: &str) -> Result<u64> {
+    let t = s.trim();
+    let (num, mult) = match t.chars().last() {
+        Some('G' | 'g') => (&t[..t.len() - 1], 1u64 << 30),
+        Some('M' | 'm') => (&t[..t.len() - 1], 1u64 << 20),
+        Some('K' | 'k') => (&t[..t.len() - 1], 1u64 << 10),
+        _ => (t, 1),
+    };
+    let v: f64 = num
+        .parse()
+        .map_err(|_| Error::InvalidInput(format!("--max-memory: cannot read '{s}' (e.g. 8G, 500M)")))?;
+    if !(v > 0.0) {
+        return Err(Error::InvalidInput(format!("--max-memory must be positive, got '{s}'")));
+    }
+    Ok((v * mult as f64) as u64)
+}
+
+fn modes(a: &ModesArgs) -> Result<i32> {
+    let mut spec = ModelSpec {
+        material: Material::parse(&a.material)?,
+        ..Default::default()
+    };
+    for gm in &a.group_material {
+        let (g, m) = gm
+            .split_once('=')
+            .ok_or_else(|| Error::InvalidInput(format!("--group-material '{gm}': expected GROUP=MATERIAL")))?;
+        spec.group_materials.push((g.to_string(), Material::parse(m)?));
+    }
+    for f in &a.fix {
+        let (g, comps) = match f.split_once(':') {
+            Some((g, c)) => (g, c),
+            None => (f.as_str(), "ux,uy,uz"),
+        };
+        let mask = parse_components(comps)
+            .ok_or_else(|| Error::InvalidInput(format!("--fix '{f}': unknown components '{comps}' (use ux,uy,uz)")))?;
+        spec.fixes.push((g.to_string(), mask));
+    }
+    spec.lumping = MassLumping::parse(&a.mass)?;
+    let target = match (&a.band, a.modes) {
+        (Some(b), _) => ModalTarget::Band(b[0], b[1]),
+        (None, Some(n)) if n > 0 => ModalTarget::Modes(n),
+        (None, Some(_)) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
+        (None, None) => ModalTarget::Modes(12),
+    };
+    let ordering = match a.ordering.as_str() {
+        "metis" => Ordering::Metis,
+        "amd" => Ordering::Amd,
+        o => {
+            return Err(Error::InvalidInput(format!(
+                "--ordering: unknown '{o}' (use metis or amd)"
+            )));
+        }
+    };
+    if a.block == 0 {
+        return Err(Error::InvalidInput("--block must be at least 1".into()));
+    }
+    let opts = ModalOptions {
+        spec,
+        target,
+        shift_hz: a.shift,
+        block: a.block,
+        ordering,
+        max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
+    };
+    let t = std::time::Instant::now();
+    let mesh = io::gmsh::read(&a.mesh, length_scale(&a.length_unit)?)?;
+    let read_time = t.elapsed().as_secs_f64();
+    let source = a.mesh.display().to_string();
+    let run = run_modal(&mesh, &source, &opts, read_time)?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&run.report).map_err(|e| Error::InvalidInput(e.to_string()))?
+        );
+    } else {
+        print!("{}", vibrofem::report::modal_table(&run.report));
+    }
+    if let Some(p) = &a.vtu {
+        let fields: Vec<io::vtk::PointField> = run
+            .shapes
+            .iter()
+            .enumerate()
+            .map(|(i, s)| io::vtk::PointField::mode(i + 1, s))
+            .collect();
+        io::vtk::write_vtu(p, &mesh, &fields)?;
+        eprintln!("wrote {}", p.display());
+    }
+    if let Some(p) = &a.msh_out {
+        let views: Vec<io::msh_out::NodeView> = run
+            .shapes
+            .iter()
+            .enumerate()
+            .map(|(i, s)| io::msh_out::NodeView {
+                name: format!("mode {} ({:.4} Hz)", i + 1, run.report.frequencies_hz[i]),
+                step: i,
+                time: run.report.frequencies_hz[i],
+                n_comp: 3,
+                data: s,
+            })
+            .collect();
+        io::msh_out::write_msh_views(p, &mesh, &views)?;
+        eprintln!("wrote {}", p.display());
+    }
+    for n in &run.report.notes {
+        eprintln!("note: {n}");
+    }
+    if !run.report.complete {
+        eprintln!("error: the Sturm-sequence check shows missed modes (see 'complete' above)");
+        return Ok(2);
+    }
+    if !run.report.accurate {
+        eprintln!("error: accuracy not guaranteed (residual or orthonormality above tolerance)");
+        return Ok(2);
+    }
+    Ok(0)
+}
+
+fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
+    let mesh = io::gmsh::read(&a.mesh, length_scale(&a.length_unit)?)?;
+    let mat = Material::parse(&a.material)?;
+    mat.validate("--material")?;
+    let info = vibrofem::report::mesh_info(&mesh, &a.mesh.display().to_string(), &mat)?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&info).map_err(|e| Error::InvalidInput(e.to_string()))?
+        );
+    } else {
+        print!("{}", vibrofem::report::mesh_info_text(&info));
+    }
+    Ok(0)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    if let Some(t) = cli.threads {
+        let _ = rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global();
+    }
+    let r = match &cli.cmd {
+        Cmd::Modes(a) => modes(a),
+        Cmd::MeshInfo(a) => mesh_info(a),
+    };
+    match r {
+        Ok(code) => ExitCode::from(code as u8),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}

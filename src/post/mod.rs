@@ -1,0 +1,2 @@
+//! Post-processing of solutions.
+pub mod modal;
