@@ -27,6 +27,8 @@ pub struct ModalOptions {
     pub ordering: Ordering,
     /// Refuse to factorise if the factor would need more than this many bytes.
     pub max_memory: Option<u64>,
+    /// Limit on eigen-iteration work (operator applications).
+    pub max_applications: usize,
 }
 
 impl Default for ModalOptions {
@@ -38,6 +40,7 @@ impl Default for ModalOptions {
             block: 6,
             ordering: Ordering::Metis,
             max_memory: None,
+            max_applications: 20_000,
         }
     }
 }
@@ -229,6 +232,7 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         target,
         shift: opts.shift_hz.map(lambda_of_hz),
         block: opts.block,
+        max_applications: opts.max_applications,
         ..Default::default()
     };
     let sol = eigen::solve(&km.k, &km.m, &sym, &params)?;

@@ -198,7 +198,7 @@ fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f
                     continue;
                 };
                 let mut pos = s + k0;
-                for ca in 0..6 {
+                for ca in 0..crate::dof::NCOMP {
                     if let Some(row) = dofs.eq_of(a, ca) {
                         if ca < ndpn {
                             debug_assert_eq!(pattern.row_idx[pos], row);

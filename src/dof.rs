@@ -1,22 +1,28 @@
 //! Degrees of freedom: which components each node carries, which are fixed, and the
 //! equation numbering of the free ones.
 //!
-//! Every node has up to six components, `ux, uy, uz, rx, ry, rz` (component index 0..6).
-//! Solids activate the three translations; shells and beams all six. Free components are
+//! Every node has up to seven components, `ux, uy, uz, rx, ry, rz, w` (component index 0..7):
+//! translations, rotations, and the warping amplitude of thin-walled beams. Solids activate
+//! the three translations; shells and beams the six; warping beams the seventh too. Free components are
 //! numbered node-major in node order, so the free DOFs of one node are consecutive and the
 //! numbering is monotone in the node index. Fixed components get no equation
 //! (homogeneous Dirichlet conditions are eliminated).
 
+/// Components per node.
+pub const NCOMP: usize = 7;
+
 /// Component names, in component order.
-pub const COMPONENT_NAMES: [&str; 6] = ["ux", "uy", "uz", "rx", "ry", "rz"];
+pub const COMPONENT_NAMES: [&str; NCOMP] = ["ux", "uy", "uz", "rx", "ry", "rz", "w"];
 
 /// Bit mask of active or fixed components of a node (bit `c` = component `c`).
 pub type DofMask = u8;
 
 /// The three translations.
 pub const TRANSLATIONS: DofMask = 0b000111;
-/// All six components.
+/// All six translations and rotations.
 pub const ALL6: DofMask = 0b111111;
+/// The warping component.
+pub const WARPING: DofMask = 0b1000000;
 
 /// Parse a component list like `ux,uy` or `all` into a mask.
 pub fn parse_components(s: &str) -> Option<DofMask> {
@@ -39,7 +45,7 @@ pub struct DofMap {
     pub active: Vec<DofMask>,
     /// Fixed components per node (subset of `active`).
     pub fixed: Vec<DofMask>,
-    /// `eq[6*node + c]`: equation number of component `c` of `node`, or −1 if the component is
+    /// `eq[NCOMP*node + c]`: equation number of component `c` of `node`, or −1 if the component is
     /// inactive or fixed.
     pub eq: Vec<i64>,
     /// First equation of each node (`n_free` for nodes with no free DOF), length `n_nodes + 1`
@@ -54,15 +60,15 @@ impl DofMap {
     pub fn new(active: Vec<DofMask>, fixed: Vec<DofMask>) -> Self {
         assert_eq!(active.len(), fixed.len());
         let n = active.len();
-        let mut eq = vec![-1i64; 6 * n];
+        let mut eq = vec![-1i64; NCOMP * n];
         let mut first = Vec::with_capacity(n + 1);
         let mut next = 0usize;
         for a in 0..n {
             first.push(next);
             let free = active[a] & !fixed[a];
-            for c in 0..6 {
+            for c in 0..NCOMP {
                 if free & (1 << c) != 0 {
-                    eq[6 * a + c] = next as i64;
+                    eq[NCOMP * a + c] = next as i64;
                     next += 1;
                 }
             }
@@ -84,7 +90,7 @@ impl DofMap {
 
     /// Equation of component `c` of `node`, if free.
     pub fn eq_of(&self, node: usize, c: usize) -> Option<usize> {
-        let e = self.eq[6 * node + c];
+        let e = self.eq[NCOMP * node + c];
         (e >= 0).then_some(e as usize)
     }
 
@@ -94,7 +100,7 @@ impl DofMap {
         let a = self.first.partition_point(|&f| f <= eq) - 1;
         let k = eq - self.first[a];
         let free = self.active[a] & !self.fixed[a];
-        let c = (0..6).filter(|c| free & (1 << c) != 0).nth(k).unwrap_or(0);
+        let c = (0..NCOMP).filter(|c| free & (1 << c) != 0).nth(k).unwrap_or(0);
         (a, c)
     }
 

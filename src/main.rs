@@ -37,8 +37,8 @@ enum Cmd {
 
 #[derive(clap::Args)]
 struct ModesArgs {
-    /// gmsh mesh file.
-    mesh: PathBuf,
+    /// gmsh mesh file (MSH 2.2 or 4.1), or a generated box `box:LX,LY,LZ:NX,NY,NZ:KIND`.
+    mesh: String,
     /// Number of modes (the lowest ones, rigid-body modes included; nearest the shift if --shift).
     #[arg(long, conflicts_with = "band")]
     modes: Option<usize>,
@@ -46,10 +46,10 @@ struct ModesArgs {
     #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"])]
     band: Option<Vec<f64>>,
     /// Material of all volume cells: `steel` or `E,NU,RHO` in Pa, -, kg/m³.
-    #[arg(long, default_value = "steel")]
+    #[arg(long, default_value = "steel", allow_hyphen_values = true)]
     material: String,
     /// Material of one group: `GROUP=steel` or `GROUP=E,NU,RHO` (repeatable).
-    #[arg(long = "group-material", value_name = "GROUP=MAT")]
+    #[arg(long = "group-material", value_name = "GROUP=MAT", allow_hyphen_values = true)]
     group_material: Vec<String>,
     /// Fix a group's nodes: `GROUP` (all components) or `GROUP:ux,uy,uz` (repeatable).
     #[arg(long, value_name = "GROUP[:COMPONENTS]")]
@@ -66,6 +66,9 @@ struct ModesArgs {
     /// Lanczos block size (at least the largest multiplicity expected).
     #[arg(long, default_value_t = 6)]
     block: usize,
+    /// Safety limit on the eigen iteration: operator applications (vectors) before giving up.
+    #[arg(long = "max-applications", default_value_t = 20000)]
+    max_applications: usize,
     /// Fill-reducing ordering: metis (default) or amd.
     #[arg(long, default_value = "metis")]
     ordering: String,
@@ -85,8 +88,8 @@ struct ModesArgs {
 
 #[derive(clap::Args)]
 struct MeshInfoArgs {
-    /// gmsh mesh file.
-    mesh: PathBuf,
+    /// gmsh mesh file, or a generated box `box:LX,LY,LZ:NX,NY,NZ:KIND`.
+    mesh: String,
     /// Length unit of the mesh coordinates: m (default) or mm.
     #[arg(long = "length-unit", default_value = "m")]
     length_unit: String,
@@ -172,11 +175,12 @@ fn modes(a: &ModesArgs) -> Result<i32> {
         block: a.block,
         ordering,
         max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
+        max_applications: a.max_applications,
     };
     let t = std::time::Instant::now();
-    let mesh = io::gmsh::read(&a.mesh, length_scale(&a.length_unit)?)?;
+    let mesh = io::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
-    let source = a.mesh.display().to_string();
+    let source = a.mesh.clone();
     let run = run_modal(&mesh, &source, &opts, read_time)?;
     if a.json {
         println!(
@@ -227,10 +231,10 @@ fn modes(a: &ModesArgs) -> Result<i32> {
 }
 
 fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
-    let mesh = io::gmsh::read(&a.mesh, length_scale(&a.length_unit)?)?;
+    let mesh = io::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
     let mat = Material::parse(&a.material)?;
     mat.validate("--material")?;
-    let info = vibrofem::report::mesh_info(&mesh, &a.mesh.display().to_string(), &mat)?;
+    let info = vibrofem::report::mesh_info(&mesh, &a.mesh, &mat)?;
     if a.json {
         println!(
             "{}",

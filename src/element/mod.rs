@@ -9,7 +9,9 @@
 //! - [`solid`]: isoparametric 3D solids (`Tet4/10`, `Hex8/20/27`, `Wedge6/15`).
 //! - [`lumping`]: the [`MassLumping`] choice and the HRZ and row-sum lumping schemes.
 
+pub mod beam;
 pub mod lumping;
+pub mod shell;
 pub mod solid;
 
 pub use lumping::MassLumping;

@@ -6,6 +6,7 @@
 
 pub mod gmsh;
 pub mod msh_out;
+pub mod source;
 pub mod vtk;
 
 /// A float in the shortest form that reads back exactly: plain decimals for ordinary

@@ -1,0 +1,1 @@
+//! Lumped dynamics of the vibratory machine (in progress).

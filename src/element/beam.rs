@@ -1,0 +1,1 @@
+//! 3D Timoshenko beam elements (in progress).

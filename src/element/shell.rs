@@ -1,0 +1,1 @@
+//! Reissner–Mindlin shell elements (in progress).

@@ -1,0 +1,1 @@
+//! Beam and shell cross-section properties (in progress).

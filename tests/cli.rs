@@ -1,0 +1,205 @@
+//! The command-line program: outputs, and a clear one-line error with a documented exit
+//! code for each kind of bad input (1: input error, 2: numerical failure).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_vibrofem"))
+}
+
+fn tmp(name: &str, content: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vibrofem-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+/// Run and return (exit code, stdout, stderr).
+fn run(args: &[&str]) -> (i32, String, String) {
+    let o = bin().args(args).output().unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
+}
+
+fn plate() -> String {
+    format!("{ROOT}/meshes/s1_plate_tet10_h30.msh")
+}
+
+/// A one-tet MSH 2.2 file with the given element line(s) and a triangle group.
+fn small_msh(elements: &str, n_elem: usize) -> String {
+    format!(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 1 \"face\"\n3 2 \"body\"\n$EndPhysicalNames\n\
+         $Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n$Elements\n{n_elem}\n{elements}$EndElements\n"
+    )
+}
+
+#[test]
+fn modes_prints_a_table_and_json() {
+    let (code, out, err) = run(&["modes", &plate(), "--modes", "8"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("complete: yes"), "{out}");
+    assert!(out.contains("rigid-body modes: 6"), "{out}");
+    let (code, out, _) = run(&["modes", &plate(), "--modes", "8", "--json"]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for key in [
+        "frequencies_hz",
+        "n_rigid",
+        "dofs",
+        "mass_kg",
+        "complete",
+        "timings_s",
+        "factor_flops",
+        "modes",
+        "sturm",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(v["frequencies_hz"].as_array().unwrap().len(), 8);
+    for phase in ["read", "assemble", "order", "factor", "solve", "verify", "total"] {
+        assert!(v["timings_s"][phase].as_f64().unwrap() >= 0.0);
+    }
+}
+
+#[test]
+fn mode_shapes_go_to_vtu_and_gmsh_views() {
+    let dir = std::env::temp_dir().join(format!("vibrofem-out-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let vtu = dir.join("modes.vtu");
+    let msh = dir.join("modes.msh");
+    let (code, _, err) = run(&[
+        "modes",
+        &plate(),
+        "--modes",
+        "7",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--msh-out",
+        msh.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v = std::fs::read_to_string(&vtu).unwrap();
+    assert!(v.contains("UnstructuredGrid") && v.contains("mode_7"));
+    let m = std::fs::read_to_string(&msh).unwrap();
+    assert_eq!(m.matches("$NodeData").count(), 7);
+    // The gmsh output reads back as a mesh with the same nodes.
+    let back = vibrofem::io::gmsh::read(&msh, 1.0).unwrap();
+    assert_eq!(back.n_nodes(), 1854);
+}
+
+#[test]
+fn mesh_info_reports_groups_volume_and_mass() {
+    let (code, out, _) = run(&["mesh-info", &plate()]);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("body") && out.contains("xmin") && out.contains("14.13"),
+        "{out}"
+    );
+}
+
+#[test]
+fn generated_box_mesh_runs() {
+    let (code, out, err) = run(&["modes", "box:0.3,0.3,0.02:6,6,1:hex20", "--modes", "7"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("complete: yes"));
+}
+
+fn expect_error(args: &[&str], code: i32, needles: &[&str]) {
+    let (c, _, err) = run(args);
+    assert_eq!(c, code, "args {args:?}: stderr {err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_else(|| panic!("no error line in {err}"));
+    for n in needles {
+        assert!(line.contains(n), "'{line}' should mention '{n}'");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn missing_file() {
+    expect_error(&["modes", "/nonexistent/plate.msh"], 1, &["/nonexistent/plate.msh"]);
+}
+
+#[test]
+fn truncated_mesh_names_section_and_line() {
+    let full = std::fs::read_to_string(plate()).unwrap();
+    let cut: String = full.lines().take(400).collect::<Vec<_>>().join("\n");
+    let p = tmp("truncated.msh", &cut);
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["truncated.msh", "$Nodes", "line"]);
+}
+
+#[test]
+fn malformed_number_names_the_line() {
+    let full = std::fs::read_to_string(plate()).unwrap();
+    let bad = full.replacen("$Nodes\n", "$Nodes\nx_garbage\n", 1);
+    let p = tmp("garbage.msh", &bad);
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["garbage.msh", "line"]);
+}
+
+#[test]
+fn unsupported_element_names_type_and_group() {
+    // A 5-node pyramid (gmsh type 7) in group "body".
+    let p = tmp("pyramid.msh", &small_msh("1 7 2 2 1 1 2 5 3 4\n", 1));
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["type 7", "body"]);
+}
+
+#[test]
+fn unknown_group_is_named() {
+    expect_error(&["modes", &plate(), "--fix", "clamp"], 1, &["'clamp'", "xmin"]);
+}
+
+#[test]
+fn inverted_element_names_its_id() {
+    // Tet 1 has nodes 1,3,2,4: negative orientation.
+    let p = tmp("inverted.msh", &small_msh("1 4 2 2 1 1 3 2 4\n", 1));
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["element 1", "Jacobian"]);
+}
+
+#[test]
+fn invalid_materials_are_rejected() {
+    expect_error(&["modes", &plate(), "--material", "-2e11,0.3,7850"], 1, &["material"]);
+    expect_error(&["modes", &plate(), "--material", "2e11,0.5,7850"], 1, &["material"]);
+    expect_error(&["modes", &plate(), "--material", "2e11,0.3,0"], 1, &["material"]);
+    expect_error(&["modes", &plate(), "--material", "unobtainium"], 1, &["unobtainium"]);
+}
+
+#[test]
+fn surface_only_mesh_has_no_volume_elements() {
+    let p = tmp("surface.msh", &small_msh("1 2 2 1 1 1 2 3\n", 1));
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["surface.msh", "no volume elements"],
+    );
+}
+
+#[test]
+fn eigen_iteration_that_cannot_converge_is_a_numerical_failure() {
+    // 12 operator applications cannot converge 20 modes of a 5.5k-DOF model.
+    expect_error(
+        &["modes", &plate(), "--modes", "20", "--max-applications", "12"],
+        2,
+        &["did not converge"],
+    );
+}
+
+#[test]
+fn too_little_memory_is_refused_with_the_estimate() {
+    expect_error(&["modes", &plate(), "--max-memory", "1M"], 1, &["GiB", "--max-memory"]);
+}
+
+#[test]
+fn bad_options_are_input_errors() {
+    expect_error(&["modes", &plate(), "--length-unit", "furlong"], 1, &["furlong"]);
+    expect_error(&["modes", &plate(), "--mass", "heavy"], 1, &["heavy"]);
+    expect_error(&["modes", &plate(), "--fix", "xmin:uq"], 1, &["uq"]);
+}
