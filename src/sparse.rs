@@ -37,6 +37,25 @@ impl Pattern {
     }
 }
 
+/// Row-major block product kernel with the block width known at compile time, so the
+/// accumulators stay in registers: `out[j, :] = Σ_i A[i, j] · x[i, :]`.
+fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: &mut [f64]) {
+    out.par_chunks_mut(B)
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(j, out)| {
+            let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+            let mut acc = [0.0f64; B];
+            for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+                let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
+                for c in 0..B {
+                    acc[c] += a * xi[c];
+                }
+            }
+            out.copy_from_slice(&acc);
+        });
+}
+
 /// A symmetric matrix on a shared pattern (both triangles stored).
 #[derive(Clone, Debug)]
 pub struct SymMatrix {
@@ -99,19 +118,25 @@ impl SymMatrix {
         let mut tmp = vec![0.0f64; n * b];
         let p = &*self.pattern;
         let vals = &self.values;
-        tmp.par_chunks_mut(b)
-            .enumerate()
-            .with_min_len(256)
-            .for_each(|(j, out)| {
-                // Symmetric: row j of A equals column j.
-                let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
-                for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
-                    let xi = &xr[i * b..i * b + b];
-                    for (o, &xv) in out.iter_mut().zip(xi) {
-                        *o += a * xv;
+        match b {
+            6 => gather_rows::<6>(p, vals, &xr, &mut tmp),
+            12 => gather_rows::<12>(p, vals, &xr, &mut tmp),
+            1 => gather_rows::<1>(p, vals, &xr, &mut tmp),
+            _ => tmp
+                .par_chunks_mut(b)
+                .enumerate()
+                .with_min_len(256)
+                .for_each(|(j, out)| {
+                    // Symmetric: row j of A equals column j.
+                    let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+                    for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+                        let xi = &xr[i * b..i * b + b];
+                        for (o, &xv) in out.iter_mut().zip(xi) {
+                            *o += a * xv;
+                        }
                     }
-                }
-            });
+                }),
+        }
         for c in 0..b {
             for (j, v) in y.as_mut().col_mut(c).iter_mut().enumerate() {
                 *v = tmp[j * b + c];

@@ -127,10 +127,16 @@ const BETA: f64 = 0.04;
 
 fn check_options(o: &Dopri5Options) -> Result<()> {
     if !(o.rtol.is_finite() && o.rtol > 0.0) {
-        return Err(Error::InvalidInput(format!("ode: rtol must be finite and > 0, got {}", o.rtol)));
+        return Err(Error::InvalidInput(format!(
+            "ode: rtol must be finite and > 0, got {}",
+            o.rtol
+        )));
     }
     if !(o.atol.is_finite() && o.atol > 0.0) {
-        return Err(Error::InvalidInput(format!("ode: atol must be finite and > 0, got {}", o.atol)));
+        return Err(Error::InvalidInput(format!(
+            "ode: atol must be finite and > 0, got {}",
+            o.atol
+        )));
     }
     if o.rtol < 1e-14 {
         return Err(Error::InvalidInput(format!(
@@ -144,7 +150,9 @@ fn check_options(o: &Dopri5Options) -> Result<()> {
     if let Some(h) = o.h_init
         && !(h.is_finite() && h > 0.0)
     {
-        return Err(Error::InvalidInput(format!("ode: h_init must be finite and > 0, got {h}")));
+        return Err(Error::InvalidInput(format!(
+            "ode: h_init must be finite and > 0, got {h}"
+        )));
     }
     if o.max_steps == 0 {
         return Err(Error::InvalidInput("ode: max_steps must be > 0".into()));
@@ -193,17 +201,19 @@ where
         return Err(Error::InvalidInput(format!("ode: t0 must be finite, got {t0}")));
     }
     if y0.iter().any(|v| !v.is_finite()) {
-        return Err(Error::InvalidInput("ode: initial state has a non-finite component".into()));
+        return Err(Error::InvalidInput(
+            "ode: initial state has a non-finite component".into(),
+        ));
     }
     if t_out.is_empty() {
         return Err(Error::InvalidInput("ode: no output times".into()));
     }
     for w in t_out.windows(2) {
-        if !(w[1] >= w[0]) {
+        if w[0].is_nan() || w[1].is_nan() || w[1] < w[0] {
             return Err(Error::InvalidInput("ode: output times must be ascending".into()));
         }
     }
-    if !(t_out[0] >= t0) || !t_out[t_out.len() - 1].is_finite() {
+    if t_out[0].is_nan() || t_out[0] < t0 || !t_out[t_out.len() - 1].is_finite() {
         return Err(Error::InvalidInput(format!(
             "ode: output times must be finite and ≥ t0 = {t0} (first {}, last {})",
             t_out[0],
@@ -290,20 +300,20 @@ where
             }
             rhs(t + C5 * h_step, &ytmp, &mut k[4]);
             for i in 0..n {
-                ytmp[i] = y[i]
-                    + h_step * (A61 * k[0][i] + A62 * k[1][i] + A63 * k[2][i] + A64 * k[3][i] + A65 * k[4][i]);
+                ytmp[i] =
+                    y[i] + h_step * (A61 * k[0][i] + A62 * k[1][i] + A63 * k[2][i] + A64 * k[3][i] + A65 * k[4][i]);
             }
             rhs(t + h_step, &ytmp, &mut k[5]);
             for i in 0..n {
-                ynew[i] = y[i]
-                    + h_step * (A71 * k[0][i] + A73 * k[2][i] + A74 * k[3][i] + A75 * k[4][i] + A76 * k[5][i]);
+                ynew[i] =
+                    y[i] + h_step * (A71 * k[0][i] + A73 * k[2][i] + A74 * k[3][i] + A75 * k[4][i] + A76 * k[5][i]);
             }
             let t_new = if last { seg_end } else { t + h_step };
             rhs(t_new, &ynew, &mut k[6]);
             stats.rhs_evals += 6;
             for i in 0..n {
-                err[i] = h_step
-                    * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i]);
+                err[i] =
+                    h_step * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i]);
             }
             let en = err_norm(&err, &y, &ynew, opts);
             if !en.is_finite() {
@@ -339,8 +349,9 @@ where
                     out_y.push(v);
                     next_out += 1;
                 }
-                facold = en.max(1e-4);
+                // PI controller: h_new = h·SAFE/(err^(0.2−0.75β)·err_prev^(−β)), ratio bounded.
                 let mut fac = fac11 / facold.powf(BETA);
+                facold = en.max(1e-4);
                 fac = (fac / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
                 let mut h_next = h_step / fac;
                 if last_rejected {

@@ -135,10 +135,12 @@ pub struct ResonancePeak {
     pub state: SteadyState,
 }
 
-/// Relative threshold on the determinant below which the excitation is treated as an exact
-/// undamped resonance: |D| ≤ 1e-10·(|k11·k22| + |k12·k21|). At the threshold the amplitude would
-/// be ~1e10 times the quasi-static scale F/c; only an (almost) undamped system at (almost) exactly
-/// a natural frequency reaches it.
+/// Relative threshold below which the excitation is treated as an exact undamped resonance:
+/// |D| ≤ 1e-10·(|p1·p2| + |s|·(|p1| + |p2|)), where D = −(p1·p2 + s·(p1 + p2)) is eq. (4) written
+/// with the coupling s = c12 + iΩμ12 and the grounded parts p1 = k11 + k12, p2 = k22 + k21. The
+/// terms cancel only at a natural frequency; at the threshold the amplitude would be ~1e10 times
+/// the quasi-static scale F/c, which only an (almost) undamped system at (almost) exactly a natural
+/// frequency reaches.
 pub const RESONANCE_REL_TOL: f64 = 1e-10;
 
 fn positive(name: &str, v: f64, unit: &str) -> Result<()> {
@@ -239,6 +241,16 @@ impl TwoMass {
         }
     }
 
+    /// Grounded stiffness and damping of each mass, [(K_g1, C_g1), (K_g2, C_g2)] in N/m and N·s/m:
+    /// the springs and dampers from each mass to the fixed frame (c13, μ13 on the isolated mass, μ1
+    /// on m1).
+    pub fn grounded(&self) -> [(f64, f64); 2] {
+        match self.k_terms {
+            KTerms::Eq1 => [(0.0, self.mu1), (self.c13, self.mu13)],
+            KTerms::AsPrinted => [(self.c13, self.mu1 + self.mu13), (0.0, 0.0)],
+        }
+    }
+
     /// Mass, damping and stiffness matrices (kg, N·s/m, N/m) of `M x'' + C x' + K x = f`.
     pub fn matrices(&self) -> (Matrix2<f64>, Matrix2<f64>, Matrix2<f64>) {
         let m = Matrix2::new(self.m1, 0.0, 0.0, self.m2);
@@ -270,17 +282,30 @@ impl TwoMass {
     /// Steady-state response to the internal force ±F·sin Ωt (Ω in rad/s, F in N), by eq. (3)–(4).
     ///
     /// Errors: invalid parameters, Ω negative or not finite, F not finite, and an excitation at an
-    /// undamped natural frequency (|D| below [`RESONANCE_REL_TOL`]), whose amplitude is unbounded.
+    /// undamped natural frequency (|D| below [`RESONANCE_REL_TOL`] of its terms), whose amplitude is
+    /// unbounded.
     pub fn steady_state(&self, omega: f64, force: f64) -> Result<SteadyState> {
         self.validate()?;
         check_omega("forcing frequency Ω", omega)?;
         if !force.is_finite() {
-            return Err(Error::InvalidInput(format!("force amplitude F must be finite, got {force} N")));
+            return Err(Error::InvalidInput(format!(
+                "force amplitude F must be finite, got {force} N"
+            )));
         }
-        let k = self.dynamic_stiffness(omega);
-        let d = k.k12 * k.k21 - k.k11 * k.k22; // eq. (4)
-        let scale = (k.k11 * k.k22).norm() + (k.k12 * k.k21).norm();
-        if !(d.norm() > RESONANCE_REL_TOL * scale) {
+        // Eq. (3)–(4) in a form free of cancellation: with s = −k12 = c12 + iΩμ12 (the coupling) and
+        // the grounded parts p1 = k11 + k12, p2 = k22 + k21 (computed directly, not by subtraction),
+        //   D = k12·k21 − k11·k22 = −(p1·p2 + s·(p1 + p2)),  k12 + k22 = p2,  k11 + k21 = p1.
+        // Algebraically identical to the paper's expressions; numerically it avoids losing
+        // log10(c12/c13) digits when c13 ≪ c12 at low frequency.
+        let [(kg1, cg1), (kg2, cg2)] = self.grounded();
+        let w2 = omega * omega;
+        let sc = Complex::new(self.c12, omega * self.mu12);
+        let p1 = Complex::new(kg1 - self.m1 * w2, omega * cg1);
+        let p2 = Complex::new(kg2 - self.m2 * w2, omega * cg2);
+        let d = -(p1 * p2 + sc * (p1 + p2)); // eq. (4)
+        // Resonance: the terms of D cancel (det(K − Ω²M) = 0 with no damping to stop it).
+        let scale = (p1 * p2).norm() + sc.norm() * (p1.norm() + p2.norm());
+        if d.norm().is_nan() || d.norm() <= RESONANCE_REL_TOL * scale {
             let wn = self.natural_frequencies()?;
             return Err(Error::InvalidInput(format!(
                 "excitation at Ω = {omega} rad/s ({:.6} Hz) is at an undamped resonance of the two-mass \
@@ -295,9 +320,13 @@ impl TwoMass {
             )));
         }
         // Unit-force receptances (eq. (3) with F = 1), m/N.
-        let h1 = (k.k12 + k.k22) / d;
-        let h2 = -(k.k11 + k.k21) / d;
-        let w2 = omega * omega;
+        let h1 = p2 / d;
+        let h2 = -p1 / d;
+        if !(h1.re.is_finite() && h1.im.is_finite() && h2.re.is_finite() && h2.im.is_finite()) {
+            return Err(Error::InvalidInput(format!(
+                "steady state at Ω = {omega} rad/s is not finite (parameters out of floating-point range?)"
+            )));
+        }
         Ok(SteadyState {
             omega,
             force,
@@ -415,7 +444,9 @@ impl TwoMass {
                 Mass::Reactive => s.amp2(),
             })
         };
-        let fs: Vec<f64> = (0..n).map(|i| f_lo + (f_hi - f_lo) * i as f64 / (n - 1) as f64).collect();
+        let fs: Vec<f64> = (0..n)
+            .map(|i| f_lo + (f_hi - f_lo) * i as f64 / (n - 1) as f64)
+            .collect();
         let a: Vec<f64> = fs.iter().map(|&f| amp(f)).collect::<Result<_>>()?;
         let mut peaks = Vec::new();
         for i in 1..n - 1 {
@@ -464,7 +495,9 @@ fn check_range(f_lo: f64, f_hi: f64, n: usize) -> Result<()> {
         )));
     }
     if n < 3 {
-        return Err(Error::InvalidInput(format!("frequency sweep needs at least 3 points, got {n}")));
+        return Err(Error::InvalidInput(format!(
+            "frequency sweep needs at least 3 points, got {n}"
+        )));
     }
     Ok(())
 }

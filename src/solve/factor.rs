@@ -89,6 +89,7 @@ pub struct Factor {
 impl Factor {
     /// Factor `a` (stored symmetric, upper triangle read).
     pub fn new(sym: Arc<SymbolicFactor>, a: &SymMatrix) -> Result<Self> {
+        let t0 = std::time::Instant::now();
         let mut values = Vec::new();
         values.try_reserve_exact(sym.sym.len_val()).map_err(|_| {
             Error::Factorization(format!(
@@ -113,6 +114,12 @@ impl Factor {
                 Default::default(),
             )
             .map_err(|e| Error::Factorization(format!("LDLᵀ: {e:?}")))?;
+        log::info!(
+            "factorised K − σM: {} entries in L, {:.3e} flop, {:.2} s",
+            sym.nnz_l,
+            sym.flops,
+            t0.elapsed().as_secs_f64()
+        );
         let d = diagonal(&sym.sym, &values);
         let negative_pivots = d.iter().filter(|&&x| x < 0.0).count();
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Live validation of vibrofem against scikit-fem (what CI runs after `cargo test`):
+#   1. set up the Python tools if validation/.venv is missing (validation/setup.sh);
+#   2. run the convention self-tests (skfem_modes.py --selftest, ~10 s), then recompute every
+#      scikit-fem reference from the committed meshes into a temporary folder
+#      and check it equals the committed validation/reference/*.json (elastic frequencies to
+#      1e-9 relative, same dofs, mass) -- the committed references are never overwritten;
+#   3. run validation/compare.py on the release binary (every case to 1e-6 relative).
+#
+#   bash validation/run_live.sh                      # uses target/release/vibrofem
+#   VIBROFEM=path/to/vibrofem bash validation/run_live.sh
+#   SKIP_REGEN=1 bash validation/run_live.sh         # step 3 only (skips step 2)
+# Extra arguments are passed to compare.py (e.g. --cases s1_plate --verbose).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$ROOT"
+BIN="${VIBROFEM:-target/release/vibrofem}"
+
+if [ ! -x validation/.venv/bin/python ] && ! python3 -c "import gmsh, skfem" >/dev/null 2>&1; then
+    bash validation/setup.sh
+fi
+PY=validation/.venv/bin/python
+[ -x "$PY" ] || PY=python3
+
+if [ "${SKIP_REGEN:-0}" != 1 ]; then
+    TMP="$(mktemp -d)"
+    trap 'rm -rf "$TMP"' EXIT
+    echo "== scikit-fem convention self-tests"
+    "$PY" validation/skfem_modes.py --selftest
+    echo "== regenerating scikit-fem references into $TMP"
+    "$PY" validation/skfem_modes.py --out "$TMP" --check validation/reference
+fi
+
+echo "== comparing $BIN with the references"
+if [ ! -x "$BIN" ]; then
+    echo "run_live.sh: $BIN not found; build it with: cargo build --release" >&2
+    exit 1
+fi
+"$PY" validation/compare.py "$BIN" "$@"
