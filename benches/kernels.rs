@@ -46,11 +46,11 @@ fn assembly_and_solve(c: &mut Criterion) {
     g.sample_size(10);
     g.bench_function("pattern", |b| {
         b.iter(|| {
-            let graph = NodeGraph::build(mesh.n_nodes(), &sets);
+            let graph = NodeGraph::build(mesh.n_nodes(), &sets, Some(&model.dofs));
             dof_pattern(&graph, &model.dofs)
         })
     });
-    let graph = NodeGraph::build(mesh.n_nodes(), &sets);
+    let graph = NodeGraph::build(mesh.n_nodes(), &sets, Some(&model.dofs));
     let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
     g.bench_function("assemble K and M", |b| {
         b.iter(|| assemble(pattern.clone(), &model.dofs, &sets, true).unwrap())

@@ -4,7 +4,7 @@ use crate::assembly::{NodeGraph, assemble, dof_pattern};
 use crate::mesh::Mesh;
 use crate::model::{Model, ModelSpec};
 use crate::ordering::{Ordering, nested_dissection};
-use crate::post::modal::{ParticipationTable, count_rigid, hz, lambda_of_hz, participation};
+use crate::post::modal::{ParticipationTable, hz, lambda_of_hz, participation};
 use crate::solve::eigen::{self, EigenParams, SturmCheck, Target};
 use crate::solve::factor::SymbolicFactor;
 use crate::{Error, Result};
@@ -178,9 +178,10 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
     };
     let t = Instant::now();
     let model = Model::build(mesh, &opts.spec, source)?;
-    let (volume, mass) = model.volume_and_mass()?;
+    let (volume, solid_mass) = model.volume_and_mass()?;
+    let mass = solid_mass + model.discrete_mass();
     let sets = model.element_sets();
-    let graph = NodeGraph::build(mesh.n_nodes(), &sets);
+    let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
     let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
     let km = assemble(pattern.clone(), &model.dofs, &sets, true)?;
     tm.assemble = t.elapsed().as_secs_f64();
@@ -241,28 +242,30 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
     tm.verify = sol.time_verify;
 
     let t = Instant::now();
-    let nodes = &mesh.nodes;
+    let nodes = &model.nodes;
     let part: ParticipationTable = participation(&km.m, &model.dofs, nodes, sol.vectors.as_ref());
-    let n_rigid = if opts.shift_hz.is_none() && matches!(opts.target, ModalTarget::Modes(_)) {
-        count_rigid(&sol.lambda)
-    } else {
-        sol.lambda.iter().take_while(|&&l| hz(l).abs() < 1e-2).count()
-    };
+    // Rigid-body modes: shapes in the span of the six rigid-body motions (they come first).
+    let n_rigid = part.rigid.iter().take_while(|&&r| r).count();
     let mut modes = Vec::with_capacity(sol.lambda.len());
     for (i, &l) in sol.lambda.iter().enumerate() {
         modes.push(ModeRow {
             mode: i + 1,
             frequency_hz: hz(l),
             eigenvalue: l,
-            kind: if i < n_rigid { "rigid" } else { "elastic" },
+            kind: if part.rigid[i] { "rigid" } else { "elastic" },
             rel_residual: sol.rel_residual[i],
             participation: part.modes[i].factor,
             effective_mass: part.modes[i].effective,
             cumulative_ratio: part.cumulative_ratio[i],
         });
     }
+    let n_mesh = model.n_mesh_nodes;
     let shapes: Vec<Vec<f64>> = (0..sol.vectors.ncols())
-        .map(|c| model.dofs.expand(&eigen::column(&sol.vectors, c), 3))
+        .map(|c| {
+            let mut s = model.dofs.expand(&eigen::column(&sol.vectors, c), 3);
+            s.truncate(3 * n_mesh);
+            s
+        })
         .collect();
     tm.post = t.elapsed().as_secs_f64();
     tm.total = t_all.elapsed().as_secs_f64() + read_time;

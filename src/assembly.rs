@@ -41,8 +41,10 @@ pub struct NodeGraph {
 }
 
 impl NodeGraph {
-    /// Build the graph of nodes sharing an element, over all element sets.
-    pub fn build(n_nodes: usize, sets: &[&dyn ElementSet]) -> NodeGraph {
+    /// Build the graph of nodes sharing an element, over all element sets. Through
+    /// constraints, an element also couples the nodes its nodes depend on (`dofs.deps`, e.g.
+    /// the reference node of a rigid coupling).
+    pub fn build(n_nodes: usize, sets: &[&dyn ElementSet], dofs: Option<&DofMap>) -> NodeGraph {
         // One packed (a, b) key per ordered node pair of each element; sort and dedup.
         let mut keys: Vec<u64> = sets
             .iter()
@@ -50,16 +52,34 @@ impl NodeGraph {
                 (0..s.len())
                     .into_par_iter()
                     .flat_map_iter(move |e| {
-                        let nodes = s.nodes(e);
-                        nodes
-                            .iter()
-                            .flat_map(move |&a| nodes.iter().map(move |&b| ((a as u64) << 32) | b as u64))
+                        let mut nodes: Vec<u32> = s.nodes(e).to_vec();
+                        if let Some(d) = dofs {
+                            for &a in s.nodes(e) {
+                                nodes.extend_from_slice(&d.deps[a as usize]);
+                            }
+                        }
+                        let nodes2 = nodes.clone();
+                        nodes.into_iter().flat_map(move |a| {
+                            let v: Vec<u64> = nodes2.iter().map(|&b| ((a as u64) << 32) | b as u64).collect();
+                            v.into_iter()
+                        })
                     })
                     .collect::<Vec<u64>>()
             })
             .collect();
-        // Isolated nodes (in no element) still get their diagonal.
+        // Every node couples with itself, and a constrained node with what it depends on.
         keys.extend((0..n_nodes as u64).map(|a| (a << 32) | a));
+        if let Some(d) = dofs {
+            for (a, deps) in d.deps.iter().enumerate() {
+                for &b in deps {
+                    keys.push(((a as u64) << 32) | b as u64);
+                    keys.push(((b as u64) << 32) | a as u64);
+                    for &c in deps {
+                        keys.push(((b as u64) << 32) | c as u64);
+                    }
+                }
+            }
+        }
         keys.par_sort_unstable();
         keys.dedup();
         let mut ptr = vec![0usize; n_nodes + 1];
@@ -164,14 +184,56 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
                 })
                 .collect::<Result<_>>()?;
             for (off, (ke, me)) in mats.iter().enumerate() {
-                scatter(&pattern, dofs, set.nodes(start + off), ndpn, ke, &mut k.values);
-                if want_mass {
-                    scatter(&pattern, dofs, set.nodes(start + off), ndpn, me, &mut m.values);
+                let nodes = set.nodes(start + off);
+                if nodes.iter().any(|&a| dofs.special[a as usize]) {
+                    scatter_general(&pattern, dofs, nodes, ndpn, ke, &mut k.values);
+                    if want_mass {
+                        scatter_general(&pattern, dofs, nodes, ndpn, me, &mut m.values);
+                    }
+                } else {
+                    scatter(&pattern, dofs, nodes, ndpn, ke, &mut k.values);
+                    if want_mass {
+                        scatter(&pattern, dofs, nodes, ndpn, me, &mut m.values);
+                    }
                 }
             }
         }
     }
     Ok(Assembled { k, m })
+}
+
+/// Add one element matrix through the constraint transformation: K̂ += Tₑᵀ Kₑ Tₑ, where row i
+/// of Tₑ expands local DOF i into equations (slaves into their masters).
+fn scatter_general(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f64], vals: &mut [f64]) {
+    let nd = ndpn * nodes.len();
+    let exps: Vec<crate::dof::Expansion> = nodes
+        .iter()
+        .flat_map(|&a| (0..ndpn).map(move |c| (a as usize, c)))
+        .map(|(a, c)| {
+            if dofs.active[a] & (1 << c) != 0 {
+                dofs.expansion(crate::dof::NCOMP * a + c)
+            } else {
+                Default::default()
+            }
+        })
+        .collect();
+    for j in 0..nd {
+        for &(ej, cj) in &exps[j].terms {
+            for i in 0..nd {
+                let v = me[i * nd + j];
+                if v == 0.0 {
+                    continue;
+                }
+                for &(ei, ci) in &exps[i].terms {
+                    if let Some(pos) = pattern.position(ei, ej) {
+                        vals[pos] += ci * cj * v;
+                    } else {
+                        debug_assert!(false, "pattern misses ({ei}, {ej})");
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Add one element matrix into global values.

@@ -5,11 +5,9 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vibrofem::analysis::{ModalOptions, ModalTarget, run_modal};
-use vibrofem::dof::parse_components;
-use vibrofem::element::MassLumping;
+use vibrofem::cli::{LoadArgs, ModelArgs, length_scale};
 use vibrofem::io;
 use vibrofem::material::Material;
-use vibrofem::model::ModelSpec;
 use vibrofem::ordering::Ordering;
 use vibrofem::{Error, Result};
 
@@ -34,8 +32,29 @@ struct Cli {
 enum Cmd {
     /// Natural frequencies and mode shapes of a solid mesh (gmsh MSH 2.2 or 4.1).
     Modes(ModesArgs),
+    /// Linear static analysis: displacements, reactions, stiffness and stresses.
+    Static(StaticArgs),
     /// Groups, cell kinds and counts, bounding box, volume and mass of a mesh.
     MeshInfo(MeshInfoArgs),
+}
+
+#[derive(clap::Args)]
+struct StaticArgs {
+    /// gmsh mesh file (MSH 2.2 or 4.1), or a generated box `box:LX,LY,LZ:NX,NY,NZ:KIND`.
+    mesh: String,
+    #[command(flatten)]
+    model: ModelArgs,
+    #[command(flatten)]
+    loads: LoadArgs,
+    /// Print the JSON report on stdout instead of the text summary.
+    #[arg(long)]
+    json: bool,
+    /// Write displacement and stress fields as a VTU file (ParaView).
+    #[arg(long)]
+    vtu: Option<PathBuf>,
+    /// Write the mesh with displacement and stress views (gmsh).
+    #[arg(long = "msh-out")]
+    msh_out: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -48,21 +67,8 @@ struct ModesArgs {
     /// All modes with frequency in [F_LO, F_HI] Hz.
     #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"])]
     band: Option<Vec<f64>>,
-    /// Material of all volume cells: `steel` or `E,NU,RHO` in Pa, -, kg/m³.
-    #[arg(long, default_value = "steel", allow_hyphen_values = true)]
-    material: String,
-    /// Material of one group: `GROUP=steel` or `GROUP=E,NU,RHO` (repeatable).
-    #[arg(long = "group-material", value_name = "GROUP=MAT", allow_hyphen_values = true)]
-    group_material: Vec<String>,
-    /// Fix a group's nodes: `GROUP` (all components) or `GROUP:ux,uy,uz` (repeatable).
-    #[arg(long, value_name = "GROUP[:COMPONENTS]")]
-    fix: Vec<String>,
-    /// Mass matrix: consistent (default) or lumped (HRZ).
-    #[arg(long, default_value = "consistent")]
-    mass: String,
-    /// Length unit of the mesh coordinates: m (default) or mm.
-    #[arg(long = "length-unit", default_value = "m")]
-    length_unit: String,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Shift in Hz: find the modes nearest this frequency (negative: a negative λ shift).
     #[arg(long, allow_negative_numbers = true)]
     shift: Option<f64>,
@@ -104,17 +110,6 @@ struct MeshInfoArgs {
     json: bool,
 }
 
-fn length_scale(u: &str) -> Result<f64> {
-    match u {
-        "m" => Ok(1.0),
-        "mm" => Ok(1e-3),
-        "cm" => Ok(1e-2),
-        _ => Err(Error::InvalidInput(format!(
-            "--length-unit: unknown unit '{u}' (use m or mm)"
-        ))),
-    }
-}
-
 fn parse_bytes(s: &str) -> Result<u64> {
     let t = s.trim();
     let (num, mult) = match t.chars().last() {
@@ -133,26 +128,7 @@ fn parse_bytes(s: &str) -> Result<u64> {
 }
 
 fn modes(a: &ModesArgs) -> Result<i32> {
-    let mut spec = ModelSpec {
-        material: Material::parse(&a.material)?,
-        ..Default::default()
-    };
-    for gm in &a.group_material {
-        let (g, m) = gm
-            .split_once('=')
-            .ok_or_else(|| Error::InvalidInput(format!("--group-material '{gm}': expected GROUP=MATERIAL")))?;
-        spec.group_materials.push((g.to_string(), Material::parse(m)?));
-    }
-    for f in &a.fix {
-        let (g, comps) = match f.split_once(':') {
-            Some((g, c)) => (g, c),
-            None => (f.as_str(), "ux,uy,uz"),
-        };
-        let mask = parse_components(comps)
-            .ok_or_else(|| Error::InvalidInput(format!("--fix '{f}': unknown components '{comps}' (use ux,uy,uz)")))?;
-        spec.fixes.push((g.to_string(), mask));
-    }
-    spec.lumping = MassLumping::parse(&a.mass)?;
+    let spec = a.model.spec()?;
     let target = match (&a.band, a.modes) {
         (Some(b), _) => ModalTarget::Band(b[0], b[1]),
         (None, Some(n)) if n > 0 => ModalTarget::Modes(n),
@@ -181,7 +157,7 @@ fn modes(a: &ModesArgs) -> Result<i32> {
         max_applications: a.max_applications,
     };
     let t = std::time::Instant::now();
-    let mesh = io::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
+    let mesh = io::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
     let source = a.mesh.clone();
     let run = run_modal(&mesh, &source, &opts, read_time)?;
@@ -233,6 +209,33 @@ fn modes(a: &ModesArgs) -> Result<i32> {
     Ok(0)
 }
 
+fn static_cmd(a: &StaticArgs) -> Result<i32> {
+    let mut spec = a.model.spec()?;
+    let loads = a.loads.apply(&mut spec)?;
+    let mesh = io::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let opts = vibrofem::statics::StaticOptions {
+        spec,
+        cases: vec![loads],
+    };
+    let run = vibrofem::statics::run_static(&mesh, &a.mesh, &opts)?;
+    let report = vibrofem::report::static_report(&mesh, &a.mesh, &run)?;
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| Error::InvalidInput(e.to_string()))?
+        );
+    } else {
+        print!("{}", vibrofem::report::static_text(&report));
+    }
+    if a.vtu.is_some() || a.msh_out.is_some() {
+        vibrofem::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
+    }
+    for n in &run.model.notes {
+        eprintln!("note: {n}");
+    }
+    Ok(0)
+}
+
 fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     let mesh = io::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
     let mat = Material::parse(&a.material)?;
@@ -265,6 +268,7 @@ fn main() -> ExitCode {
     }
     let r = match &cli.cmd {
         Cmd::Modes(a) => modes(a),
+        Cmd::Static(a) => static_cmd(a),
         Cmd::MeshInfo(a) => mesh_info(a),
     };
     match r {

@@ -21,6 +21,15 @@ pub struct ModelSpec {
     pub fixes: Vec<(String, DofMask)>,
     /// Mass matrix form.
     pub lumping: MassLumping,
+    /// Rigid couplings of groups to reference nodes.
+    pub couplings: Vec<CouplingSpec>,
+    /// Prescribed displacements per group: `(group, [ux, uy, uz, rx, ry, rz])`, `None` = free.
+    /// On a coupled group they apply to its reference node.
+    pub prescribed: Vec<(String, [Option<f64>; 6])>,
+    /// Point masses.
+    pub point_masses: Vec<PointMassSpec>,
+    /// Discrete springs.
+    pub springs: Vec<SpringSpec>,
 }
 
 impl Default for ModelSpec {
@@ -30,8 +39,98 @@ impl Default for ModelSpec {
             group_materials: vec![],
             fixes: vec![],
             lumping: MassLumping::Consistent,
+            couplings: vec![],
+            prescribed: vec![],
+            point_masses: vec![],
+            springs: vec![],
         }
     }
+}
+
+/// A rigid coupling (RBE2 / kinematic coupling): every node of `group` follows a reference node
+/// at the group's centroid as a rigid body, u_s = u_R + θ_R × (x_s − x_R) (and θ_s = θ_R for
+/// nodes with rotations). Implemented by eliminating the slave DOFs, not by penalty springs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CouplingSpec {
+    /// The coupled group.
+    pub group: String,
+    /// "Guided": the reference node may only translate along this axis (0 = x, 1 = y, 2 = z)
+    /// and may not rotate.
+    pub guided: Option<usize>,
+}
+
+/// A point mass with rotary inertia.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointMassSpec {
+    /// Where: a coupled group (its reference node), a one-node group, or a group whose nodes
+    /// share the mass equally (translations only).
+    pub group: String,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Inertia tensor about the point, kg·m²: Ixx, Iyy, Izz, Ixy, Iyz, Ixz.
+    pub inertia: [f64; 6],
+}
+
+/// A discrete spring with a diagonal 6×6 stiffness, between two groups' points or from one
+/// point to the ground. A point is a coupled group's reference node or a one-node group.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpringSpec {
+    /// First end.
+    pub a: String,
+    /// Second end, or `None` for the ground.
+    pub b: Option<String>,
+    /// Stiffness in ux, uy, uz (N/m) and rx, ry, rz (N·m/rad).
+    pub k: [f64; 6],
+}
+
+/// Discrete elements (point masses, springs) with precomputed matrices.
+pub struct DiscreteSet {
+    /// Nodes per element (1 or 2).
+    pub per: usize,
+    /// Components per node (3 or 6).
+    pub ndpn: usize,
+    /// Node indices, `per` per element.
+    pub nodes: Vec<u32>,
+    /// Stiffness matrices, `(per·ndpn)²` each, row-major.
+    pub ke: Vec<Vec<f64>>,
+    /// Mass matrices.
+    pub me: Vec<Vec<f64>>,
+    /// What each element is, for messages and reports.
+    pub labels: Vec<String>,
+}
+
+impl ElementSet for DiscreteSet {
+    fn len(&self) -> usize {
+        self.labels.len()
+    }
+    fn nodes(&self, e: usize) -> &[u32] {
+        &self.nodes[e * self.per..(e + 1) * self.per]
+    }
+    fn dofs_per_node(&self) -> usize {
+        self.ndpn
+    }
+    fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
+        ke.copy_from_slice(&self.ke[e]);
+        if want_mass {
+            me.copy_from_slice(&self.me[e]);
+        }
+        Ok(())
+    }
+}
+
+/// A reference node created for a coupling.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ReferenceNode {
+    /// The coupled group.
+    pub group: String,
+    /// Node index in the model (after the mesh's nodes).
+    pub node: usize,
+    /// Position (centroid of the group's nodes), m.
+    pub position: [f64; 3],
+    /// Number of coupled nodes.
+    pub slaves: usize,
+    /// Guided axis, if any.
+    pub guided: Option<usize>,
 }
 
 /// The solid cells of one kind, with their materials.
@@ -53,8 +152,8 @@ pub struct SolidSet {
 }
 
 impl SolidSet {
-    /// Coordinates of cell `e`'s nodes.
-    fn coords(&self, e: usize, out: &mut [[f64; 3]]) {
+    /// Coordinates of cell `e`'s nodes, written to `out` (length `kind.n_nodes()`).
+    pub fn coords(&self, e: usize, out: &mut [[f64; 3]]) {
         for (o, &a) in out.iter_mut().zip(self.nodes(e)) {
             *o = self.nodes[a as usize];
         }
@@ -68,7 +167,8 @@ impl SolidSet {
         solid::volume(self.kind, &x[..nn]).map_err(|det| self.inverted(e, det))
     }
 
-    fn inverted(&self, e: usize, det: f64) -> Error {
+    /// The error for a non-positive Jacobian in cell `e`.
+    pub fn inverted(&self, e: usize, det: f64) -> Error {
         Error::InvertedElement {
             element: self.tags[e],
             kind: self.kind.name(),
@@ -105,6 +205,14 @@ impl ElementSet for SolidSet {
 pub struct Model {
     /// Solid element sets, one per cell kind present.
     pub solids: Vec<SolidSet>,
+    /// Point masses and springs (each set has one node count and DOFs per node).
+    pub discrete: Vec<DiscreteSet>,
+    /// All node coordinates: the mesh's, then the reference nodes.
+    pub nodes: std::sync::Arc<Vec<[f64; 3]>>,
+    /// Number of mesh nodes (reference nodes follow).
+    pub n_mesh_nodes: usize,
+    /// Reference nodes of couplings.
+    pub references: Vec<ReferenceNode>,
     /// The DOF numbering.
     pub dofs: DofMap,
     /// Materials table (index 0 is the default material).
@@ -132,6 +240,7 @@ impl Model {
         }
         let nodes = std::sync::Arc::new(mesh.nodes.clone());
         let mut solids = Vec::new();
+        let _ = &nodes;
         for (bi, block) in mesh.blocks.iter().enumerate() {
             if block.kind.dim() != 3 || block.is_empty() {
                 continue;
@@ -165,17 +274,215 @@ impl Model {
                 ),
             });
         }
-        let n = mesh.n_nodes();
+        let n_mesh = mesh.n_nodes();
+        let mut notes = Vec::new();
+        // Reference nodes of couplings, appended after the mesh nodes.
+        let mut all_nodes = mesh.nodes.clone();
+        let mut references = Vec::new();
+        let mut coupled_nodes: Vec<(usize, Vec<u32>)> = Vec::new();
+        for c in &spec.couplings {
+            let grp = mesh.group(&c.group)?;
+            let gn = mesh.group_nodes(grp);
+            if gn.is_empty() {
+                return Err(Error::InvalidInput(format!("coupling: group '{}' is empty", c.group)));
+            }
+            if references.iter().any(|r: &ReferenceNode| r.group == c.group) {
+                return Err(Error::InvalidInput(format!("group '{}' is coupled twice", c.group)));
+            }
+            if let Some(ax) = c.guided {
+                if ax > 2 {
+                    return Err(Error::InvalidInput(format!(
+                        "coupling '{}': guided axis must be x, y or z",
+                        c.group
+                    )));
+                }
+            }
+            let mut p = [0.0; 3];
+            for &a in &gn {
+                for d in 0..3 {
+                    p[d] += mesh.nodes[a as usize][d] / gn.len() as f64;
+                }
+            }
+            references.push(ReferenceNode {
+                group: c.group.clone(),
+                node: all_nodes.len(),
+                position: p,
+                slaves: gn.len(),
+                guided: c.guided,
+            });
+            coupled_nodes.push((all_nodes.len(), gn));
+            all_nodes.push(p);
+        }
+        let n = all_nodes.len();
+        let nodes = std::sync::Arc::new(all_nodes);
+        for s in &mut solids {
+            s.nodes = nodes.clone();
+        }
+        let point_of = |g: &str| -> Result<usize> {
+            if let Some(r) = references.iter().find(|r| r.group == g) {
+                return Ok(r.node);
+            }
+            let gn = mesh.group_nodes(mesh.group(g)?);
+            match gn.as_slice() {
+                [a] => Ok(*a as usize),
+                _ => Err(Error::InvalidInput(format!(
+                    "group '{g}' has {} nodes: a point mass with inertia or a spring needs a coupled group or a \
+                     one-node group",
+                    gn.len()
+                ))),
+            }
+        };
+        // Discrete elements.
+        let mut discrete = Vec::new();
+        let mut masses6 = DiscreteSet {
+            per: 1,
+            ndpn: 6,
+            nodes: vec![],
+            ke: vec![],
+            me: vec![],
+            labels: vec![],
+        };
+        let mut masses3 = DiscreteSet {
+            per: 1,
+            ndpn: 3,
+            nodes: vec![],
+            ke: vec![],
+            me: vec![],
+            labels: vec![],
+        };
+        for pm in &spec.point_masses {
+            if !(pm.mass.is_finite() && pm.mass >= 0.0) || pm.inertia.iter().any(|v| !v.is_finite()) {
+                return Err(Error::InvalidInput(format!(
+                    "point mass on '{}': mass must be non-negative and finite, got {}",
+                    pm.group, pm.mass
+                )));
+            }
+            let rotary = pm.inertia.iter().any(|&v| v != 0.0);
+            let single = references.iter().any(|r| r.group == pm.group)
+                || mesh.group(&pm.group).map(|g| mesh.group_nodes(g).len() == 1)?;
+            if single {
+                let a = point_of(&pm.group)?;
+                let mut me = vec![0.0; 36];
+                for d in 0..3 {
+                    me[d * 6 + d] = pm.mass;
+                }
+                let [ixx, iyy, izz, ixy, iyz, ixz] = pm.inertia;
+                let it = [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        me[(3 + i) * 6 + 3 + j] = it[i][j];
+                    }
+                }
+                masses6.nodes.push(a as u32);
+                masses6.ke.push(vec![0.0; 36]);
+                masses6.me.push(me);
+                masses6
+                    .labels
+                    .push(format!("point mass {} kg on '{}'", pm.mass, pm.group));
+            } else {
+                if rotary {
+                    return Err(Error::InvalidInput(format!(
+                        "point mass on '{}': rotary inertia needs a coupled group (--couple {})",
+                        pm.group, pm.group
+                    )));
+                }
+                let gn = mesh.group_nodes(mesh.group(&pm.group)?);
+                let share = pm.mass / gn.len() as f64;
+                for a in gn {
+                    let mut me = vec![0.0; 9];
+                    for d in 0..3 {
+                        me[d * 3 + d] = share;
+                    }
+                    masses3.nodes.push(a);
+                    masses3.ke.push(vec![0.0; 9]);
+                    masses3.me.push(me);
+                    masses3.labels.push(format!("share of point mass on '{}'", pm.group));
+                }
+                notes.push(format!(
+                    "point mass {} kg on '{}' spread equally over its nodes",
+                    pm.mass, pm.group
+                ));
+            }
+        }
+        let mut springs1 = DiscreteSet {
+            per: 1,
+            ndpn: 6,
+            nodes: vec![],
+            ke: vec![],
+            me: vec![],
+            labels: vec![],
+        };
+        let mut springs2 = DiscreteSet {
+            per: 2,
+            ndpn: 6,
+            nodes: vec![],
+            ke: vec![],
+            me: vec![],
+            labels: vec![],
+        };
+        for sp in &spec.springs {
+            if sp.k.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(Error::InvalidInput(format!(
+                    "spring on '{}': stiffnesses must be non-negative",
+                    sp.a
+                )));
+            }
+            let a = point_of(&sp.a)?;
+            match &sp.b {
+                None => {
+                    let mut ke = vec![0.0; 36];
+                    for d in 0..6 {
+                        ke[d * 6 + d] = sp.k[d];
+                    }
+                    springs1.nodes.push(a as u32);
+                    springs1.ke.push(ke);
+                    springs1.me.push(vec![0.0; 36]);
+                    springs1.labels.push(format!("spring '{}' to ground", sp.a));
+                }
+                Some(bg) => {
+                    let b = point_of(bg)?;
+                    let mut ke = vec![0.0; 144];
+                    for d in 0..6 {
+                        ke[d * 12 + d] = sp.k[d];
+                        ke[(d + 6) * 12 + d + 6] = sp.k[d];
+                        ke[d * 12 + d + 6] = -sp.k[d];
+                        ke[(d + 6) * 12 + d] = -sp.k[d];
+                    }
+                    springs2.nodes.extend([a as u32, b as u32]);
+                    springs2.ke.push(ke);
+                    springs2.me.push(vec![0.0; 144]);
+                    springs2.labels.push(format!("spring '{}'–'{bg}'", sp.a));
+                }
+            }
+        }
+        for d in [masses6, masses3, springs1, springs2] {
+            if !d.labels.is_empty() {
+                discrete.push(d);
+            }
+        }
+
+        // Active components: what the elements use; reference nodes carry all six.
         let mut active = vec![0 as DofMask; n];
         for s in &solids {
             for &a in &s.conn {
                 active[a as usize] |= TRANSLATIONS;
             }
         }
-        let orphan_nodes = active.iter().filter(|&&m| m == 0).count();
-        let mut fixed = vec![0 as DofMask; n];
-        let mut notes = Vec::new();
-        for (g, mask) in &spec.fixes {
+        for d in &discrete {
+            let mask: DofMask = if d.ndpn == 6 { crate::dof::ALL6 } else { TRANSLATIONS };
+            for &a in &d.nodes {
+                active[a as usize] |= mask;
+            }
+        }
+        for r in &references {
+            active[r.node] |= crate::dof::ALL6;
+        }
+        let orphan_nodes = active[..n_mesh].iter().filter(|&&m| m == 0).count();
+
+        // Constraints: fixes, couplings, prescribed values.
+        let mut cons = crate::dof::Constraints::new(n);
+        let mut fixed_by: Vec<Option<usize>> = vec![None; n];
+        for (gi, (g, mask)) in spec.fixes.iter().enumerate() {
             let grp = mesh.group(g)?;
             let gn = mesh.group_nodes(grp);
             if gn.is_empty() {
@@ -186,8 +493,9 @@ impl Model {
                 let m = *mask & active[a as usize];
                 if m != 0 {
                     count += 1;
+                    fixed_by[a as usize] = Some(gi);
                 }
-                fixed[a as usize] |= m;
+                cons.fixed[a as usize] |= m;
             }
             if count == 0 {
                 return Err(Error::InvalidInput(format!(
@@ -195,14 +503,95 @@ impl Model {
                 )));
             }
         }
+        use crate::dof::NCOMP;
+        for (r, (rnode, gn)) in references.iter().zip(&coupled_nodes) {
+            let xr = r.position;
+            for &s in gn {
+                let s = s as usize;
+                if let Some(gi) = fixed_by[s] {
+                    return Err(Error::InvalidInput(format!(
+                        "conflicting constraints: group '{}' is coupled, but its node {} is also fixed by '{}'",
+                        r.group, mesh.node_tags[s], spec.fixes[gi].0
+                    )));
+                }
+                if references.iter().any(|o| {
+                    o.group != r.group
+                        && coupled_nodes
+                            .iter()
+                            .any(|(rn, g)| *rn == o.node && g.contains(&(s as u32)))
+                        && o.node < r.node
+                }) {
+                    return Err(Error::InvalidInput(format!(
+                        "conflicting constraints: node {} belongs to two coupled groups",
+                        mesh.node_tags[s]
+                    )));
+                }
+                let d = [nodes[s][0] - xr[0], nodes[s][1] - xr[1], nodes[s][2] - xr[2]];
+                let rr = |c: usize| NCOMP * rnode + c;
+                // u_s = u_R + θ_R × d
+                let rows: [Vec<(usize, f64)>; 3] = [
+                    vec![(rr(0), 1.0), (rr(4), d[2]), (rr(5), -d[1])],
+                    vec![(rr(1), 1.0), (rr(5), d[0]), (rr(3), -d[2])],
+                    vec![(rr(2), 1.0), (rr(3), d[1]), (rr(4), -d[0])],
+                ];
+                for (c, row) in rows.into_iter().enumerate() {
+                    if active[s] & (1 << c) != 0 {
+                        cons.mpc
+                            .insert(NCOMP * s + c, row.into_iter().filter(|(_, k)| *k != 0.0).collect());
+                    }
+                }
+                for c in 3..6 {
+                    if active[s] & (1 << c) != 0 {
+                        cons.mpc.insert(NCOMP * s + c, vec![(rr(c), 1.0)]);
+                    }
+                }
+            }
+            if let Some(ax) = r.guided {
+                cons.fixed[*rnode] |= crate::dof::ALL6 & !(1 << ax);
+            }
+        }
+        for (g, vals) in &spec.prescribed {
+            let targets: Vec<usize> = match references.iter().find(|r| &r.group == g) {
+                Some(r) => vec![r.node],
+                None => mesh
+                    .group_nodes(mesh.group(g)?)
+                    .into_iter()
+                    .map(|a| a as usize)
+                    .collect(),
+            };
+            for a in targets {
+                for (c, v) in vals.iter().enumerate() {
+                    let Some(v) = v else { continue };
+                    if !v.is_finite() {
+                        return Err(Error::InvalidInput(format!(
+                            "prescribed displacement on '{g}' is not finite"
+                        )));
+                    }
+                    if active[a] & (1 << c) == 0 {
+                        continue;
+                    }
+                    if cons.mpc.contains_key(&(NCOMP * a + c)) {
+                        return Err(Error::InvalidInput(format!(
+                            "conflicting constraints: '{g}' prescribes a coupled node; prescribe the coupled group instead"
+                        )));
+                    }
+                    cons.fixed[a] |= 1 << c;
+                    cons.value.insert(NCOMP * a + c, *v);
+                }
+            }
+        }
         if orphan_nodes > 0 {
             notes.push(format!(
                 "{orphan_nodes} nodes belong to no volume element and are ignored"
             ));
         }
-        let dofs = DofMap::new(active, fixed);
+        let dofs = DofMap::with_constraints(active, cons)?;
         Ok(Model {
             solids,
+            discrete,
+            nodes,
+            n_mesh_nodes: n_mesh,
+            references,
             dofs,
             materials,
             orphan_nodes,
@@ -212,7 +601,11 @@ impl Model {
 
     /// Element sets for assembly.
     pub fn element_sets(&self) -> Vec<&dyn ElementSet> {
-        self.solids.iter().map(|s| s as &dyn ElementSet).collect()
+        self.solids
+            .iter()
+            .map(|s| s as &dyn ElementSet)
+            .chain(self.discrete.iter().map(|d| d as &dyn ElementSet))
+            .collect()
     }
 
     /// Total volume (m³) and mass (kg) of the solid cells.
@@ -226,6 +619,14 @@ impl Model {
             }
         }
         Ok((v, m))
+    }
+
+    /// Total translational mass of the point masses, kg.
+    pub fn discrete_mass(&self) -> f64 {
+        self.discrete
+            .iter()
+            .flat_map(|d| d.me.iter().map(move |m| m[0] / d.per as f64))
+            .sum()
     }
 
     /// Number of solid cells per kind.

@@ -196,3 +196,198 @@ pub fn mesh_info_text(i: &MeshInfo) -> String {
     let _ = writeln!(s, "mass    {:.6} kg (density {} kg/m³)", i.mass_kg, i.density);
     s
 }
+
+/// Stress summary of one load case.
+#[derive(Clone, Debug, Serialize)]
+pub struct StressSummary {
+    /// Maximum von Mises (averaged nodal) per group and overall.
+    pub von_mises: Vec<crate::post::stress::GroupMax>,
+    /// Maximum unaveraged element von Mises at nodes, overall.
+    pub von_mises_unaveraged: Vec<crate::post::stress::GroupMax>,
+    /// Maximum Tresca per group and overall.
+    pub tresca: Vec<crate::post::stress::GroupMax>,
+    /// Maximum shear stress (Tresca/2) per group and overall.
+    pub max_shear: Vec<crate::post::stress::GroupMax>,
+}
+
+/// The `--json` document of `vibrofem static`.
+#[derive(Clone, Debug, Serialize)]
+pub struct StaticReport {
+    /// Mesh.
+    pub mesh: String,
+    /// Free equations.
+    pub dofs: usize,
+    /// Load cases.
+    pub cases: Vec<crate::statics::CaseReport>,
+    /// Stress summaries per case.
+    pub stress: Vec<StressSummary>,
+    /// Wall time of assembly, factorisation, solution and post-processing, s.
+    pub timings_s: [f64; 4],
+    /// Notes.
+    pub notes: Vec<String>,
+}
+
+/// Displacements of the mesh nodes (3 per node) from a raw solution.
+pub fn mesh_displacements(run: &crate::statics::StaticRun, case: usize) -> Vec<f64> {
+    let n = run.model.n_mesh_nodes;
+    let u = &run.u[case];
+    let mut out = vec![0.0; 3 * n];
+    for a in 0..n {
+        for c in 0..3 {
+            out[3 * a + c] = u[crate::dof::NCOMP * a + c];
+        }
+    }
+    out
+}
+
+/// Build the static report (stress recovery included).
+pub fn static_report(mesh: &Mesh, source: &str, run: &crate::statics::StaticRun) -> Result<StaticReport> {
+    use crate::post::stress::{StressField, group_maxima, nodal_stress};
+    let mut stress = Vec::new();
+    for ci in 0..run.cases.len() {
+        let u = mesh_displacements(run, ci);
+        let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+        stress.push(StressSummary {
+            von_mises: group_maxima(mesh, &ns, StressField::VonMises)?,
+            von_mises_unaveraged: group_maxima(mesh, &ns, StressField::VonMisesMaxUnaveraged)?
+                .into_iter()
+                .filter(|g| g.group == "(all)")
+                .collect(),
+            tresca: group_maxima(mesh, &ns, StressField::Tresca)?,
+            max_shear: group_maxima(mesh, &ns, StressField::MaxShear)?,
+        });
+    }
+    Ok(StaticReport {
+        mesh: source.into(),
+        dofs: run.dofs,
+        cases: run.cases.clone(),
+        stress,
+        timings_s: run.timings,
+        notes: run.model.notes.clone(),
+    })
+}
+
+/// Text form of a static report.
+pub fn static_text(r: &StaticReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "mesh     {}", r.mesh);
+    let _ = writeln!(s, "model    {} free DOFs", r.dofs);
+    for (ci, c) in r.cases.iter().enumerate() {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "load case {}", ci + 1);
+        let _ = writeln!(
+            s,
+            "  applied force   [{:.6e}, {:.6e}, {:.6e}] N",
+            c.applied.force[0], c.applied.force[1], c.applied.force[2]
+        );
+        let _ = writeln!(
+            s,
+            "  max |u|         {:.6e} m at node {}",
+            c.max_displacement.0, c.max_displacement.1
+        );
+        for rf in &c.references {
+            let d = rf.displacement;
+            let _ = writeln!(
+                s,
+                "  reference '{}': u = [{:.6e}, {:.6e}, {:.6e}] m, rot = [{:.3e}, {:.3e}, {:.3e}] rad",
+                rf.group, d[0], d[1], d[2], d[3], d[4], d[5]
+            );
+            if let Some(k) = rf.stiffness {
+                let _ = writeln!(s, "    stiffness along the guided axis: {k:.6e} N/m");
+            }
+        }
+        for re in &c.reactions {
+            let f = re.resultant.force;
+            let _ = writeln!(
+                s,
+                "  reaction '{}': F = [{:.6e}, {:.6e}, {:.6e}] N",
+                re.group, f[0], f[1], f[2]
+            );
+        }
+        let _ = writeln!(s, "  equilibrium     |ΣR + ΣF| / |F| = {:.2e}", c.equilibrium_error);
+        let _ = writeln!(s, "  solve residual  {:.2e}", c.rel_residual);
+        if let Some(st) = r.stress.get(ci) {
+            for g in &st.von_mises {
+                let _ = writeln!(
+                    s,
+                    "  von Mises max {:<16} {:>10.3} MPa at node {} ({:.4}, {:.4}, {:.4}) m",
+                    g.group,
+                    g.value / 1e6,
+                    g.node.unwrap_or(0),
+                    g.coords[0],
+                    g.coords[1],
+                    g.coords[2]
+                );
+            }
+            for g in st.max_shear.iter().filter(|g| g.group == "(all)") {
+                let _ = writeln!(
+                    s,
+                    "  max shear stress             {:>10.3} MPa at node {}",
+                    g.value / 1e6,
+                    g.node.unwrap_or(0)
+                );
+            }
+        }
+    }
+    let t = r.timings_s;
+    let _ = writeln!(
+        s,
+        "\ntime [s]: assemble {:.3}  factor {:.3}  solve {:.3}  post {:.3}",
+        t[0], t[1], t[2], t[3]
+    );
+    s
+}
+
+/// Write displacement and stress fields of every case to VTU and/or gmsh.
+pub fn write_static_fields(
+    mesh: &Mesh,
+    run: &crate::statics::StaticRun,
+    vtu: Option<&std::path::Path>,
+    msh: Option<&std::path::Path>,
+) -> Result<()> {
+    use crate::io::{msh_out, vtk};
+    use crate::post::stress::{StressFields, nodal_stress};
+    let mut disps = Vec::new();
+    let mut fields = Vec::new();
+    for ci in 0..run.cases.len() {
+        let u = mesh_displacements(run, ci);
+        let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+        fields.push(StressFields::new(
+            &ns,
+            &if run.cases.len() > 1 {
+                format!("case{}_", ci + 1)
+            } else {
+                String::new()
+            },
+        ));
+        disps.push(u);
+    }
+    if let Some(p) = vtu {
+        let mut pf = Vec::new();
+        for (ci, u) in disps.iter().enumerate() {
+            let name = if disps.len() > 1 {
+                format!("case{}_displacement", ci + 1)
+            } else {
+                "displacement".into()
+            };
+            pf.push(vtk::PointField::new(name, 3, u));
+            pf.extend(fields[ci].point_fields());
+        }
+        vtk::write_vtu(p, mesh, &pf)?;
+    }
+    if let Some(p) = msh {
+        let mut views = Vec::new();
+        for (ci, u) in disps.iter().enumerate() {
+            views.push(msh_out::NodeView {
+                name: "displacement".into(),
+                step: ci,
+                time: ci as f64,
+                n_comp: 3,
+                data: u,
+            });
+            views.extend(fields[ci].node_views(ci, ci as f64));
+        }
+        msh_out::write_msh_views(p, mesh, &views)?;
+    }
+    Ok(())
+}

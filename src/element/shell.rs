@@ -30,12 +30,24 @@
 //!   strain.
 //! - **Drilling rotation.** The rotation `θz` about `n` is tied to the in-plane rotation
 //!   of the membrane `ω = ½(∂v/∂x − ∂u/∂y)` by the penalty of Hughes and Brezzi (1989),
-//!   `½ ∫ α G t (θz − ω)² dA` with `α` = [`ShellSection::drilling`] (default `1e-3`),
+//!   `½ ∫ α G t (θz − ω)² dA` with `α` = [`ShellSection::drilling`] (default `0.1`),
 //!   integrated at the 2 × 2 (quad) or 3 (triangle) points so that every `θz` is restrained
 //!   (no spurious zero-energy mode) while a rigid rotation costs nothing: a free element has
-//!   exactly 6 zero eigenvalues. The term is variationally consistent (the exact solution has
-//!   `θz = ω`), so converged answers do not depend on `α`; the tests vary `α` by 10³ and see
-//!   the answers move by less than the discretisation error.
+//!   exactly 6 zero eigenvalues. Within one quad the four nodal `θz` can match `ω` at the
+//!   four points exactly, so the penalty does not stiffen a quad's membrane by itself; it only
+//!   ties neighbours together (an in-plane cantilever moves by 2e-4 between `α = 1e-3` and
+//!   `10`).
+//!
+//!   **Choice of `α`.** The term is variationally consistent for the membrane, but on a
+//!   *twisted or curved* faceted surface the nodal rotation's normal component also enters
+//!   the neighbours' bending, and a weak tie lets it act as an extra, nearly free field: the
+//!   converged answer then depends on `α`, with a relative weight of about
+//!   `(E/G)(t φ')²/(12 α)` for a twist rate `φ'`. Measured on the twisted-beam benchmark
+//!   (90° over `L`/`t` = 37.5, quads): `α = 1e-3` is 26–32 % too flexible on 12 × 2 *and*
+//!   48 × 8 meshes, `1e-2` is 3 % off, `0.1`–`10` within 0.4 %. Triangles prefer small `α`:
+//!   the penalty over-constrains the constant-strain membrane (twisted beam 12 × 2: −15 % at
+//!   `0.1`, −27 % at `10`; Scordelis–Lo 16 × 16: −4 % at `0.1`, −10 % at `10`). `α = 0.1`
+//!   serves both; flat plates are insensitive to it.
 //! - **Plate.** Mindlin bending with `D = E t³/(12(1 − ν²))` and transverse shear
 //!   `κ G t`, `κ = 5/6`. The shear strains are the MITC assumed fields, which remove
 //!   shear locking in the thin limit:
@@ -49,8 +61,9 @@
 //!   Rotations `θx, θy` are the local components of the rotation vector: a fibre at height
 //!   `z` moves by `z (θy, −θx)` in the plane.
 //!
-//! Integration: 2 × 2 Gauss on quads (membrane, bending, shear, drilling), 1 point for the
-//! constant triangle membrane and bending, 3 points for the triangle's shear and drilling.
+//! Integration: 2 × 2 Gauss on quads (membrane, bending, shear, drilling); the 3-point
+//! degree-2 rule on triangles (exact for the quadratic shear and drilling integrands; the
+//! constant membrane and bending terms are exact with any rule).
 //!
 //! # Offset
 //!

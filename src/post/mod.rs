@@ -1,2 +1,3 @@
 //! Post-processing of solutions.
 pub mod modal;
+pub mod stress;

@@ -53,6 +53,9 @@ pub struct ParticipationTable {
     pub cumulative_ratio: Vec<[f64; 6]>,
     /// Centre of mass of the free mass (m).
     pub centre_of_mass: [f64; 3],
+    /// Per mode: the shape is a rigid-body motion (lies in the span of the six rigid-body
+    /// vectors to 1e-8 of its M-norm²).
+    pub rigid: Vec<bool>,
 }
 
 /// Rigid-body direction vectors over the free DOFs (columns X, Y, Z, RX, RY, RZ) about `c`.
@@ -102,6 +105,26 @@ pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatR
     for d in 0..6 {
         total[d] = (0..dofs.n_free).map(|i| r[(i, d)] * mr[(i, d)]).sum();
     }
+    // Gram matrix of the rigid-body vectors, G = RᵀMR, and its pseudo-inverse (a model may not
+    // carry all six motions, e.g. fixed DOFs remove parts of them).
+    let mut g = nalgebra::DMatrix::zeros(6, 6);
+    for i in 0..6 {
+        for j in 0..6 {
+            g[(i, j)] = (0..dofs.n_free).map(|k| r[(k, i)] * mr[(k, j)]).sum::<f64>();
+        }
+    }
+    let g = (&g + g.transpose()) * 0.5;
+    let eig = g.clone().symmetric_eigen();
+    let emax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+    let mut ginv = nalgebra::DMatrix::zeros(6, 6);
+    for k in 0..6 {
+        let e = eig.eigenvalues[k];
+        if e > 1e-12 * emax {
+            let v = eig.eigenvectors.column(k);
+            ginv += v * v.transpose() / e;
+        }
+    }
+    let mut rigid = Vec::with_capacity(phi.ncols());
     let mut modes = Vec::with_capacity(phi.ncols());
     let mut cumulative_ratio = Vec::with_capacity(phi.ncols());
     let mut acc = [0.0; 6];
@@ -118,6 +141,10 @@ pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatR
         for d in 0..6 {
             ratio[d] = if total[d] > 0.0 { acc[d] / total[d] } else { 0.0 };
         }
+        // M-norm² of the part of φ in span(R): Γᵀ G⁺ Γ (φ is M-normalised).
+        let gv = nalgebra::DVector::from_column_slice(&factor);
+        let inside = (gv.transpose() * &ginv * &gv)[(0, 0)];
+        rigid.push(emax > 0.0 && 1.0 - inside < 1e-8);
         modes.push(Participation { factor, effective });
         cumulative_ratio.push(ratio);
     }
@@ -126,5 +153,6 @@ pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatR
         total,
         cumulative_ratio,
         centre_of_mass: c,
+        rigid,
     }
 }

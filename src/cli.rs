@@ -1,0 +1,243 @@
+//! Parsing of the command-line model options shared by `modes` and `static`.
+//!
+//! Every parser returns an [`Error::InvalidInput`] that quotes the option and the offending text.
+
+use crate::dof::parse_components;
+use crate::element::MassLumping;
+use crate::material::Material;
+use crate::model::{CouplingSpec, ModelSpec, PointMassSpec, SpringSpec};
+use crate::statics::Load;
+use crate::{Error, Result};
+
+/// Model options as given on the command line.
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct ModelArgs {
+    /// Material of all volume cells: `steel` or `E,NU,RHO` in Pa, -, kg/m³.
+    #[arg(long, default_value = "steel", allow_hyphen_values = true)]
+    pub material: String,
+    /// Material of one group: `GROUP=steel` or `GROUP=E,NU,RHO` (repeatable).
+    #[arg(long = "group-material", value_name = "GROUP=MAT", allow_hyphen_values = true)]
+    pub group_material: Vec<String>,
+    /// Fix a group's nodes: `GROUP` (all translations) or `GROUP:ux,uy,uz` (repeatable).
+    #[arg(long, value_name = "GROUP[:COMPONENTS]")]
+    pub fix: Vec<String>,
+    /// Couple a group rigidly to a reference node at its centroid: `GROUP`, or
+    /// `GROUP:guided=z` to let the reference node move only along z, without rotation.
+    #[arg(long, value_name = "GROUP[:guided=AXIS]")]
+    pub couple: Vec<String>,
+    /// Point mass: `GROUP=m` or `GROUP=m,Ixx,Iyy,Izz,Ixy,Iyz,Ixz` (kg, kg·m²); on a coupled
+    /// group it sits at the reference node.
+    #[arg(long = "point-mass", value_name = "GROUP=M[,I...]")]
+    pub point_mass: Vec<String>,
+    /// Discrete spring: `A=kx,ky,kz,krx,kry,krz` to the ground or `A:B=...` between two points
+    /// (coupled groups or one-node groups); N/m and N·m/rad.
+    #[arg(long, value_name = "A[:B]=K6")]
+    pub spring: Vec<String>,
+    /// Mass matrix: consistent (default) or lumped (HRZ).
+    #[arg(long, default_value = "consistent")]
+    pub mass: String,
+    /// Length unit of the mesh coordinates: m (default) or mm.
+    #[arg(long = "length-unit", default_value = "m")]
+    pub length_unit: String,
+}
+
+/// Numbers separated by commas.
+pub fn numbers(opt: &str, text: &str, s: &str) -> Result<Vec<f64>> {
+    s.split(',')
+        .map(|v| {
+            let x: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| Error::InvalidInput(format!("{opt} '{text}': '{}' is not a number", v.trim())))?;
+            if !x.is_finite() {
+                return Err(Error::InvalidInput(format!("{opt} '{text}': {x} is not finite")));
+            }
+            Ok(x)
+        })
+        .collect()
+}
+
+/// `GROUP=a,b,c` with exactly `n` numbers.
+pub fn group_values(opt: &str, text: &str, n: usize) -> Result<(String, Vec<f64>)> {
+    let (g, v) = text
+        .split_once('=')
+        .ok_or_else(|| Error::InvalidInput(format!("{opt} '{text}': expected GROUP=values")))?;
+    let v = numbers(opt, text, v)?;
+    if v.len() != n {
+        return Err(Error::InvalidInput(format!(
+            "{opt} '{text}': expected {n} numbers, got {}",
+            v.len()
+        )));
+    }
+    Ok((g.trim().to_string(), v))
+}
+
+/// Length unit name → factor to metres.
+pub fn length_scale(u: &str) -> Result<f64> {
+    match u {
+        "m" => Ok(1.0),
+        "mm" => Ok(1e-3),
+        "cm" => Ok(1e-2),
+        _ => Err(Error::InvalidInput(format!(
+            "--length-unit: unknown unit '{u}' (use m or mm)"
+        ))),
+    }
+}
+
+fn axis(opt: &str, text: &str, a: &str) -> Result<usize> {
+    match a.trim() {
+        "x" => Ok(0),
+        "y" => Ok(1),
+        "z" => Ok(2),
+        _ => Err(Error::InvalidInput(format!("{opt} '{text}': axis must be x, y or z"))),
+    }
+}
+
+impl ModelArgs {
+    /// Build the model specification.
+    pub fn spec(&self) -> Result<ModelSpec> {
+        let mut spec = ModelSpec {
+            material: Material::parse(&self.material)?,
+            ..Default::default()
+        };
+        for gm in &self.group_material {
+            let (g, m) = gm
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--group-material '{gm}': expected GROUP=MATERIAL")))?;
+            spec.group_materials.push((g.to_string(), Material::parse(m)?));
+        }
+        for f in &self.fix {
+            let (g, comps) = match f.split_once(':') {
+                Some((g, c)) => (g, c),
+                None => (f.as_str(), "ux,uy,uz"),
+            };
+            let mask = parse_components(comps).ok_or_else(|| {
+                Error::InvalidInput(format!(
+                    "--fix '{f}': unknown components '{comps}' (use ux,uy,uz,rx,ry,rz)"
+                ))
+            })?;
+            spec.fixes.push((g.to_string(), mask));
+        }
+        for c in &self.couple {
+            let (g, guided) = match c.split_once(':') {
+                None => (c.clone(), None),
+                Some((g, opt)) => {
+                    let a = opt.strip_prefix("guided=").ok_or_else(|| {
+                        Error::InvalidInput(format!("--couple '{c}': expected GROUP or GROUP:guided=AXIS"))
+                    })?;
+                    (g.to_string(), Some(axis("--couple", c, a)?))
+                }
+            };
+            spec.couplings.push(CouplingSpec { group: g, guided });
+        }
+        for p in &self.point_mass {
+            let (g, v) = p
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--point-mass '{p}': expected GROUP=m[,Ixx,...]")))?;
+            let v = numbers("--point-mass", p, v)?;
+            if v.len() != 1 && v.len() != 7 {
+                return Err(Error::InvalidInput(format!(
+                    "--point-mass '{p}': give the mass, or the mass and 6 inertias (Ixx,Iyy,Izz,Ixy,Iyz,Ixz)"
+                )));
+            }
+            let mut inertia = [0.0; 6];
+            if v.len() == 7 {
+                inertia.copy_from_slice(&v[1..]);
+            }
+            spec.point_masses.push(PointMassSpec {
+                group: g.to_string(),
+                mass: v[0],
+                inertia,
+            });
+        }
+        for s in &self.spring {
+            let (ends, v) = s
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--spring '{s}': expected A[:B]=kx,ky,kz,krx,kry,krz")))?;
+            let v = numbers("--spring", s, v)?;
+            if v.len() != 6 {
+                return Err(Error::InvalidInput(format!("--spring '{s}': expected 6 stiffnesses")));
+            }
+            let (a, b) = match ends.split_once(':') {
+                Some((a, b)) => (a.to_string(), Some(b.to_string())),
+                None => (ends.to_string(), None),
+            };
+            let mut k = [0.0; 6];
+            k.copy_from_slice(&v);
+            spec.springs.push(SpringSpec { a, b, k });
+        }
+        spec.lumping = MassLumping::parse(&self.mass)?;
+        Ok(spec)
+    }
+}
+
+/// Loads and prescribed displacements given to `vibrofem static`.
+#[derive(Clone, Debug, Default, clap::Args)]
+pub struct LoadArgs {
+    /// Total force on a group: `GROUP=Fx,Fy,Fz` (N). A coupled group takes it at its reference
+    /// node; a surface group as a uniform traction; other groups split it between their nodes.
+    #[arg(long, value_name = "GROUP=FX,FY,FZ", allow_hyphen_values = true)]
+    pub force: Vec<String>,
+    /// Pressure on a surface group: `GROUP=p` (Pa, positive into the solid).
+    #[arg(long, value_name = "GROUP=P", allow_hyphen_values = true)]
+    pub pressure: Vec<String>,
+    /// Body acceleration `gx,gy,gz` (m/s²), e.g. `0,0,-9.81`.
+    #[arg(long, value_name = "GX,GY,GZ", allow_hyphen_values = true)]
+    pub gravity: Option<String>,
+    /// Prescribed displacement: `GROUP=ux,uy,uz` (m; `-` leaves a component free). On a coupled
+    /// group it moves the reference node.
+    #[arg(long, value_name = "GROUP=UX,UY,UZ", allow_hyphen_values = true)]
+    pub displace: Vec<String>,
+}
+
+impl LoadArgs {
+    /// Add the prescribed displacements to `spec` and return the loads (one case).
+    pub fn apply(&self, spec: &mut ModelSpec) -> Result<Vec<Load>> {
+        let mut loads = Vec::new();
+        for f in &self.force {
+            let (g, v) = group_values("--force", f, 3)?;
+            loads.push(Load::Force {
+                group: g,
+                force: [v[0], v[1], v[2]],
+            });
+        }
+        for p in &self.pressure {
+            let (g, v) = group_values("--pressure", p, 1)?;
+            loads.push(Load::Pressure { group: g, p: v[0] });
+        }
+        if let Some(g) = &self.gravity {
+            let v = numbers("--gravity", g, g)?;
+            if v.len() != 3 {
+                return Err(Error::InvalidInput(format!("--gravity '{g}': expected gx,gy,gz")));
+            }
+            loads.push(Load::Acceleration([v[0], v[1], v[2]]));
+        }
+        for d in &self.displace {
+            let (g, v) = d
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--displace '{d}': expected GROUP=ux,uy,uz")))?;
+            let parts: Vec<&str> = v.split(',').collect();
+            if parts.len() != 3 && parts.len() != 6 {
+                return Err(Error::InvalidInput(format!(
+                    "--displace '{d}': expected 3 (or 6) values"
+                )));
+            }
+            let mut vals = [None; 6];
+            for (i, p) in parts.iter().enumerate() {
+                let p = p.trim();
+                if p == "-" || p.is_empty() {
+                    continue;
+                }
+                let x: f64 = p
+                    .parse()
+                    .map_err(|_| Error::InvalidInput(format!("--displace '{d}': '{p}' is not a number")))?;
+                if !x.is_finite() {
+                    return Err(Error::InvalidInput(format!("--displace '{d}': {x} is not finite")));
+                }
+                vals[i] = Some(x);
+            }
+            spec.prescribed.push((g.to_string(), vals));
+        }
+        Ok(loads)
+    }
+}
