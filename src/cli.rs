@@ -5,7 +5,7 @@
 use crate::dof::parse_components;
 use crate::element::MassLumping;
 use crate::material::Material;
-use crate::model::{CouplingSpec, ModelSpec, PointMassSpec, SpringSpec};
+use crate::model::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
 use crate::statics::Load;
 use crate::{Error, Result};
 
@@ -36,6 +36,19 @@ pub struct ModelArgs {
     /// Mass matrix: consistent (default) or lumped (HRZ).
     #[arg(long, default_value = "consistent")]
     pub mass: String,
+    /// Analyse only these volume groups as solids (default: every volume cell).
+    #[arg(long = "solid", value_name = "GROUP")]
+    pub solid: Vec<String>,
+    /// Shell part: `GROUP=t` or `GROUP=t,offset` (m; the offset moves the mid-surface from the
+    /// nodes along the normal, e.g. −t/2 for a plate meshed on its bottom face).
+    #[arg(long, value_name = "GROUP=T[,OFFSET]", allow_hyphen_values = true)]
+    pub shell: Vec<String>,
+    /// Beam part: `GROUP=SECTION@ORIENT`. SECTION: `rect:b,h`, `circle:d`, `tube:d,wall`,
+    /// `i:h,b,s,t`, `channel:h,b,s,t`, `gost8239-10`, `gost8240-10`,
+    /// `custom:A,Iy,Iz,J,ky,kz,Cw` (m, m², m⁴, m⁶), with `+warping` for a 7th (warping) DOF.
+    /// ORIENT: the local y axis `x,y,z`, or `radial:cx,cy,cz,ax,ay,az` (from an axis).
+    #[arg(long, value_name = "GROUP=SECTION@ORIENT", allow_hyphen_values = true)]
+    pub beam: Vec<String>,
     /// Length unit of the mesh coordinates: m (default) or mm.
     #[arg(long = "length-unit", default_value = "m")]
     pub length_unit: String,
@@ -167,8 +180,137 @@ impl ModelArgs {
             spec.springs.push(SpringSpec { a, b, k });
         }
         spec.lumping = MassLumping::parse(&self.mass)?;
+        if !self.solid.is_empty() {
+            spec.solid_groups = Some(self.solid.clone());
+        }
+        for sh in &self.shell {
+            let (g, v) = sh.split_once('=').ok_or_else(|| {
+                Error::InvalidInput(format!(
+                    "--shell '{sh}': expected GROUP=thickness[,offset] (a shell needs a thickness)"
+                ))
+            })?;
+            let v = numbers("--shell", sh, v)?;
+            if v.is_empty() || v.len() > 2 {
+                return Err(Error::InvalidInput(format!(
+                    "--shell '{sh}': expected thickness[,offset]"
+                )));
+            }
+            let mut sec = crate::section::ShellSection::new(v[0]);
+            if v.len() == 2 {
+                sec = sec.with_offset(v[1]);
+            }
+            spec.shells.push(ShellPart {
+                group: g.to_string(),
+                section: sec,
+                material: None,
+            });
+        }
+        for b in &self.beam {
+            spec.beams.push(parse_beam(b)?);
+        }
         Ok(spec)
     }
+}
+
+/// Parse a `--beam GROUP=SECTION@ORIENT` option.
+pub fn parse_beam(b: &str) -> Result<BeamPart> {
+    use crate::section::BeamSection;
+    let (g, rest) = b.split_once('=').ok_or_else(|| {
+        Error::InvalidInput(format!(
+            "--beam '{b}': expected GROUP=SECTION@ORIENT (a beam needs a section)"
+        ))
+    })?;
+    let (sec, orient) = rest.split_once('@').ok_or_else(|| {
+        Error::InvalidInput(format!(
+            "--beam '{b}': missing orientation, e.g. '@0,0,1' (the local y axis)"
+        ))
+    })?;
+    let (sec, warping) = match sec.strip_suffix("+warping") {
+        Some(s) => (s, true),
+        None => (sec, false),
+    };
+    let (name, vals) = sec.split_once(':').unwrap_or((sec, ""));
+    let v = if vals.is_empty() {
+        vec![]
+    } else {
+        numbers("--beam", b, vals)?
+    };
+    let need = |n: usize| -> Result<()> {
+        if v.len() == n {
+            Ok(())
+        } else {
+            Err(Error::InvalidInput(format!(
+                "--beam '{b}': section '{name}' needs {n} numbers, got {}",
+                v.len()
+            )))
+        }
+    };
+    let section = match name {
+        "rect" => {
+            need(2)?;
+            BeamSection::rectangle(v[0], v[1])
+        }
+        "circle" => {
+            need(1)?;
+            BeamSection::circle(v[0])
+        }
+        "tube" => {
+            need(2)?;
+            BeamSection::tube(v[0], v[1])
+        }
+        "i" => {
+            need(4)?;
+            BeamSection::i_beam(v[0], v[1], v[2], v[3])
+        }
+        "channel" => {
+            need(4)?;
+            BeamSection::channel(v[0], v[1], v[2], v[3])
+        }
+        "gost8239-10" => {
+            need(0)?;
+            BeamSection::gost_8239_i10()
+        }
+        "gost8240-10" => {
+            need(0)?;
+            BeamSection::gost_8240_channel10()
+        }
+        "custom" => {
+            need(7)?;
+            BeamSection::custom(v[0], v[1], v[2], v[3], v[4], v[5], v[6])
+        }
+        _ => {
+            return Err(Error::InvalidInput(format!(
+                "--beam '{b}': unknown section '{name}' (rect, circle, tube, i, channel, gost8239-10, gost8240-10, custom)"
+            )));
+        }
+    }
+    .with_warping(warping);
+    let orientation = if let Some(r) = orient.strip_prefix("radial:") {
+        let v = numbers("--beam", b, r)?;
+        if v.len() != 6 {
+            return Err(Error::InvalidInput(format!(
+                "--beam '{b}': radial orientation needs cx,cy,cz,ax,ay,az"
+            )));
+        }
+        Orientation::Radial {
+            centre: [v[0], v[1], v[2]],
+            axis: [v[3], v[4], v[5]],
+        }
+    } else {
+        let v = numbers("--beam", b, orient)?;
+        if v.len() != 3 || v.iter().all(|x| *x == 0.0) {
+            return Err(Error::InvalidInput(format!(
+                "--beam '{b}': orientation must be a non-zero vector x,y,z"
+            )));
+        }
+        Orientation::Vector([v[0], v[1], v[2]])
+    };
+    Ok(BeamPart {
+        group: g.to_string(),
+        section,
+        orientation,
+        material: None,
+    })
 }
 
 /// Loads and prescribed displacements given to `vibrofem static`.

@@ -30,6 +30,52 @@ pub struct ModelSpec {
     pub point_masses: Vec<PointMassSpec>,
     /// Discrete springs.
     pub springs: Vec<SpringSpec>,
+    /// Groups meshed with surface cells analysed as shells.
+    pub shells: Vec<ShellPart>,
+    /// Groups meshed with line cells analysed as beams.
+    pub beams: Vec<BeamPart>,
+    /// Volume groups analysed as solids; `None`: every volume cell of the mesh when there are no
+    /// shell or beam parts, none otherwise.
+    pub solid_groups: Option<Vec<String>>,
+}
+
+/// A shell part: a surface group with a section and (optionally) its own material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShellPart {
+    /// Surface group (tri3/quad4 cells).
+    pub group: String,
+    /// Thickness, offset, drilling.
+    pub section: crate::section::ShellSection,
+    /// Material (default: the model's).
+    pub material: Option<Material>,
+}
+
+/// How a beam's local y axis is oriented.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Orientation {
+    /// One vector for all elements (must not be parallel to any element axis).
+    Vector([f64; 3]),
+    /// Radial from an axis through `centre` along `axis` (helices, rings): the element
+    /// midpoint's offset from the axis.
+    Radial {
+        /// A point on the axis.
+        centre: [f64; 3],
+        /// Axis direction.
+        axis: [f64; 3],
+    },
+}
+
+/// A beam part: a line group with a section and an orientation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BeamPart {
+    /// Line group (line2/line3 cells).
+    pub group: String,
+    /// Section properties.
+    pub section: crate::section::BeamSection,
+    /// Local y axis.
+    pub orientation: Orientation,
+    /// Material (default: the model's).
+    pub material: Option<Material>,
 }
 
 impl Default for ModelSpec {
@@ -43,7 +89,103 @@ impl Default for ModelSpec {
             prescribed: vec![],
             point_masses: vec![],
             springs: vec![],
+            shells: vec![],
+            beams: vec![],
+            solid_groups: None,
         }
+    }
+}
+
+/// Shell cells of one group.
+pub struct ShellSet {
+    /// Group name.
+    pub group: String,
+    /// Cell kind of each cell.
+    pub kinds: Vec<CellKind>,
+    /// Node lists (offsets into `conn`).
+    pub conn: Vec<u32>,
+    /// Offsets: cell `e` has nodes `conn[ptr[e]..ptr[e+1]]`.
+    pub ptr: Vec<usize>,
+    /// gmsh element tags.
+    pub tags: Vec<u64>,
+    /// Section.
+    pub section: crate::section::ShellSection,
+    /// Material.
+    pub material: Material,
+    /// Mass form.
+    pub lumping: MassLumping,
+    nodes: std::sync::Arc<Vec<[f64; 3]>>,
+}
+
+impl ElementSet for ShellSet {
+    fn len(&self) -> usize {
+        self.tags.len()
+    }
+    fn nodes(&self, e: usize) -> &[u32] {
+        &self.conn[self.ptr[e]..self.ptr[e + 1]]
+    }
+    fn dofs_per_node(&self) -> usize {
+        6
+    }
+    fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
+        let x: Vec<[f64; 3]> = self.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
+        let k = self.kinds[e];
+        let bad = |det: f64| Error::InvertedElement {
+            element: self.tags[e],
+            kind: k.name(),
+            det,
+        };
+        crate::element::shell::stiffness(k, &x, &self.section, &self.material, ke).map_err(bad)?;
+        if want_mass {
+            crate::element::shell::mass(k, &x, &self.section, self.material.density, self.lumping, me).map_err(bad)?;
+        }
+        Ok(())
+    }
+}
+
+/// Beam cells of one group.
+pub struct BeamSet {
+    /// Group name.
+    pub group: String,
+    /// Cell kind (line2 or line3) of each cell.
+    pub kinds: Vec<CellKind>,
+    /// Node lists.
+    pub conn: Vec<u32>,
+    /// Offsets into `conn`.
+    pub ptr: Vec<usize>,
+    /// gmsh element tags.
+    pub tags: Vec<u64>,
+    /// Orientation vector per element.
+    pub orient: Vec<[f64; 3]>,
+    /// Section.
+    pub section: crate::section::BeamSection,
+    /// Material.
+    pub material: Material,
+    /// Mass form.
+    pub lumping: MassLumping,
+    nodes: std::sync::Arc<Vec<[f64; 3]>>,
+}
+
+impl ElementSet for BeamSet {
+    fn len(&self) -> usize {
+        self.tags.len()
+    }
+    fn nodes(&self, e: usize) -> &[u32] {
+        &self.conn[self.ptr[e]..self.ptr[e + 1]]
+    }
+    fn dofs_per_node(&self) -> usize {
+        crate::element::beam::dofs_per_node(&self.section)
+    }
+    fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
+        let x: Vec<[f64; 3]> = self.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
+        let k = self.kinds[e];
+        let ctx = |err: Error| Error::InvalidInput(format!("beam '{}', element {}: {err}", self.group, self.tags[e]));
+        crate::element::beam::stiffness(k, &x, self.orient[e], &self.section, &self.material, ke).map_err(ctx)?;
+        if want_mass {
+            crate::element::beam::mass(k, &x, self.orient[e], &self.section, &self.material, self.lumping, me)
+                .map_err(ctx)?;
+        }
+        Ok(())
     }
 }
 
@@ -207,6 +349,10 @@ pub struct Model {
     pub solids: Vec<SolidSet>,
     /// Point masses and springs (each set has one node count and DOFs per node).
     pub discrete: Vec<DiscreteSet>,
+    /// Shell parts.
+    pub shells: Vec<ShellSet>,
+    /// Beam parts.
+    pub beams: Vec<BeamSet>,
     /// All node coordinates: the mesh's, then the reference nodes.
     pub nodes: std::sync::Arc<Vec<[f64; 3]>>,
     /// Number of mesh nodes (reference nodes follow).
@@ -241,31 +387,170 @@ impl Model {
         let nodes = std::sync::Arc::new(mesh.nodes.clone());
         let mut solids = Vec::new();
         let _ = &nodes;
+        // Solid cells: all volume cells, or those of the chosen groups.
+        // With shell or beam parts and no explicit solid groups, no volume cell is used: a model
+        // contains what it names.
+        let all_solids = spec.shells.is_empty() && spec.beams.is_empty();
+        let mut selected: Vec<Vec<bool>> = mesh
+            .blocks
+            .iter()
+            .map(|b| vec![all_solids && b.kind.dim() == 3; b.len()])
+            .collect();
+        if let Some(groups) = &spec.solid_groups {
+            for v in &mut selected {
+                v.iter_mut().for_each(|x| *x = false);
+            }
+            for g in groups {
+                let grp = mesh.group(g)?;
+                let mut any = false;
+                for c in &grp.cells {
+                    if mesh.blocks[c.block as usize].kind.dim() == 3 {
+                        selected[c.block as usize][c.index as usize] = true;
+                        any = true;
+                    }
+                }
+                if !any {
+                    return Err(Error::InvalidInput(format!(
+                        "group '{g}' has no volume cells: a solid formulation needs tet, hex or wedge cells"
+                    )));
+                }
+            }
+        }
         for (bi, block) in mesh.blocks.iter().enumerate() {
             if block.kind.dim() != 3 || block.is_empty() {
                 continue;
             }
-            let mut mat = vec![0u16; block.len()];
+            let mut matb = vec![0u16; block.len()];
             for (grp, mi) in &group_mat_idx {
                 for c in grp.cells.iter().filter(|c| c.block as usize == bi) {
-                    mat[c.index as usize] = *mi;
+                    matb[c.index as usize] = *mi;
                 }
+            }
+            let keep: Vec<usize> = (0..block.len()).filter(|&i| selected[bi][i]).collect();
+            if keep.is_empty() {
+                continue;
+            }
+            let mut conn = Vec::with_capacity(keep.len() * block.kind.n_nodes());
+            for &i in &keep {
+                conn.extend_from_slice(block.cell(i));
             }
             solids.push(SolidSet {
                 kind: block.kind,
-                conn: block.conn.clone(),
-                tags: block.tags.clone(),
-                mat,
+                conn,
+                tags: keep.iter().map(|&i| block.tags[i]).collect(),
+                mat: keep.iter().map(|&i| matb[i]).collect(),
                 materials: materials.clone(),
                 lumping: spec.lumping,
                 nodes: nodes.clone(),
             });
         }
-        if solids.is_empty() {
+        // Shell and beam parts.
+        let mut shells = Vec::new();
+        for sp in &spec.shells {
+            sp.section.validate(&format!("shell '{}'", sp.group))?;
+            let mat = sp.material.unwrap_or(spec.material);
+            mat.validate(&format!("for shell '{}'", sp.group))?;
+            let grp = mesh.group(&sp.group)?;
+            let mut set = ShellSet {
+                group: sp.group.clone(),
+                kinds: vec![],
+                conn: vec![],
+                ptr: vec![0],
+                tags: vec![],
+                section: sp.section,
+                material: mat,
+                lumping: spec.lumping,
+                nodes: nodes.clone(),
+            };
+            for c in &grp.cells {
+                let b = &mesh.blocks[c.block as usize];
+                if !crate::element::shell::supports(b.kind) {
+                    return Err(Error::InvalidInput(format!(
+                        "group '{}' has {} cells (element {}): a shell needs tri3 or quad4 surface cells",
+                        sp.group, b.kind, b.tags[c.index as usize]
+                    )));
+                }
+                set.kinds.push(b.kind);
+                set.conn.extend_from_slice(b.cell(c.index as usize));
+                set.ptr.push(set.conn.len());
+                set.tags.push(b.tags[c.index as usize]);
+            }
+            if set.tags.is_empty() {
+                return Err(Error::InvalidInput(format!("shell group '{}' is empty", sp.group)));
+            }
+            shells.push(set);
+        }
+        let mut beams = Vec::new();
+        for bp in &spec.beams {
+            bp.section.validate(&format!("beam '{}'", bp.group))?;
+            let mat = bp.material.unwrap_or(spec.material);
+            mat.validate(&format!("for beam '{}'", bp.group))?;
+            let grp = mesh.group(&bp.group)?;
+            let mut set = BeamSet {
+                group: bp.group.clone(),
+                kinds: vec![],
+                conn: vec![],
+                ptr: vec![0],
+                tags: vec![],
+                orient: vec![],
+                section: bp.section,
+                material: mat,
+                lumping: spec.lumping,
+                nodes: nodes.clone(),
+            };
+            for c in &grp.cells {
+                let b = &mesh.blocks[c.block as usize];
+                if !crate::element::beam::supports(b.kind) {
+                    if b.kind.dim() == 0 {
+                        continue;
+                    }
+                    return Err(Error::InvalidInput(format!(
+                        "group '{}' has {} cells (element {}): a beam needs line2 or line3 cells",
+                        bp.group, b.kind, b.tags[c.index as usize]
+                    )));
+                }
+                let cell = b.cell(c.index as usize);
+                let xm = {
+                    let mut m = [0.0; 3];
+                    for &a in cell {
+                        for d in 0..3 {
+                            m[d] += mesh.nodes[a as usize][d] / cell.len() as f64;
+                        }
+                    }
+                    m
+                };
+                let o = match bp.orientation {
+                    Orientation::Vector(v) => v,
+                    Orientation::Radial { centre, axis } => {
+                        let r = [xm[0] - centre[0], xm[1] - centre[1], xm[2] - centre[2]];
+                        let an = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2])
+                            .sqrt()
+                            .max(1e-300);
+                        let u = [axis[0] / an, axis[1] / an, axis[2] / an];
+                        let t = r[0] * u[0] + r[1] * u[1] + r[2] * u[2];
+                        [r[0] - t * u[0], r[1] - t * u[1], r[2] - t * u[2]]
+                    }
+                };
+                set.kinds.push(b.kind);
+                set.conn.extend_from_slice(cell);
+                set.ptr.push(set.conn.len());
+                set.tags.push(b.tags[c.index as usize]);
+                set.orient.push(o);
+            }
+            if set.tags.is_empty() {
+                return Err(Error::InvalidInput(format!(
+                    "beam group '{}' has no line cells",
+                    bp.group
+                )));
+            }
+            beams.push(set);
+        }
+        if solids.is_empty() && shells.is_empty() && beams.is_empty() {
             let kinds: Vec<String> = mesh.blocks.iter().map(|b| format!("{} {}", b.len(), b.kind)).collect();
             return Err(Error::EmptyModel {
                 what: format!(
-                    "{source}: the mesh has no volume elements (it has {}); solid analysis needs tet, hex or wedge cells",
+                    "{source}: the mesh has no volume elements (it has {}); solid analysis needs tet, hex or wedge \
+                     cells (surface and line groups need --shell or --beam)",
                     if kinds.is_empty() {
                         "no elements".to_string()
                     } else {
@@ -316,6 +601,12 @@ impl Model {
         let n = all_nodes.len();
         let nodes = std::sync::Arc::new(all_nodes);
         for s in &mut solids {
+            s.nodes = nodes.clone();
+        }
+        for s in &mut shells {
+            s.nodes = nodes.clone();
+        }
+        for s in &mut beams {
             s.nodes = nodes.clone();
         }
         let point_of = |g: &str| -> Result<usize> {
@@ -468,6 +759,21 @@ impl Model {
                 active[a as usize] |= TRANSLATIONS;
             }
         }
+        for s in &shells {
+            for &a in &s.conn {
+                active[a as usize] |= crate::dof::ALL6;
+            }
+        }
+        for s in &beams {
+            let mask = if s.section.warping {
+                crate::dof::ALL6 | crate::dof::WARPING
+            } else {
+                crate::dof::ALL6
+            };
+            for &a in &s.conn {
+                active[a as usize] |= mask;
+            }
+        }
         for d in &discrete {
             let mask: DofMask = if d.ndpn == 6 { crate::dof::ALL6 } else { TRANSLATIONS };
             for &a in &d.nodes {
@@ -581,14 +887,14 @@ impl Model {
             }
         }
         if orphan_nodes > 0 {
-            notes.push(format!(
-                "{orphan_nodes} nodes belong to no volume element and are ignored"
-            ));
+            notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
         }
         let dofs = DofMap::with_constraints(active, cons)?;
         Ok(Model {
             solids,
             discrete,
+            shells,
+            beams,
             nodes,
             n_mesh_nodes: n_mesh,
             references,
@@ -604,6 +910,8 @@ impl Model {
         self.solids
             .iter()
             .map(|s| s as &dyn ElementSet)
+            .chain(self.shells.iter().map(|d| d as &dyn ElementSet))
+            .chain(self.beams.iter().map(|d| d as &dyn ElementSet))
             .chain(self.discrete.iter().map(|d| d as &dyn ElementSet))
             .collect()
     }
@@ -611,6 +919,26 @@ impl Model {
     /// Total volume (m³) and mass (kg) of the solid cells.
     pub fn volume_and_mass(&self) -> Result<(f64, f64)> {
         let (mut v, mut m) = (0.0, 0.0);
+        for s in &self.shells {
+            for e in 0..s.len() {
+                let x: Vec<[f64; 3]> = s.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
+                let a = crate::element::shell::area(s.kinds[e], &x).map_err(|det| Error::InvertedElement {
+                    element: s.tags[e],
+                    kind: s.kinds[e].name(),
+                    det,
+                })?;
+                v += a * s.section.thickness;
+                m += a * s.section.thickness * s.material.density;
+            }
+        }
+        for b in &self.beams {
+            for e in 0..b.len() {
+                let x: Vec<[f64; 3]> = b.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
+                let l = crate::element::beam::length(b.kinds[e], &x);
+                v += l * b.section.area;
+                m += l * b.section.area * b.material.density;
+            }
+        }
         for s in &self.solids {
             for e in 0..s.len() {
                 let ve = s.volume(e)?;
