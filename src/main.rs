@@ -30,12 +30,27 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// The vibratory-table design chain (FE parts → two-mass model → checks); built-in paper
+    /// design when no file is given.
+    Design(DesignArgs),
     /// Natural frequencies and mode shapes of a solid mesh (gmsh MSH 2.2 or 4.1).
     Modes(ModesArgs),
     /// Linear static analysis: displacements, reactions, stiffness and stresses.
     Static(StaticArgs),
     /// Groups, cell kinds and counts, bounding box, volume and mass of a mesh.
     MeshInfo(MeshInfoArgs),
+}
+
+#[derive(clap::Args)]
+struct DesignArgs {
+    /// Design file (TOML); default: the paper's 100 Hz table, built in.
+    file: Option<PathBuf>,
+    /// Folder for the report (report.md, report.json, SVG plots, mode shapes).
+    #[arg(short, long, default_value = "vibrofem-design")]
+    out: PathBuf,
+    /// Print the JSON report on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(clap::Args)]
@@ -209,6 +224,46 @@ fn modes(a: &ModesArgs) -> Result<i32> {
     Ok(0)
 }
 
+fn design_cmd(a: &DesignArgs) -> Result<i32> {
+    use std::io::IsTerminal;
+    let d = match &a.file {
+        Some(f) => vibrofem::design::Design::from_toml(f)?,
+        None => vibrofem::design::Design::paper(),
+    };
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        Some(b)
+    } else {
+        None
+    };
+    let t0 = std::time::Instant::now();
+    let progress = |step: &str| match &bar {
+        Some(b) => b.set_message(step.to_string()),
+        None => eprintln!("[{:6.1} s] {step}", t0.elapsed().as_secs_f64()),
+    };
+    let r = vibrofem::design::run_design(&d, Some(&a.out), &progress);
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let r = r?;
+    let json = serde_json::to_string_pretty(&r).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    std::fs::write(a.out.join("report.json"), &json).map_err(|e| Error::io(a.out.join("report.json"), e))?;
+    std::fs::write(a.out.join("report.md"), vibrofem::design::report_markdown(&r))
+        .map_err(|e| Error::io(a.out.join("report.md"), e))?;
+    if a.json {
+        println!("{json}");
+    } else {
+        print!("{}", vibrofem::design::verdict_text(&r));
+        println!(
+            "
+report: {}/report.md (plots and mode shapes beside it)",
+            a.out.display()
+        );
+    }
+    Ok(0)
+}
+
 fn static_cmd(a: &StaticArgs) -> Result<i32> {
     let mut spec = a.model.spec()?;
     let loads = a.loads.apply(&mut spec)?;
@@ -268,6 +323,7 @@ fn main() -> ExitCode {
     }
     let r = match &cli.cmd {
         Cmd::Modes(a) => modes(a),
+        Cmd::Design(a) => design_cmd(a),
         Cmd::Static(a) => static_cmd(a),
         Cmd::MeshInfo(a) => mesh_info(a),
     };

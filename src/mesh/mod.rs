@@ -6,6 +6,7 @@
 
 pub mod cell;
 pub mod generate;
+pub mod parametric;
 
 pub use cell::CellKind;
 

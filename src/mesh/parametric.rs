@@ -90,7 +90,7 @@ fn grid_lines(what: &str, size_name: &str, required: &[f64], h: f64, min_div: us
     for w in pts.windows(2) {
         total += ((w[1] - w[0]) / h - 1e-9).ceil().max(min_div as f64);
     }
-    if !(total <= MAX_CELLS as f64) {
+    if total > MAX_CELLS as f64 {
         return Err(invalid(format!(
             "{what}: {size_name} = {h} is too small: {total:.0} grid lines along one axis (limit {MAX_CELLS})"
         )));
@@ -123,13 +123,13 @@ fn line_index(lines: &[f64], v: f64) -> u32 {
     best as u32
 }
 
-/// Number of cells between two required coordinates, checked against [`MAX_CELLS`].
-fn check_cell_count(what: &str, size_name: &str, h: f64, n: f64) -> Result<()> {
+/// A cell count `n` checked against [`MAX_CELLS`]; `cause` names the parameter responsible.
+fn check_cell_count(what: &str, cause: &str, n: f64) -> Result<()> {
     if n <= MAX_CELLS as f64 {
         Ok(())
     } else {
         Err(invalid(format!(
-            "{what}: {size_name} = {h} is too small: {n:.0} cells (limit {MAX_CELLS})"
+            "{what}: {cause} gives {n:.0} cells (limit {MAX_CELLS})"
         )))
     }
 }
@@ -192,7 +192,11 @@ impl Builder {
     fn coord(&self, axis: usize, k: u32) -> f64 {
         let l = &self.lines[axis];
         let i = (k / 2) as usize;
-        if k % 2 == 0 { l[i] } else { 0.5 * (l[i] + l[i + 1]) }
+        if k.is_multiple_of(2) {
+            l[i]
+        } else {
+            0.5 * (l[i] + l[i + 1])
+        }
     }
 
     fn finish(self) -> Mesh {
@@ -247,7 +251,11 @@ impl Builder {
 
 /// The line kind matching the edges of a 2D kind (`Line3` for quadratic cells).
 fn edge_kind(kind: CellKind) -> CellKind {
-    if kind.order() == 2 { CellKind::Line3 } else { CellKind::Line2 }
+    if kind.order() == 2 {
+        CellKind::Line3
+    } else {
+        CellKind::Line2
+    }
 }
 
 /// A quad with corners on grid lines: `p(a, b)` gives the grid indices at `(u_a, v_b)`,
@@ -324,18 +332,20 @@ fn grid_solid_impl(
 ) -> Result<Mesh> {
     const WHAT: &str = "grid solid";
     if !matches!(kind, CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27) {
-        return Err(invalid(format!("{WHAT}: cell kind must be hex8, hex20 or hex27, got {kind}")));
+        return Err(invalid(format!(
+            "{WHAT}: cell kind must be hex8, hex20 or hex27, got {kind}"
+        )));
     }
     for (axis, l) in lines.iter().enumerate() {
         let name = ["x", "y", "z"][axis];
-        if l.len() < 2 || l.iter().any(|v| !v.is_finite()) || l.windows(2).any(|w| !(w[1] > w[0])) {
+        if l.len() < 2 || l.iter().any(|v| !v.is_finite()) || l.windows(2).any(|w| w[1] <= w[0]) {
             return Err(invalid(format!(
                 "{WHAT}: the {name} grid lines must be at least 2 finite, strictly increasing values"
             )));
         }
     }
     let n = [lines[0].len() - 1, lines[1].len() - 1, lines[2].len() - 1];
-    check_cell_count(WHAT, "the grid", 0.0, n[0] as f64 * n[1] as f64 * n[2] as f64)?;
+    check_cell_count(WHAT, "the grid", n[0] as f64 * n[1] as f64 * n[2] as f64)?;
     let face_kind = match kind {
         CellKind::Hex8 => CellKind::Quad4,
         CellKind::Hex20 => CellKind::Quad8,
@@ -557,15 +567,12 @@ impl SandwichParams {
         density * self.shell_volume()
     }
 
-    /// Check every parameter; the error names the offending one. Called by the generators.
+    /// Check every parameter; the error names the offending one. Called by
+    /// [`sandwich_table`]; [`sandwich_table_solid`] checks the same geometry but not the shell
+    /// mesh controls (`elem_size`, `shell_kind`).
     pub fn validate(&self) -> Result<()> {
         const W: &str = "sandwich table";
-        positive(W, "length", self.length)?;
-        positive(W, "top_width", self.top_width)?;
-        positive(W, "top_thickness", self.top_thickness)?;
-        positive(W, "bottom_width", self.bottom_width)?;
-        positive(W, "bottom_thickness", self.bottom_thickness)?;
-        positive(W, "web_height", self.web_height)?;
+        self.validate_geometry()?;
         positive(W, "elem_size", self.elem_size)?;
         if !matches!(self.shell_kind, CellKind::Quad4 | CellKind::Quad8 | CellKind::Quad9) {
             return Err(invalid(format!(
@@ -573,6 +580,18 @@ impl SandwichParams {
                 self.shell_kind
             )));
         }
+        Ok(())
+    }
+
+    /// Check the geometric parameters (everything but the shell mesh controls).
+    fn validate_geometry(&self) -> Result<()> {
+        const W: &str = "sandwich table";
+        positive(W, "length", self.length)?;
+        positive(W, "top_width", self.top_width)?;
+        positive(W, "top_thickness", self.top_thickness)?;
+        positive(W, "bottom_width", self.bottom_width)?;
+        positive(W, "bottom_thickness", self.bottom_thickness)?;
+        positive(W, "web_height", self.web_height)?;
         if self.long_webs.is_empty() && self.trans_webs.is_empty() {
             return Err(invalid(format!(
                 "{W}: long_webs and trans_webs are both empty: the plates need at least one web between them"
@@ -677,7 +696,7 @@ pub fn sandwich_table(p: &SandwichParams) -> Result<Mesh> {
     let zl = grid_lines(W, "elem_size", &[0.0, hz], h, 2)?;
     let (nx, ny, nz) = (xl.len() - 1, yl.len() - 1, zl.len() - 1);
     let n_cells = (nx * ny) as f64 * 2.0 + (p.long_webs.len() * nx * nz) as f64 + (p.trans_webs.len() * ny * nz) as f64;
-    check_cell_count(W, "elem_size", h, n_cells)?;
+    check_cell_count(W, &format!("elem_size = {h}"), n_cells)?;
 
     let iy = |v: f64| line_index(&yl, v);
     let ix = |v: f64| line_index(&xl, v);
@@ -757,7 +776,7 @@ pub fn sandwich_table(p: &SandwichParams) -> Result<Mesh> {
 /// `"zmax"` (the top face).
 pub fn sandwich_table_solid(p: &SandwichParams, h: f64, kind: CellKind) -> Result<Mesh> {
     const W: &str = "sandwich table solid";
-    p.validate()?;
+    p.validate_geometry()?;
     positive(W, "h", h)?;
     let (hx, ht, hb, hw) = (
         0.5 * p.length,
@@ -780,7 +799,11 @@ pub fn sandwich_table_solid(p: &SandwichParams, h: f64, kind: CellKind) -> Resul
     let xl = grid_lines(W, "h", &xr, h, 1)?;
     let yl = grid_lines(W, "h", &yr, h, 1)?;
     let zl = grid_lines(W, "h", &[-z1, z1, z2, z3], h, 1)?;
-    check_cell_count(W, "h", h, (xl.len() - 1) as f64 * (yl.len() - 1) as f64 * (zl.len() - 1) as f64)?;
+    check_cell_count(
+        W,
+        &format!("h = {h}"),
+        (xl.len() - 1) as f64 * (yl.len() - 1) as f64 * (zl.len() - 1) as f64,
+    )?;
     let names = ["top_plate", "bottom_plate", "webs_long", "webs_trans"];
     let classify = |c: [f64; 3]| {
         let [x, y, z] = c;
@@ -876,7 +899,7 @@ impl HelixParams {
             )));
         }
         let n = self.turns * self.elems_per_turn as f64;
-        check_cell_count(W, "elems_per_turn", self.elems_per_turn as f64, n)
+        check_cell_count(W, "turns × elems_per_turn", n)
     }
 
     /// Number of elements, `⌈turns × elems_per_turn⌉`.
@@ -945,7 +968,12 @@ pub fn helix_beam(p: &HelixParams) -> Result<Mesh> {
             index,
         })
         .collect();
-    let point = |index| vec![CellRef { block: bp as u32, index }];
+    let point = |index| {
+        vec![CellRef {
+            block: bp as u32,
+            index,
+        }]
+    };
     for (tag, (name, dim, cells)) in [
         ("wire", 1, lines.clone()),
         ("coil", 1, lines),
@@ -1036,7 +1064,11 @@ pub fn i_beam_shell(h: f64, b: f64, s: f64, t: f64, length: f64, elem_size: f64)
     let yl = grid_lines(W, "elem_size", &[-0.5 * b, 0.0, 0.5 * b], elem_size, 1)?;
     let zl = grid_lines(W, "elem_size", &[-zf, zf], elem_size, 2)?;
     let (nx, ny, nz) = ((xl.len() - 1) as u32, (yl.len() - 1) as u32, (zl.len() - 1) as u32);
-    check_cell_count(W, "elem_size", elem_size, nx as f64 * (2.0 * ny as f64 + nz as f64))?;
+    check_cell_count(
+        W,
+        &format!("elem_size = {elem_size}"),
+        nx as f64 * (2.0 * ny as f64 + nz as f64),
+    )?;
     let jw = line_index(&yl, 0.0);
     let mut bd = Builder::new([xl, yl, zl]);
     let g_top = bd.group("flange_top", 2);
@@ -1081,9 +1113,15 @@ pub fn i_beam_line(length: f64, n_elem: usize) -> Result<Mesh> {
     if n_elem == 0 {
         return Err(invalid(format!("{W}: n_elem must be at least 1, got 0")));
     }
-    check_cell_count(W, "n_elem", n_elem as f64, n_elem as f64)?;
+    check_cell_count(W, "n_elem", n_elem as f64)?;
     let xl: Vec<f64> = (0..=n_elem)
-        .map(|i| if i == n_elem { length } else { length * i as f64 / n_elem as f64 })
+        .map(|i| {
+            if i == n_elem {
+                length
+            } else {
+                length * i as f64 / n_elem as f64
+            }
+        })
         .collect();
     let mut bd = Builder::new([xl, vec![0.0], vec![0.0]]);
     let g = bd.group("beam", 1);
@@ -1118,8 +1156,7 @@ pub fn i_beam_solid(h: f64, b: f64, s: f64, t: f64, length: f64, elem_size: f64,
     let zl = grid_lines(W, "elem_size", &[-hh, -zi, zi, hh], elem_size, 1)?;
     check_cell_count(
         W,
-        "elem_size",
-        elem_size,
+        &format!("elem_size = {elem_size}"),
         (xl.len() - 1) as f64 * (yl.len() - 1) as f64 * (zl.len() - 1) as f64,
     )?;
     let classify = |c: [f64; 3]| {
