@@ -24,11 +24,13 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
     // The resonant natural frequency is then Ω/z up to the isolators' small effect (< 0.5 %).
     let f2 = value(&r, "natural frequency 2");
     assert!((f2 - 100.0 / 0.97).abs() / f2 < 5e-3, "{f2}");
-    // Coil: the beam helix against k = G d⁴/(8 D³ i) with i = 6 (beam bending and axial
-    // terms add ~0.1 %): tolerance 1 %.
+    // Coil: the beam helix against k = G d⁴/(8 D³ i) with i = 6. The formula keeps only the
+    // wire's torsion; the converged beam model adds the helix angle (5.7°), bending, axial and
+    // shear compliance of the wire, which lower k by about 1.5 % at C = D/d = 5.3
+    // (validation/springs_s3_s4_s5.py): tolerance 2.5 %.
     let k_formula = 7.7e10 * 0.006f64.powi(4) / (8.0 * 0.032f64.powi(3) * 6.0);
     let kc = value(&r, "FE coil stiffness");
-    assert!((kc - k_formula).abs() / k_formula < 1e-2, "{kc} vs {k_formula}");
+    assert!((kc - k_formula).abs() / k_formula < 2.5e-2, "{kc} vs {k_formula}");
     for f in [
         "report.md",
         "amplitude_frequency.svg",

@@ -1,3 +1,4 @@
 //! Post-processing of solutions.
+pub mod mass;
 pub mod modal;
 pub mod stress;
