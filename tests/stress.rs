@@ -508,3 +508,172 @@ fn bad_input_is_reported() {
     let e = nodal_stress_with(&m.solids, n, &u, Recovery::Extrapolated).unwrap_err();
     assert!(matches!(e, Error::InvertedElement { .. }), "{e}");
 }
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+/// The scikit-fem static references (`validation/skfem_static.py`) store the displacement of
+/// every node and the nodal stresses obtained the same way as `nodal_stress` (direct nodal
+/// evaluation in each cell, simple average), computed independently with skfem's P2 / S2
+/// spaces. Feeding the reference displacements to `nodal_stress` must give the same stresses.
+#[test]
+fn nodal_stress_matches_scikit_fem_on_the_reference_displacements() {
+    let cases = [
+        "static_s3_leaf_hex20_10x6x1_guided",
+        "static_s3_leaf_hex20_20x12x2_traction",
+        "static_s3_leaf_tet10_h9_guided",
+        "static_cantilever_hex20_40x2x2_tip",
+    ];
+    for case in cases {
+        let path = format!("{ROOT}/validation/reference/{case}.json");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let r: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let mesh_path = format!("{ROOT}/{}", r["mesh"].as_str().unwrap());
+        let mesh = vibrofem::io::gmsh::read(std::path::Path::new(&mesh_path), 1.0).unwrap();
+        let mat = Material {
+            young: r["material"]["young"].as_f64().unwrap(),
+            poisson: r["material"]["poisson"].as_f64().unwrap(),
+            density: r["material"]["density"].as_f64().unwrap(),
+        };
+        let m = model(&mesh, mat);
+        let tags: Vec<u64> = r["node_tags"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t.as_u64().unwrap())
+            .collect();
+        assert_eq!(tags, mesh.node_tags, "{case}: node order");
+        let u: Vec<f64> = r["displacement"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|row| row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()))
+            .collect();
+        let ns = nodal_stress(&m.solids, mesh.n_nodes(), &u).unwrap();
+        let want: Vec<[f64; 6]> = r["stress"]["nodal"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|row| std::array::from_fn(|c| row[c].as_f64().unwrap()))
+            .collect();
+        let vm: Vec<f64> = r["stress"]["von_mises"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let vmu: Vec<f64> = r["stress"]["von_mises_max_unaveraged"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let smax = want.iter().map(max_abs6).fold(0.0, f64::max);
+        let mut worst = 0.0f64;
+        for a in 0..mesh.n_nodes() {
+            worst = worst.max(diff6(&ns.stress[a], &want[a]) / smax);
+            worst = worst.max((ns.von_mises[a] - vm[a]).abs() / smax);
+            worst = worst.max((ns.von_mises_max_unaveraged[a] - vmu[a]).abs() / smax);
+        }
+        assert!(worst < 1e-10, "{case}: max relative difference {worst:e}");
+        let top = group_maxima(&mesh, &ns, StressField::VonMises).unwrap();
+        let ref_max = r["results"]["max_von_mises"]["value"].as_f64().unwrap();
+        assert!((top[0].value - ref_max).abs() < 1e-9 * ref_max, "{case}");
+        eprintln!(
+            "{case}: nodal stresses agree to {worst:.1e}; max von Mises {:.3} MPa",
+            top[0].value / 1e6
+        );
+    }
+}
+
+/// The committed spring meshes (`meshes/make_springs.py`) load with their groups, have the
+/// expected volumes, and every cell has a positive Jacobian at its nodes (stress recovery of a
+/// zero field evaluates there).
+#[test]
+fn spring_meshes_load_with_groups_and_valid_cells() {
+    let leaf_volume = 0.169 * 0.146 * 0.009;
+    let helix = 6.0 * (std::f64::consts::PI * 0.032f64).hypot(0.010);
+    let wire_volume = std::f64::consts::PI * 0.006f64.powi(2) / 4.0 * helix;
+    let meshes: [(&str, &[&str], f64, f64); 7] = [
+        (
+            "s3_leaf_hex20_10x6x1",
+            &["leaf", "clamp_fixed", "clamp_guided", "top", "bottom"],
+            leaf_volume,
+            1e-12,
+        ),
+        (
+            "s3_leaf_hex20_20x12x2",
+            &["leaf", "clamp_fixed", "clamp_guided"],
+            leaf_volume,
+            1e-12,
+        ),
+        (
+            "s3_leaf_hex20_40x24x4",
+            &["leaf", "clamp_fixed", "clamp_guided"],
+            leaf_volume,
+            1e-12,
+        ),
+        (
+            "s3_leaf_tet10_h9",
+            &["leaf", "clamp_fixed", "clamp_guided"],
+            leaf_volume,
+            1e-12,
+        ),
+        (
+            "s3_leaf_tet10_h6",
+            &["leaf", "clamp_fixed", "clamp_guided"],
+            leaf_volume,
+            1e-12,
+        ),
+        (
+            "s5_coil_tet10_h2p5",
+            &["wire", "end_bottom", "end_top", "surface"],
+            wire_volume,
+            3e-3,
+        ),
+        (
+            "s5_coil_tet10_h2",
+            &["wire", "end_bottom", "end_top", "surface"],
+            wire_volume,
+            1e-3,
+        ),
+    ];
+    for (name, groups, volume, tol) in meshes {
+        let path = format!("{ROOT}/meshes/{name}.msh");
+        let mesh = vibrofem::io::gmsh::read(std::path::Path::new(&path), 1.0).unwrap();
+        for g in groups {
+            let grp = mesh.group(g).unwrap();
+            assert!(!mesh.group_nodes(grp).is_empty(), "{name}: group {g} is empty");
+        }
+        let m = model(&mesh, steel());
+        let v: f64 = m
+            .solids
+            .iter()
+            .map(|s| (0..s.tags.len()).map(|e| s.volume(e).unwrap()).sum::<f64>())
+            .sum();
+        assert!((v / volume - 1.0).abs() < tol, "{name}: volume {v:e} vs {volume:e}");
+        let u = vec![0.0; 3 * mesh.n_nodes()];
+        nodal_stress(&m.solids, mesh.n_nodes(), &u).unwrap();
+        assert!(
+            ns_all_nodes_used(&mesh, &m),
+            "{name}: every node belongs to a volume cell"
+        );
+        if name.starts_with("s5") {
+            // the end faces: disks of the wire at z = 0 and z = 6 pitches
+            for (g, z) in [("end_bottom", 0.0), ("end_top", 0.06)] {
+                let nodes = mesh.group_nodes(mesh.group(g).unwrap());
+                let zc = nodes.iter().map(|&a| mesh.nodes[a as usize][2]).sum::<f64>() / nodes.len() as f64;
+                assert!((zc - z).abs() < 1e-4, "{name} {g}: mean z {zc}");
+            }
+        }
+    }
+}
+
+fn ns_all_nodes_used(mesh: &Mesh, m: &Model) -> bool {
+    let mut used = vec![false; mesh.n_nodes()];
+    for s in &m.solids {
+        for &a in &s.conn {
+            used[a as usize] = true;
+        }
+    }
+    used.iter().all(|&u| u)
+}
