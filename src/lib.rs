@@ -26,6 +26,7 @@ pub mod model;
 pub mod ordering;
 pub mod post;
 pub mod report;
+pub mod scene;
 pub mod section;
 pub mod solve;
 pub mod sparse;

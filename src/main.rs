@@ -39,6 +39,43 @@ enum Cmd {
     Static(StaticArgs),
     /// Groups, cell kinds and counts, bounding box, volume and mass of a mesh.
     MeshInfo(MeshInfoArgs),
+    /// Run a scene file (TOML): the modal and/or static analyses it describes.
+    Run(RunArgs),
+    /// Run a template scene over every mesh matched by a glob, in parallel; exit 3 if some fail.
+    Batch(BatchArgs),
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    /// Scene file (TOML, see docs/scenes.md).
+    scene: PathBuf,
+    /// Folder for summary.json and the result files asked for in [output].
+    #[arg(short, long, default_value = "vibrofem-run")]
+    out: PathBuf,
+    /// Print the JSON summary on stdout instead of the tables.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(clap::Args)]
+struct BatchArgs {
+    /// Glob of mesh files, wildcards (* and ?) in the file name only, e.g. 'meshes/s1_*.msh'.
+    pattern: String,
+    /// Template scene: each mesh replaces its [mesh].
+    #[arg(long)]
+    scene: PathBuf,
+    /// Folder for per-case results (<stem>.json), summary.csv and summary.json.
+    #[arg(short, long, default_value = "vibrofem-batch")]
+    out: PathBuf,
+    /// Cases run at once (capped further by available memory).
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
+    /// Rerun cases whose result file already exists.
+    #[arg(long)]
+    force: bool,
+    /// Run only shard I of N of the sorted file list, e.g. 2/8.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -307,6 +344,77 @@ fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     Ok(0)
 }
 
+fn run_cmd(a: &RunArgs) -> Result<i32> {
+    let scene = vibrofem::scene::Scene::load(&a.scene)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
+    let report = scene.run(Some((&a.out, "")))?;
+    let json = serde_json::to_string_pretty(&report).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    let path = a.out.join("summary.json");
+    std::fs::write(&path, &json).map_err(|e| Error::io(&path, e))?;
+    if a.json {
+        println!("{json}");
+    } else {
+        print!("{}", report.text());
+    }
+    for n in &report.notes {
+        eprintln!("note: {n}");
+    }
+    for o in &report.outputs {
+        eprintln!("wrote {o}");
+    }
+    if !report.verified() {
+        eprintln!("error: the modal solution failed its Sturm-sequence or residual check");
+        return Ok(2);
+    }
+    Ok(0)
+}
+
+fn batch_cmd(a: &BatchArgs) -> Result<i32> {
+    use std::io::IsTerminal;
+    let opts = vibrofem::scene::BatchOptions {
+        pattern: a.pattern.clone(),
+        template: a.scene.clone(),
+        out: a.out.clone(),
+        jobs: a.jobs,
+        force: a.force,
+        shard: a.shard.as_deref().map(vibrofem::scene::parse_shard).transpose()?,
+        progress_bar: std::io::stderr().is_terminal(),
+    };
+    let s = vibrofem::scene::run_batch(&opts)?;
+    println!(
+        "{:<48} {:>10} {:>8} {:>14} {:>9}",
+        "file", "status", "dofs", "f1 / k", "time [s]"
+    );
+    for r in &s.rows {
+        let key = r
+            .frequencies_hz
+            .first()
+            .map(|f| format!("{f:.4} Hz"))
+            .or(r.stiffness.map(|k| format!("{k:.4e}")))
+            .unwrap_or_default();
+        println!(
+            "{:<48} {:>10} {:>8} {:>14} {:>9.2}",
+            r.file,
+            r.status,
+            r.dofs.map(|d| d.to_string()).unwrap_or_default(),
+            key,
+            r.time_s
+        );
+        if let Some(e) = &r.error {
+            println!("    {e}");
+        }
+    }
+    println!(
+        "{} cases: {} ok, {} resumed, {} failed; summary in {}",
+        s.rows.len(),
+        s.rows.len() - s.failed - s.resumed,
+        s.resumed,
+        s.failed,
+        a.out.join("summary.csv").display()
+    );
+    Ok(if s.failed > 0 { 3 } else { 0 })
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let level = match cli.verbose {
@@ -326,6 +434,8 @@ fn main() -> ExitCode {
         Cmd::Design(a) => design_cmd(a),
         Cmd::Static(a) => static_cmd(a),
         Cmd::MeshInfo(a) => mesh_info(a),
+        Cmd::Run(a) => run_cmd(a),
+        Cmd::Batch(a) => batch_cmd(a),
     };
     match r {
         Ok(code) => ExitCode::from(code as u8),

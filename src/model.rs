@@ -886,6 +886,22 @@ impl Model {
                 }
             }
         }
+        for set in &solids {
+            if matches!(set.kind, CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6) {
+                if let Some(m) = set
+                    .mat
+                    .iter()
+                    .map(|&i| set.materials[i as usize])
+                    .find(|m| m.poisson > 0.49)
+                {
+                    notes.push(format!(
+                        "material ν = {} is nearly incompressible: linear {} elements lock (frequencies and \
+                         stiffness too high); use tet10 or hex20",
+                        m.poisson, set.kind
+                    ));
+                }
+            }
+        }
         if orphan_nodes > 0 {
             notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
         }

@@ -41,6 +41,9 @@
 //! reference point is the mean of its nodes) with exact parallel-axis algebra, so summing many
 //! elements far from the origin loses no accuracy.
 
+// Index loops over the three axes read like the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use crate::element::MassLumping;
 use crate::mesh::{CellKind, Mesh};
 use crate::model::Model;
@@ -229,7 +232,10 @@ fn element_moments(x: &[[f64; 3]], d: usize, me: &[f64], drill: Option<(f64, [f6
     Moments { p, m, s, ss }
 }
 
-/// Kind of model element set (with the set and element index it locates an element).
+/// A model element: its kind of set, the set index and the element index in the set.
+type ElementRef = (Part, usize, usize);
+
+/// Kind of model element set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Part {
     Solid,
@@ -351,7 +357,7 @@ pub fn group_mass_properties(model: &Model, mesh: &Mesh) -> Result<Vec<MassProps
         .collect();
 
     // Mesh cell (kind, tag) → model elements with the same nodes.
-    let mut index: HashMap<(CellKind, u64), Vec<(Part, usize, usize)>> = HashMap::new();
+    let mut index: HashMap<(CellKind, u64), Vec<ElementRef>> = HashMap::new();
     for (si, s) in model.solids.iter().enumerate() {
         for (e, &tag) in s.tags.iter().enumerate() {
             index.entry((s.kind, tag)).or_default().push((Part::Solid, si, e));
@@ -414,7 +420,7 @@ pub fn group_mass_properties(model: &Model, mesh: &Mesh) -> Result<Vec<MassProps
 
     let mut out = Vec::new();
     for g in &mesh.groups {
-        let mut members: Vec<(Part, usize, usize)> = Vec::new();
+        let mut members: Vec<ElementRef> = Vec::new();
         for c in &g.cells {
             let block = &mesh.blocks[c.block as usize];
             let i = c.index as usize;

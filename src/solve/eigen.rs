@@ -174,7 +174,33 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
     };
     let mut factorizations = 0;
-    let (fa, sigma) = factor_at(k, m, sym, sigma, &mut factorizations)?;
+    let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
+    if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
+        if n > p.dense_below {
+            // The diagonal heuristic can put the default shift far below the wanted modes
+            // (thin shells: rotational stiffness ∝ 1/t²; huge stiffness contrasts). Then every
+            // θ = 1/(λ − σ) is nearly the same and Lanczos crawls. Estimate the low spectrum by a
+            // few block inverse iterations and move the shift closer while it is too far.
+            for _ in 0..6 {
+                let est = probe_low_spectrum(k, m, &fa, (nm + 6).min(12).min(n), p.seed);
+                let Some(&last) = est.last() else { break };
+                let mut lam_est = est[nm.min(est.len()) - 1];
+                if lam_est < 1e-6 * last {
+                    lam_est = last; // the wanted ones are rigid-body modes: use the first elastic scale
+                }
+                if !(lam_est > 0.0) || sigma.abs() <= 10.0 * lam_est {
+                    break;
+                }
+                // Near the wanted modes but not closer than their scale: the θ spread is then
+                // about 2, and K − σM stays as well conditioned as the problem allows.
+                let s_new = -lam_est;
+                log::info!(
+                    "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e}"
+                );
+                (fa, sigma) = factor_at(k, m, sym, s_new, &mut factorizations)?;
+            }
+        }
+    }
     let time_factor_main = t0.elapsed().as_secs_f64();
     let mut time_verify = 0.0;
 
@@ -223,7 +249,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         attempt += 1;
         let ti_round = Instant::now();
         if fa.is_none() {
-            fa = Some(factor_at(k, m, sym, sigma, &mut factorizations)?.0);
+            fa = Some(factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?.0);
         }
         let f = fa
             .as_ref()
@@ -345,6 +371,47 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     }
 }
 
+/// Rayleigh–Ritz estimates (ascending) of the lowest eigenvalues from a few block inverse
+/// iterations with the factor of K − σM (upper bounds of the lowest `nb` eigenvalues).
+fn probe_low_spectrum(k: &SymMatrix, m: &SymMatrix, fa: &Factor, nb: usize, seed: u64) -> Vec<f64> {
+    let n = k.n();
+    let mut rng = Rng(seed.rotate_left(17) | 1);
+    let mut x = Mat::from_fn(n, nb, |_, _| rng.next());
+    let mut y = Mat::zeros(n, nb);
+    for _ in 0..4 {
+        m.mul_block(x.as_ref(), y.as_mut());
+        fa.solve_in_place(y.as_mut());
+        for c in 0..nb {
+            let nrm = (0..n).map(|i| y[(i, c)] * y[(i, c)]).sum::<f64>().sqrt();
+            if !(nrm > 0.0 && nrm.is_finite()) {
+                return vec![];
+            }
+            for i in 0..n {
+                x[(i, c)] = y[(i, c)] / nrm;
+            }
+        }
+    }
+    let mut kx = Mat::zeros(n, nb);
+    let mut mx = Mat::zeros(n, nb);
+    k.mul_block(x.as_ref(), kx.as_mut());
+    m.mul_block(x.as_ref(), mx.as_mut());
+    let mut kh = Mat::zeros(nb, nb);
+    let mut mh = Mat::zeros(nb, nb);
+    matmul(kh.as_mut(), Accum::Replace, x.transpose(), kx.as_ref(), 1.0, Par::Seq);
+    matmul(mh.as_mut(), Accum::Replace, x.transpose(), mx.as_ref(), 1.0, Par::Seq);
+    let kd = nalgebra::DMatrix::from_fn(nb, nb, |i, j| 0.5 * (kh[(i, j)] + kh[(j, i)]));
+    let md = nalgebra::DMatrix::from_fn(nb, nb, |i, j| 0.5 * (mh[(i, j)] + mh[(j, i)]));
+    let Some(ch) = md.cholesky() else { return vec![] };
+    let Some(linv) = ch.l().try_inverse() else {
+        return vec![];
+    };
+    let c = &linv * kd * linv.transpose();
+    let c = (&c + c.transpose()) * 0.5;
+    let mut ev: Vec<f64> = c.symmetric_eigen().eigenvalues.iter().copied().collect();
+    ev.sort_by(f64::total_cmp);
+    ev
+}
+
 /// Factor K − σM; if σ sits exactly on an eigenvalue (zero pivot), nudge it.
 fn factor_at(
     k: &SymMatrix,
@@ -353,13 +420,28 @@ fn factor_at(
     sigma: f64,
     count: &mut usize,
 ) -> Result<(Factor, f64)> {
+    factor_at_checked(k, m, sym, sigma, count, false)
+}
+
+/// [`factor_at`]; with `strict`, a pivot below 1e-8 of its own diagonal entry
+/// (σ on an eigenvalue) also moves the shift. Only a user's operator shift is checked so: Sturm
+/// points need only the count, and small shifts next to rigid-body modes are legitimately
+/// ill-conditioned (their pivots are small without being wrong).
+fn factor_at_checked(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    sigma: f64,
+    count: &mut usize,
+    strict: bool,
+) -> Result<(Factor, f64)> {
     let mut s = sigma;
     let mut last_err = None;
     for i in 0..4 {
         *count += 1;
         let a = k.sub_scaled(s, m);
         match Factor::new(sym.clone(), &a) {
-            Ok(f) if f.pivot_range.0 > f.pivot_range.1 * 1e-14 => return Ok((f, s)),
+            Ok(f) if !strict || f.min_rel_pivot > 1e-8 => return Ok((f, s)),
             Ok(_) => {
                 last_err = Some(Error::Factorization(format!(
                     "K − σM numerically singular at σ = {s:.6e}"
@@ -389,24 +471,34 @@ fn refine(k: &SymMatrix, m: &SymMatrix, fa: &Factor, x: &Mat<f64>) -> Result<(Ve
     let mut mh = Mat::zeros(c, c);
     matmul(kh.as_mut(), Accum::Replace, y.transpose(), ky.as_ref(), 1.0, Par::Seq);
     matmul(mh.as_mut(), Accum::Replace, y.transpose(), my.as_ref(), 1.0, Par::Seq);
-    let kd = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (kh[(i, j)] + kh[(j, i)]));
-    let md = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (mh[(i, j)] + mh[(j, i)]));
-    let ch = md
-        .cholesky()
-        .ok_or_else(|| Error::Verification("refined Ritz vectors are not M-independent".into()))?;
-    let linv = ch
-        .l()
-        .try_inverse()
-        .ok_or_else(|| Error::Verification("singular Ritz Gram matrix".into()))?;
-    let cmat = &linv * &kd * linv.transpose();
+    // Columns scaled to unit M-norm first (they differ by the ratios of θ).
+    let sc: Vec<f64> = (0..c)
+        .map(|i| 1.0 / mh[(i, i)].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    let kd = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (kh[(i, j)] + kh[(j, i)]) * sc[i] * sc[j]);
+    let md = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (mh[(i, j)] + mh[(j, i)]) * sc[i] * sc[j]);
+    // M-orthonormal basis of span(Y) from the eigen-decomposition of its Gram matrix, dropping
+    // directions that are numerically dependent (two Ritz vectors of one eigenvector would
+    // otherwise give a spurious extra eigenvalue).
+    let ge = md.symmetric_eigen();
+    let gmax = ge.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+    let keep: Vec<usize> = (0..c).filter(|&i| ge.eigenvalues[i] > 1e-10 * gmax).collect();
+    if keep.is_empty() {
+        return Err(Error::Verification("refined Ritz vectors are not M-independent".into()));
+    }
+    let q = nalgebra::DMatrix::from_fn(c, keep.len(), |i, j| {
+        ge.eigenvectors[(i, keep[j])] / ge.eigenvalues[keep[j]].sqrt()
+    });
+    let cmat = q.transpose() * &kd * &q;
     let cmat = (&cmat + cmat.transpose()) * 0.5;
     let eig = cmat.symmetric_eigen();
-    let mut order: Vec<usize> = (0..c).collect();
+    let r = keep.len();
+    let mut order: Vec<usize> = (0..r).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-    // Z = L⁻ᵀ U, columns in ascending order; then X = Y Z is M-orthonormal.
-    let z = linv.transpose() * &eig.eigenvectors;
-    let zf = Mat::from_fn(c, c, |i, j| z[(i, order[j])]);
-    let mut xn = Mat::zeros(n, c);
+    // Z = Q U, columns in ascending order; then X = Y Z is M-orthonormal.
+    let z = &q * &eig.eigenvectors;
+    let zf = Mat::from_fn(c, r, |i, j| z[(i, order[j])] * sc[i]);
+    let mut xn = Mat::zeros(n, r);
     matmul(xn.as_mut(), Accum::Replace, y.as_ref(), zf.as_ref(), 1.0, Par::Seq);
     Ok((order.iter().map(|&j| eig.eigenvalues[j]).collect(), xn))
 }
@@ -419,7 +511,8 @@ pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, 
     let mut mx = Mat::zeros(n, nc);
     k.mul_block(x, kx.as_mut());
     m.mul_block(x, mx.as_mut());
-    let lam_ref = lambda.iter().fold(sigma.abs(), |a, l| a.max(l.abs()));
+    // Scale of the spectrum found (a far shift must not make elastic modes look rigid).
+    let lam_ref = lambda.iter().fold(1e-3 * sigma.abs(), |a, l| a.max(l.abs()));
     let mut res = Vec::with_capacity(nc);
     for c in 0..nc {
         let (mut r2, mut k2, mut m2) = (0.0, 0.0, 0.0);
@@ -432,9 +525,9 @@ pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, 
         // Rigid-body modes (λ ≈ 0) have Kx ≈ 0: normalise by a representative stiffness
         // scale instead, so the number still measures accuracy.
         let denom = if lambda[c].abs() < 1e-6 * lam_ref {
-            sigma.abs().max(1e-6 * lam_ref) * m2.sqrt()
+            lam_ref * m2.sqrt()
         } else {
-            k2.sqrt()
+            k2.sqrt().max(lambda[c].abs() * m2.sqrt())
         };
         res.push(if denom > 0.0 { r2.sqrt() / denom } else { r2.sqrt() });
     }
@@ -658,8 +751,11 @@ impl Lanczos {
         }
         self.want = want.max(self.want);
         let b = self.b;
+        // The basis must also hold the current columns plus the next block (a resumed run may
+        // end with a full basis).
         let m_max = (self.want * 2 + 4 * b)
             .max(self.want + 6 * b)
+            .max(self.cur + b)
             .min(self.n)
             .max(b.min(self.n));
         if m_max > self.m_max {

@@ -84,6 +84,9 @@ pub struct Factor {
     /// Smallest and largest pivot magnitude (a ratio near machine precision means the
     /// matrix is numerically singular).
     pub pivot_range: (f64, f64),
+    /// Smallest |pivot| relative to the matrix's own diagonal entry in that position: at
+    /// rounding level when the matrix is singular, e.g. a shift on an eigenvalue.
+    pub min_rel_pivot: f64,
 }
 
 impl Factor {
@@ -121,6 +124,21 @@ impl Factor {
             t0.elapsed().as_secs_f64()
         );
         let d = diagonal(&sym.sym, &values);
+        let adiag = a.diagonal();
+        let min_rel_pivot = match sym.sym.perm() {
+            Some(perm) => {
+                let (fwd, _) = perm.arrays();
+                d.iter()
+                    .enumerate()
+                    .map(|(i, x)| x.abs() / adiag[fwd[i]].abs().max(f64::MIN_POSITIVE))
+                    .fold(f64::INFINITY, f64::min)
+            }
+            None => d
+                .iter()
+                .zip(&adiag)
+                .map(|(x, a)| x.abs() / a.abs().max(f64::MIN_POSITIVE))
+                .fold(f64::INFINITY, f64::min),
+        };
         let negative_pivots = d.iter().filter(|&&x| x < 0.0).count();
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
         for &x in &d {
@@ -137,6 +155,7 @@ impl Factor {
             values,
             negative_pivots,
             pivot_range: (lo, hi),
+            min_rel_pivot,
         })
     }
 
