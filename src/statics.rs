@@ -233,34 +233,24 @@ fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<Vec<f64>> {
                 if acc.iter().any(|v| !v.is_finite()) {
                     return Err(Error::InvalidInput(format!("acceleration is not finite: {acc:?}")));
                 }
-                for s in &model.solids {
-                    let nn = s.kind.n_nodes();
-                    let mut ke = vec![0.0; 9 * nn * nn];
-                    let mut me = vec![0.0; 9 * nn * nn];
-                    for e in 0..s.len() {
-                        s.matrices(e, &mut ke, &mut me, true)?;
-                        let nodes = s.nodes(e);
-                        for i in 0..3 * nn {
-                            let mut fi = 0.0;
-                            for j in 0..3 * nn {
-                                fi += me[i * 3 * nn + j] * acc[j % 3];
-                            }
-                            f[NCOMP * nodes[i / 3] as usize + i % 3] += fi;
-                        }
-                    }
-                }
-                for d in &model.discrete {
-                    let nd = d.ndpn * d.per;
-                    for e in 0..d.len() {
+                // Consistent body force f = M·a over every element set (solids, shells,
+                // beams, point masses): the acceleration acts on the translations.
+                for set in model.element_sets() {
+                    let ndpn = set.dofs_per_node();
+                    for e in 0..set.len() {
+                        let nodes = set.nodes(e);
+                        let nd = ndpn * nodes.len();
+                        let mut ke = vec![0.0; nd * nd];
+                        let mut me = vec![0.0; nd * nd];
+                        set.matrices(e, &mut ke, &mut me, true)?;
                         for i in 0..nd {
-                            let c = i % d.ndpn;
                             let mut fi = 0.0;
                             for j in 0..nd {
-                                if j % d.ndpn < 3 {
-                                    fi += d.me[e][i * nd + j] * acc[j % d.ndpn];
+                                if j % ndpn < 3 {
+                                    fi += me[i * nd + j] * acc[j % ndpn];
                                 }
                             }
-                            f[NCOMP * d.nodes[e * d.per + i / d.ndpn] as usize + c] += fi;
+                            f[NCOMP * nodes[i / ndpn] as usize + i % ndpn] += fi;
                         }
                     }
                 }

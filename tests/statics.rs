@@ -286,3 +286,30 @@ fn bad_input_is_reported_clearly() {
     let msg = static_err(m, s, vec![]).to_string();
     assert!(msg.contains("rotary inertia needs a coupled group"), "{msg}");
 }
+
+#[test]
+fn gravity_acts_on_shells_and_beams_too() {
+    // MITC4 plate 1 × 0.5 × 0.01 m under its own weight: the clamp carries ρ·t·A·g (consistent
+    // shell mass, translations only; 1e-9).
+    let m = "box:1,0.5,0.01:10,5,1:hex8";
+    let mesh = source::load(m, 1.0).unwrap();
+    let mut s = ModelSpec::default();
+    s.shells.push(vibrofem::model::ShellPart {
+        group: "zmin".into(),
+        section: vibrofem::section::ShellSection::new(0.01),
+        material: None,
+    });
+    s.fixes.push(("xmin".into(), vibrofem::dof::ALL6));
+    let run = run_static(
+        &mesh,
+        m,
+        &StaticOptions {
+            spec: s,
+            cases: vec![vec![Load::Acceleration([0.0, 0.0, -9.81])]],
+        },
+    )
+    .unwrap();
+    let w = 1.0 * 0.5 * 0.01 * 7850.0 * 9.81;
+    let rz = run.cases[0].reactions[0].resultant.force[2];
+    assert!((rz - w).abs() < 1e-9 * w, "{rz} vs {w}");
+}
