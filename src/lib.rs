@@ -31,3 +31,4 @@ pub mod section;
 pub mod solve;
 pub mod sparse;
 pub mod statics;
+pub mod sweep;

@@ -383,12 +383,11 @@ fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     let s = vibrofem::scene::run_batch(&opts)?;
     println!(
         "{:<48} {:>10} {:>8} {:>14} {:>9}",
-        "file", "status", "dofs", "f1 / k", "time [s]"
+        "file", "status", "dofs", "f elastic / k", "time [s]"
     );
     for r in &s.rows {
         let key = r
-            .frequencies_hz
-            .first()
+            .first_elastic_hz
             .map(|f| format!("{f:.4} Hz"))
             .or(r.stiffness.map(|k| format!("{k:.4e}")))
             .unwrap_or_default();

@@ -1227,6 +1227,8 @@ pub struct BatchRow {
     pub mass_kg: Option<f64>,
     /// Frequencies, Hz.
     pub frequencies_hz: Vec<f64>,
+    /// First elastic (non-rigid-body) frequency, Hz.
+    pub first_elastic_hz: Option<f64>,
     /// Stiffness along the first guided axis, load case 1 (N/m).
     pub stiffness: Option<f64>,
     /// Largest displacement, load case 1 (m).
@@ -1246,6 +1248,7 @@ impl BatchRow {
             dofs: None,
             mass_kg: None,
             frequencies_hz: vec![],
+            first_elastic_hz: None,
             stiffness: None,
             max_displacement: None,
             max_von_mises: None,
@@ -1261,6 +1264,10 @@ impl BatchRow {
             dofs: r.modal.as_ref().map(|m| m.dofs).or(r.statics.as_ref().map(|s| s.dofs)),
             mass_kg: r.modal.as_ref().map(|m| m.mass_kg),
             frequencies_hz: r.modal.as_ref().map(|m| m.frequencies_hz.clone()).unwrap_or_default(),
+            first_elastic_hz: r
+                .modal
+                .as_ref()
+                .and_then(|m| m.modes.iter().find(|x| x.kind == "elastic").map(|x| x.frequency_hz)),
             stiffness: r.stiffness(),
             max_displacement: r.max_displacement(),
             max_von_mises: r.max_von_mises(),
