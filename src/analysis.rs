@@ -131,6 +131,8 @@ pub struct ModalReport {
     pub max_rel_residual: f64,
     /// max |XᵀMX − I|.
     pub m_orthonormality: f64,
+    /// Worst backward error of a probe solve with the factorisations used (stability check).
+    pub factor_backward_error: f64,
     /// Total participating mass per direction and the centre of mass.
     pub participation_total: [f64; 6],
     /// Centre of mass, m.
@@ -169,6 +171,44 @@ pub fn peak_memory() -> Option<u64> {
     Some(kb * 1024)
 }
 
+/// Memory the operating system can still give this process (Linux MemAvailable), bytes.
+pub fn available_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Refuse, before factorising, a model whose factor (estimated from the symbolic analysis) plus
+/// the matrices would not fit in `limit` bytes (`--max-memory`) or, without a limit, in the memory
+/// the system has available — a clear error with the estimate instead of being killed.
+pub fn check_memory(
+    source: &str,
+    sym: &SymbolicFactor,
+    pattern: &crate::sparse::Pattern,
+    limit: Option<u64>,
+) -> Result<()> {
+    // Factor values, K, M, the shifted copy and faer's permuted copy (values + indices).
+    let need = sym.factor_bytes() as u64 + 4 * 16 * pattern.nnz() as u64;
+    let (lim, what) = match limit {
+        Some(l) => (l, "--max-memory is"),
+        None => match available_memory() {
+            Some(a) => (a, "the system has available"),
+            None => return Ok(()),
+        },
+    };
+    if need > lim {
+        return Err(Error::InvalidInput(format!(
+            "{source}: the factorisation needs about {:.2} GiB (factor {:.2} GiB, {} entries) but {what} {:.2} GiB",
+            need as f64 / 1073741824.0,
+            sym.factor_bytes() as f64 / 1073741824.0,
+            sym.nnz_l,
+            lim as f64 / 1073741824.0
+        )));
+    }
+    Ok(())
+}
+
 /// Run a modal analysis on a mesh already in memory. `source` names it in messages.
 pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64) -> Result<ModalRun> {
     let t_all = Instant::now();
@@ -204,19 +244,7 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         }
     };
     tm.order = t.elapsed().as_secs_f64();
-    if let Some(limit) = opts.max_memory {
-        // Factor values plus K, M, the shifted copy, and the Lanczos basis.
-        let need = sym.factor_bytes() as u64 + 3 * 16 * pattern.nnz() as u64;
-        if need > limit {
-            return Err(Error::InvalidInput(format!(
-                "{source}: the factorisation needs about {:.2} GiB (factor {:.2} GiB, {} entries) but --max-memory is {:.2} GiB",
-                need as f64 / 1073741824.0,
-                sym.factor_bytes() as f64 / 1073741824.0,
-                sym.nnz_l,
-                limit as f64 / 1073741824.0
-            )));
-        }
-    }
+    check_memory(source, &sym, &pattern, opts.max_memory)?;
     let sym = Arc::new(sym);
     let target = match opts.target {
         ModalTarget::Modes(n) => Target::Nearest(n),
@@ -271,12 +299,18 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
     tm.total = t_all.elapsed().as_secs_f64() + read_time;
 
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
-    let accurate = max_res <= params.verify_tol && sol.m_orthonormality <= 1e-8;
+    let accurate = max_res <= params.verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let mut notes = model.notes.clone();
     if !accurate {
         notes.push(format!(
             "accuracy not guaranteed: largest residual {max_res:.2e} (tolerance {:.0e}), M-orthonormality error {:.2e}",
             params.verify_tol, sol.m_orthonormality
+        ));
+    }
+    if sol.factor_backward_error > 1e-8 {
+        notes.push(format!(
+            "a factorisation of K − σM is unstable (probe backward error {:.1e}, pivot growth): results may be wrong",
+            sol.factor_backward_error
         ));
     }
     if !sol.sturm.complete {
@@ -307,6 +341,7 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         accurate,
         max_rel_residual: max_res,
         m_orthonormality: sol.m_orthonormality,
+        factor_backward_error: sol.factor_backward_error,
         participation_total: part.total,
         centre_of_mass: part.centre_of_mass,
         timings_s: tm.clone(),

@@ -450,6 +450,7 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
     let t = Instant::now();
     let (fwd, inv) = nested_dissection(&graph, &model.dofs)?;
     let sym = Arc::new(SymbolicFactor::new(&pattern, Some((&fwd, &inv)))?);
+    crate::analysis::check_memory(source, &sym, &pattern, None)?;
     let singular = |extra: String| {
         let free = free_rigid_motions(&km.k, &model.dofs, &model.nodes);
         Error::Factorization(if free.is_empty() {

@@ -116,6 +116,8 @@ pub struct EigenSolution {
     pub time_iterate: f64,
     /// Seconds in verification (residuals, orthonormality, Sturm factorisations).
     pub time_verify: f64,
+    /// Worst probe backward error of the factorisations used (see [`Factor::probe_residual`]).
+    pub factor_backward_error: f64,
 }
 
 /// Default shift: a small negative fraction of the typical diagonal ratio K_ii/M_ii (which
@@ -175,6 +177,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     };
     let mut factorizations = 0;
     let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
+    let mut backward = fa.probe_residual;
     if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
         if n > p.dense_below {
             // The diagonal heuristic can put the default shift far below the wanted modes
@@ -198,6 +201,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
                     "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e}"
                 );
                 (fa, sigma) = factor_at(k, m, sym, s_new, &mut factorizations)?;
+                backward = fa.probe_residual;
             }
         }
     }
@@ -210,6 +214,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         Target::Band(_, hi) => {
             let tv = Instant::now();
             let (fh, _) = factor_at(k, m, sym, hi, &mut factorizations)?;
+            backward = backward.max(fh.probe_residual);
             time_verify += tv.elapsed().as_secs_f64();
             fh.negative_pivots.saturating_sub(fa.negative_pivots)
         }
@@ -233,6 +238,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             time_factor: time_factor_main,
             time_iterate: 0.0,
             time_verify,
+            factor_backward_error: backward,
         });
     }
 
@@ -309,10 +315,13 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let lower_count = if lower_pt == sigma {
             lower_count_at_shift
         } else {
-            factor_at(k, m, sym, lower_pt, &mut factorizations)?.0.negative_pivots
+            let (fl, _) = factor_at(k, m, sym, lower_pt, &mut factorizations)?;
+            backward = backward.max(fl.probe_residual);
+            fl.negative_pivots
         };
         let (fu, upper_pt) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
         let upper_count = fu.negative_pivots;
+        backward = backward.max(fu.probe_residual);
         drop(fu);
         let n_between = found.iter().filter(|(l, _)| *l > lower_pt && *l < upper_pt).count();
         let expected = upper_count.saturating_sub(lower_count);
@@ -366,6 +375,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             time_factor: time_factor_main,
             time_iterate,
             time_verify,
+            factor_backward_error: backward,
         };
         return Ok(sol);
     }
@@ -441,7 +451,16 @@ fn factor_at_checked(
         *count += 1;
         let a = k.sub_scaled(s, m);
         match Factor::new(sym.clone(), &a) {
-            Ok(f) if !strict || f.min_rel_pivot > 1e-8 => return Ok((f, s)),
+            Ok(mut f) if !strict || f.min_rel_pivot > 1e-8 => {
+                f.probe(&a);
+                if f.probe_residual > 1e-8 {
+                    log::warn!(
+                        "factorisation of K − σM at σ = {s:.6e}: probe backward error {:.1e}",
+                        f.probe_residual
+                    );
+                }
+                return Ok((f, s));
+            }
             Ok(_) => {
                 last_err = Some(Error::Factorization(format!(
                     "K − σM numerically singular at σ = {s:.6e}"
