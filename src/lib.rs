@@ -19,6 +19,7 @@ pub use error::{Error, Result};
 pub mod analysis;
 pub mod assembly;
 pub mod cli;
+pub mod converge;
 pub mod design;
 pub mod dof;
 pub mod dynamics;

@@ -43,6 +43,67 @@ enum Cmd {
     Run(RunArgs),
     /// Run a template scene over every mesh matched by a glob, in parallel; exit 3 if some fail.
     Batch(BatchArgs),
+    /// Parametric study of the sandwich work table: mass and first elastic frequency per design,
+    /// CSV/JSON table and Pareto plot (docs/sweeps.md).
+    Sweep(SweepArgs),
+    /// Speed–accuracy study: a case over mesh refinements and formulations (s1, s3, s5, s7, or a
+    /// scene with a generator).
+    Converge(ConvergeArgs),
+    /// Join the summaries of batch shard folders into one.
+    Merge(MergeArgs),
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// Study file ([study], see docs/sweeps.md) or a scene with generator = "sandwich:paper[,SIZE]".
+    study: PathBuf,
+    /// KEY=a:b:step or KEY=v1,v2,… (e.g. table.top_thickness=0.015:0.03:0.0025); repeatable.
+    #[arg(long = "set", value_name = "KEY=RANGE")]
+    set: Vec<String>,
+    /// Folder for sweep.csv, sweep.json and pareto.svg.
+    #[arg(short, long, default_value = "vibrofem-sweep")]
+    out: PathBuf,
+    /// Designs analysed at once.
+    #[arg(long, default_value_t = 1)]
+    jobs: usize,
+    /// Model: shell (MITC4 mid-surface) or solid (hex20 of --solid-size).
+    #[arg(long)]
+    formulation: Option<String>,
+    /// Hex20 element size for --formulation solid (m).
+    #[arg(long)]
+    solid_size: Option<f64>,
+    /// Lowest admissible first elastic frequency (Hz).
+    #[arg(long)]
+    min_f1: Option<f64>,
+    /// Highest admissible mass (kg).
+    #[arg(long)]
+    max_mass: Option<f64>,
+    /// Re-run the N best designs on a finer shell mesh and as hex20 solids.
+    #[arg(long)]
+    check: Option<usize>,
+}
+
+#[derive(clap::Args)]
+struct ConvergeArgs {
+    /// Built-in case (s1, s3, s5, s7, tiny) or a scene file with a box:, helix: or sandwich:paper
+    /// generator.
+    case: String,
+    /// Folder for converge.md, converge.json and converge.svg.
+    #[arg(short, long, default_value = "vibrofem-converge")]
+    out: PathBuf,
+    /// Refinement levels of a scene (each halves the element size).
+    #[arg(long, default_value_t = 3)]
+    levels: usize,
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// Batch output folders (each with summary.json).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Folder for the merged summary.csv and summary.json.
+    #[arg(short, long)]
+    out: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -414,6 +475,70 @@ fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     Ok(if s.failed > 0 { 3 } else { 0 })
 }
 
+fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
+    use vibrofem::sweep;
+    let mut study = sweep::Study::load(&a.study)?;
+    for s in &a.set {
+        let (k, v) = sweep::parse_set(s)?;
+        study.set(&k, v);
+    }
+    match a.formulation.as_deref() {
+        None => {}
+        Some("shell") => study.formulation = sweep::SweepFormulation::Shell,
+        Some("solid") => study.formulation = sweep::SweepFormulation::Solid,
+        Some(f) => return Err(Error::InvalidInput(format!("--formulation '{f}': use shell or solid"))),
+    }
+    if let Some(h) = a.solid_size {
+        study.solid_size = h;
+    }
+    if let Some(f) = a.min_f1 {
+        study.constraints.min_f1_hz = f;
+    }
+    if let Some(m) = a.max_mass {
+        study.constraints.max_mass_kg = m;
+    }
+    if let Some(n) = a.check {
+        study.check.designs = n;
+    }
+    let o = sweep::run_sweep(
+        &study,
+        &sweep::SweepOptions {
+            out: Some(a.out.clone()),
+            jobs: a.jobs,
+            progress: true,
+        },
+    )?;
+    print!("{}", sweep::table_text(&o));
+    println!("outputs in {}", a.out.display());
+    Ok(0)
+}
+
+fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
+    use vibrofem::converge;
+    let case = if std::path::Path::new(&a.case).is_file() {
+        converge::from_scene(std::path::Path::new(&a.case), a.levels)?
+    } else {
+        converge::builtin(&a.case)?
+    };
+    let c = converge::run_case(&case, &|l| eprintln!("{l}"))?;
+    converge::write_outputs(&c, &a.out)?;
+    print!("{}", converge::table_markdown(&c));
+    println!("outputs in {}", a.out.display());
+    Ok(0)
+}
+
+fn merge_cmd(a: &MergeArgs) -> Result<i32> {
+    let s = vibrofem::sweep::merge(&a.dirs, Some(&a.out))?;
+    println!(
+        "{} cases ({} failed) merged from {} folders into {}",
+        s.rows.len(),
+        s.failed,
+        a.dirs.len(),
+        a.out.join("summary.csv").display()
+    );
+    Ok(0)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let level = match cli.verbose {
@@ -435,6 +560,9 @@ fn main() -> ExitCode {
         Cmd::MeshInfo(a) => mesh_info(a),
         Cmd::Run(a) => run_cmd(a),
         Cmd::Batch(a) => batch_cmd(a),
+        Cmd::Sweep(a) => sweep_cmd(a),
+        Cmd::Converge(a) => converge_cmd(a),
+        Cmd::Merge(a) => merge_cmd(a),
     };
     match r {
         Ok(code) => ExitCode::from(code as u8),

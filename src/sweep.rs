@@ -180,13 +180,13 @@ impl TableSpec {
             elem_size: self.elem_size,
             shell_kind: CellKind::Quad4,
         };
-        if self.n_long_webs > 1 && !(self.long_web_span > 0.0) {
+        if self.n_long_webs > 1 && (self.long_web_span.is_nan() || self.long_web_span <= 0.0) {
             return Err(invalid(format!(
                 "long_web_span = {} must be positive",
                 self.long_web_span
             )));
         }
-        if self.n_trans_webs > 1 && !(self.trans_web_span > 0.0) {
+        if self.n_trans_webs > 1 && (self.trans_web_span.is_nan() || self.trans_web_span <= 0.0) {
             return Err(invalid(format!(
                 "trans_web_span = {} must be positive",
                 self.trans_web_span
@@ -660,7 +660,7 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     use rayon::prelude::*;
     let designs = study.designs()?;
     if let Some(h) = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size)
-        && !(h > 0.0)
+        && (h.is_nan() || h <= 0.0)
     {
         return Err(invalid(format!("solid_size = {h} must be positive")));
     }
@@ -974,6 +974,7 @@ fn same_result(a: &BatchRow, b: &BatchRow) -> bool {
         && a.dofs == b.dofs
         && a.mass_kg == b.mass_kg
         && a.frequencies_hz == b.frequencies_hz
+        && a.first_elastic_hz == b.first_elastic_hz
         && a.stiffness == b.stiffness
         && a.max_displacement == b.max_displacement
         && a.max_von_mises == b.max_von_mises
