@@ -25,7 +25,6 @@ use crate::dynamics::transient::{TransientOptions, simulate_startup};
 use crate::dynamics::two_mass::TwoMass;
 use crate::material::Material;
 use crate::mesh::CellKind;
-use crate::mesh::generate::box_mesh;
 use crate::mesh::parametric::{HelixParams, SandwichParams, helix_beam, sandwich_table};
 use crate::model::{BeamPart, CouplingSpec, ModelSpec, Orientation, ShellPart};
 use crate::section::{BeamSection, ShellSection};
@@ -342,6 +341,24 @@ impl Design {
         pos("coil.shear_modulus", self.coil.shear_modulus)?;
         pos("drive.pull", self.drive.pull)?;
         pos("drive.efficiency", self.drive.efficiency)?;
+        if self.leaf.divisions.contains(&0) || self.leaf.divisions.iter().product::<usize>() > 200_000 {
+            return Err(Error::InvalidInput(format!(
+                "design: 'leaf.divisions' must be at least 1 each and at most 200 000 cells in all, got {:?}",
+                self.leaf.divisions
+            )));
+        }
+        if !(self.table.element_size >= 0.002 && self.table.element_size.is_finite()) {
+            return Err(Error::InvalidInput(format!(
+                "design: 'table.element_size' must be at least 0.002 m, got {}",
+                self.table.element_size
+            )));
+        }
+        if self.coil.elements_per_turn < 3 || self.coil.elements_per_turn > 1000 {
+            return Err(Error::InvalidInput(format!(
+                "design: 'coil.elements_per_turn' must be between 3 and 1000, got {}",
+                self.coil.elements_per_turn
+            )));
+        }
         if self.leaf.count == 0 || self.coil.count == 0 || self.drive.magnets == 0 {
             return Err(Error::InvalidInput(
                 "design: leaf.count, coil.count and drive.magnets must be ≥ 1".into(),
@@ -431,7 +448,7 @@ pub struct DesignReport {
 /// displacement (Pa/m), both from a guided 1000 N load.
 pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
     let l = &d.leaf;
-    let mesh = box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions);
+    let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let spec = ModelSpec {
         material: Material {
             young: l.material[0],

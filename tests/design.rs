@@ -89,3 +89,32 @@ fn design_files_are_strict() {
     assert_eq!(ok.leaf.thickness, 0.01);
     assert_eq!(ok.coil.count, 8);
 }
+
+#[test]
+fn design_mesh_parameters_are_checked_before_meshing() {
+    // Found by the errors audit: zero divisions used to reach a panicking generator.
+    let dir = std::env::temp_dir().join(format!("vibrofem-design-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, text, key) in [
+        (
+            "div.toml",
+            "version = 1\n[leaf]\ndivisions = [0, 6, 1]\n",
+            "leaf.divisions",
+        ),
+        (
+            "size.toml",
+            "version = 1\n[table]\nelement_size = 1e-6\n",
+            "table.element_size",
+        ),
+        (
+            "turns.toml",
+            "version = 1\n[coil]\nelements_per_turn = 0\n",
+            "coil.elements_per_turn",
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        let e = Design::from_toml(&p).unwrap_err();
+        assert!(e.to_string().contains(key), "{e}");
+    }
+}

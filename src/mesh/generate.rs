@@ -161,6 +161,18 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
             "box mesh: divisions must be at least 1, got {n:?}"
         )));
     }
+    // Refuse meshes far beyond what a 24 GiB machine can solve before allocating anything
+    // (the same cap as the parametric generators).
+    let bricks = n[0].checked_mul(n[1]).and_then(|v| v.checked_mul(n[2]));
+    match bricks {
+        Some(b) if b <= crate::mesh::parametric::MAX_CELLS => {}
+        _ => {
+            return Err(Error::InvalidInput(format!(
+                "box mesh: {n:?} divisions give more than {} bricks; use a coarser mesh",
+                crate::mesh::parametric::MAX_CELLS
+            )));
+        }
+    }
     // Lattice of half-steps: 2n+1 points per direction.
     let lat = [2 * n[0] + 1, 2 * n[1] + 1, 2 * n[2] + 1];
     let n_lat = lat[0]
