@@ -118,3 +118,13 @@ fn design_mesh_parameters_are_checked_before_meshing() {
         assert!(e.to_string().contains(key), "{e}");
     }
 }
+
+#[test]
+fn committed_design_file_runs() {
+    // The README's design-file example (S8 with transverse webs) parses and meets the
+    // work-table criterion that the bare reconstruction fails.
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/designs/s8_transverse_webs.toml");
+    let d = Design::from_toml(&p).unwrap();
+    let r = run_design(&d, None, &|_| {}).unwrap();
+    assert!(r.checks[0].ok, "work-table check: {:?}", r.checks[0]);
+}
