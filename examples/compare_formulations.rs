@@ -554,79 +554,10 @@ fn sandwich_solid_graded(p: &SandwichParams, hx: f64, hy: f64, hz: f64) -> Res<M
     )?)
 }
 
-/// The S7 shell model with the webs at their real (clear) height: the web surfaces run
-/// between the plates' inner faces and each web edge node is tied to the plate node at the
-/// same (x, y) by a rigid coupling (the plate's half thickness as a rigid offset).
+/// The S7 shell model with the webs at their real (clear) height, tied to the plates by rigid
+/// couplings (`vibrofem::design::sandwich_clear_webs`, the design chain's table model).
 fn sandwich_shell_clear_webs(p: &SandwichParams) -> Res<(Mesh, ModelSpec)> {
-    let mut mesh = sandwich_table(p)?;
-    let hz = p.mid_surface_spacing();
-    let (z0, z1) = (0.5 * p.bottom_thickness, 0.5 * p.bottom_thickness + p.web_height);
-    let webs = mesh.group("webs_long")?.cells.clone();
-    let mut copy: HashMap<u32, u32> = HashMap::new();
-    let mut moved: HashMap<u32, ()> = HashMap::new();
-    let mut links: Vec<(u32, u32)> = vec![];
-    for c in &webs {
-        let b = c.block as usize;
-        let nn = mesh.blocks[b].kind.n_nodes();
-        for k in 0..nn {
-            let a = mesh.blocks[b].conn[c.index as usize * nn + k];
-            let z = mesh.nodes[a as usize][2];
-            let junction = z.abs() < 1e-9 || (z - hz).abs() < 1e-9;
-            let new = if junction {
-                *copy.entry(a).or_insert_with(|| {
-                    let mut q = mesh.nodes[a as usize];
-                    q[2] = if z.abs() < 1e-9 { z0 } else { z1 };
-                    mesh.nodes.push(q);
-                    mesh.node_tags.push(mesh.nodes.len() as u64);
-                    links.push((a, (mesh.nodes.len() - 1) as u32));
-                    (mesh.nodes.len() - 1) as u32
-                })
-            } else {
-                if moved.insert(a, ()).is_none() {
-                    mesh.nodes[a as usize][2] = z0 + z / hz * (z1 - z0);
-                }
-                a
-            };
-            mesh.blocks[b].conn[c.index as usize * nn + k] = new;
-        }
-    }
-    let mut points = CellBlock::new(CellKind::Point1);
-    let mut tag = mesh
-        .blocks
-        .iter()
-        .map(|b| b.tags.iter().copied().max().unwrap_or(0))
-        .max()
-        .unwrap_or(0);
-    let bp = mesh.blocks.len() as u32;
-    let mut couplings = vec![];
-    for (i, (a, b)) in links.iter().enumerate() {
-        let first = points.len() as u32;
-        for n in [*a, *b] {
-            tag += 1;
-            points.push(&[n], tag);
-        }
-        let name = format!("link_{i}");
-        mesh.groups.push(Group {
-            name: name.clone(),
-            dim: 0,
-            tag: mesh.groups.len() as i32 + 1,
-            cells: vec![
-                CellRef {
-                    block: bp,
-                    index: first,
-                },
-                CellRef {
-                    block: bp,
-                    index: first + 1,
-                },
-            ],
-        });
-        couplings.push(CouplingSpec {
-            group: name,
-            guided: None,
-        });
-    }
-    mesh.blocks.push(points);
+    let (mesh, couplings) = vibrofem::design::sandwich_clear_webs(p)?;
     let spec = ModelSpec {
         shells: shell_parts(&p.thicknesses(), |_| 0.0),
         couplings,

@@ -912,74 +912,17 @@ fn s6_i_beam_torsion_needs_warping() {
     assert_ne!(labels(&without), labels(&solid), "{without:?}");
 }
 
-/// The S7 shell model with the webs at their clear height between the plates' inner faces,
-/// each web edge node tied to the plate node at the same (x, y) by a rigid coupling.
+/// The S7 shell model with the webs at their clear height (the design chain's model,
+/// `vibrofem::design::sandwich_clear_webs`), with its shell parts and rigid links.
 fn sandwich_clear_webs(p: &vibrofem::mesh::parametric::SandwichParams) -> (Mesh, ModelSpec) {
-    let mut mesh = vibrofem::mesh::parametric::sandwich_table(p).unwrap();
-    let hz = p.mid_surface_spacing();
-    let (z0, z1) = (0.5 * p.bottom_thickness, 0.5 * p.bottom_thickness + p.web_height);
-    let webs = mesh.group("webs_long").unwrap().cells.clone();
-    let mut copy = std::collections::HashMap::new();
-    let mut moved = std::collections::HashSet::new();
-    let mut links = vec![];
-    for c in &webs {
-        let (b, e) = (c.block as usize, c.index as usize);
-        for k in 0..4 {
-            let a = mesh.blocks[b].conn[4 * e + k];
-            let z = mesh.nodes[a as usize][2];
-            let new = if z.abs() < 1e-9 || (z - hz).abs() < 1e-9 {
-                *copy.entry(a).or_insert_with(|| {
-                    let q = mesh.nodes[a as usize];
-                    mesh.nodes.push([q[0], q[1], if z.abs() < 1e-9 { z0 } else { z1 }]);
-                    mesh.node_tags.push(mesh.nodes.len() as u64);
-                    links.push((a, mesh.nodes.len() as u32 - 1));
-                    mesh.nodes.len() as u32 - 1
-                })
-            } else {
-                if moved.insert(a) {
-                    mesh.nodes[a as usize][2] = z0 + z / hz * (z1 - z0);
-                }
-                a
-            };
-            mesh.blocks[b].conn[4 * e + k] = new;
-        }
-    }
-    let mut points = CellBlock::new(CellKind::Point1);
-    let bp = mesh.blocks.len() as u32;
-    let mut couplings = vec![];
-    for (i, (a, b)) in links.iter().enumerate() {
-        let first = points.len() as u32;
-        points.push(&[*a], 1_000_000 + 2 * i as u64);
-        points.push(&[*b], 1_000_001 + 2 * i as u64);
-        let name = format!("link_{i}");
-        mesh.groups.push(Group {
-            name: name.clone(),
-            dim: 0,
-            tag: mesh.groups.len() as i32 + 1,
-            cells: vec![
-                CellRef {
-                    block: bp,
-                    index: first,
-                },
-                CellRef {
-                    block: bp,
-                    index: first + 1,
-                },
-            ],
-        });
-        couplings.push(CouplingSpec {
-            group: name,
-            guided: None,
-        });
-    }
-    mesh.blocks.push(points);
+    let (mesh, couplings) = vibrofem::design::sandwich_clear_webs(p).unwrap();
     let spec = ModelSpec {
         shells: p
             .thicknesses()
             .into_iter()
-            .map(|(g, t)| ShellPart {
+            .map(|(g, th)| ShellPart {
                 group: g,
-                section: ShellSection::new(t),
+                section: ShellSection::new(th),
                 material: None,
             })
             .collect(),
