@@ -155,6 +155,17 @@ pub struct ModalReport {
     pub notes: Vec<String>,
 }
 
+impl ModalReport {
+    /// Frequencies of the elastic (non-rigid-body) modes, ascending, Hz.
+    pub fn elastic_frequencies(&self) -> Vec<f64> {
+        self.modes
+            .iter()
+            .filter(|m| m.kind == "elastic")
+            .map(|m| m.frequency_hz)
+            .collect()
+    }
+}
+
 /// A modal solution with its shapes, for writers.
 pub struct ModalRun {
     /// The report.

@@ -375,10 +375,9 @@ pub fn run_level(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>)> {
                     return Err(Error::Verification(format!("{}: modal check failed", l.mesh)));
                 }
                 let f = m
-                    .modes
-                    .iter()
-                    .find(|m| m.kind == "elastic")
-                    .map(|m| m.frequency_hz)
+                    .elastic_frequencies()
+                    .first()
+                    .copied()
                     .ok_or_else(|| Error::Verification(format!("{}: no elastic mode", l.mesh)))?;
                 (f, m.dofs)
             } else {

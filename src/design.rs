@@ -658,14 +658,7 @@ pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::ModalRun,
             "work-table modal analysis: a mode was missed".into(),
         ));
     }
-    let el: Vec<f64> = run
-        .report
-        .modes
-        .iter()
-        .filter(|m| m.kind == "elastic")
-        .map(|m| m.frequency_hz)
-        .take(6)
-        .collect();
+    let el: Vec<f64> = run.report.elastic_frequencies().into_iter().take(6).collect();
     Ok((run.report.mass_kg, el, run, mesh))
 }
 

@@ -1264,10 +1264,7 @@ impl BatchRow {
             dofs: r.modal.as_ref().map(|m| m.dofs).or(r.statics.as_ref().map(|s| s.dofs)),
             mass_kg: r.modal.as_ref().map(|m| m.mass_kg),
             frequencies_hz: r.modal.as_ref().map(|m| m.frequencies_hz.clone()).unwrap_or_default(),
-            first_elastic_hz: r
-                .modal
-                .as_ref()
-                .and_then(|m| m.modes.iter().find(|x| x.kind == "elastic").map(|x| x.frequency_hz)),
+            first_elastic_hz: r.modal.as_ref().and_then(|m| m.elastic_frequencies().first().copied()),
             stiffness: r.stiffness(),
             max_displacement: r.max_displacement(),
             max_von_mises: r.max_von_mises(),

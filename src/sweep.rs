@@ -578,13 +578,7 @@ pub fn analyse(p: &SandwichParams, material: Material, solid_size: Option<f64>) 
             "sandwich table modal analysis: a mode was missed".into(),
         ));
     }
-    let el: Vec<f64> = run
-        .report
-        .modes
-        .iter()
-        .filter(|m| m.kind == "elastic")
-        .map(|m| m.frequency_hz)
-        .collect();
+    let el: Vec<f64> = run.report.elastic_frequencies();
     if el.is_empty() {
         return Err(Error::Verification(
             "sandwich table: no elastic mode among the lowest 10".into(),
