@@ -7,7 +7,7 @@
 
 use crate::Result;
 use crate::dof::DofMap;
-use crate::sparse::{Pattern, SymMatrix};
+use crate::linalg::sparse::{Pattern, SymMatrix};
 use rayon::prelude::*;
 use std::sync::Arc;
 

@@ -1,9 +1,9 @@
 //! The design chain: the built-in paper design end to end, its FE parts against hand
 //! formulas, and design-file errors.
 
-use vibrofem::design::{Design, coil_fe, leaf_fe, run_design};
+use vibrofem::app::design::{Design, coil_fe, leaf_fe, run_design};
 
-fn value(r: &vibrofem::design::DesignReport, name: &str) -> f64 {
+fn value(r: &vibrofem::app::design::DesignReport, name: &str) -> f64 {
     r.quantities
         .iter()
         .find(|q| q.name.starts_with(name))

@@ -8,18 +8,18 @@ use std::f64::consts::{PI, TAU};
 
 use nalgebra::{Complex, Matrix2, Vector2};
 use vibrofem::Error;
-use vibrofem::dynamics::electromagnet::{peak_force_from_gamma, required_peak_force, static_offset};
-use vibrofem::dynamics::isolation::{
+use vibrofem::app::dynamics::electromagnet::{peak_force_from_gamma, required_peak_force, static_offset};
+use vibrofem::app::dynamics::isolation::{
     c13_for_isolation_frequency, coil_shear_stress, coil_turns_for_stiffness, isolation_frequency_hz, spring_index,
     transmissibility, wahl_factor,
 };
-use vibrofem::dynamics::ode::{Dopri5Options, integrate};
-use vibrofem::dynamics::plot::{write_electromagnet_svg, write_frequency_response_svg, write_transient_svg};
-use vibrofem::dynamics::tuning::{
+use vibrofem::app::dynamics::ode::{Dopri5Options, integrate};
+use vibrofem::app::dynamics::plot::{write_electromagnet_svg, write_frequency_response_svg, write_transient_svg};
+use vibrofem::app::dynamics::tuning::{
     c12_from_detuning, damping_from_loss_factor, detuning_from_c12, drive_power, leaf_bending_stress,
     leaf_thickness_for_stiffness, overload_g, reactive_mass_for_detuning, stiffness_for_leaf_thickness,
 };
-use vibrofem::dynamics::{
+use vibrofem::app::dynamics::{
     CoilSpring, KTerms, Mass, PeriodicResponse, RectifiedDrive, TransientOptions, TwoMass, fourier_coefficient,
     simulate_startup,
 };
@@ -536,7 +536,7 @@ fn dopri5_bad_input() {
 // ---------------------------------------------------------------------------------------------
 // Transient
 
-fn paper_transient(t_end: f64) -> vibrofem::dynamics::Transient {
+fn paper_transient(t_end: f64) -> vibrofem::app::dynamics::Transient {
     let opts = TransientOptions {
         t_end,
         ..Default::default()

@@ -8,10 +8,11 @@
 #![allow(clippy::needless_range_loop)]
 
 use nalgebra::{DMatrix, SymmetricEigen};
+use vibrofem::Error;
 use vibrofem::element::{MassLumping, lumping, solid};
+use vibrofem::fe::{quadrature, shape};
 use vibrofem::material::Material;
 use vibrofem::mesh::CellKind;
-use vibrofem::{Error, quadrature, shape};
 
 // ---------------------------------------------------------------------------------------------
 // helpers

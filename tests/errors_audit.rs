@@ -10,12 +10,12 @@ use std::path::Path;
 use std::sync::Arc;
 
 use vibrofem::Error;
-use vibrofem::io::source;
+use vibrofem::analysis::statics::{StaticOptions, run_static};
+use vibrofem::input::source;
+use vibrofem::linalg::eigen::{EigenParams, Target, solve};
+use vibrofem::linalg::factor::SymbolicFactor;
+use vibrofem::linalg::sparse::SymMatrix;
 use vibrofem::model::ModelSpec;
-use vibrofem::solve::eigen::{EigenParams, Target, solve};
-use vibrofem::solve::factor::SymbolicFactor;
-use vibrofem::sparse::SymMatrix;
-use vibrofem::statics::{StaticOptions, run_static};
 
 fn box_mesh() -> vibrofem::mesh::Mesh {
     source::load("box:0.1,0.05,0.01:2,2,1:hex8", 1.0).unwrap()
@@ -41,9 +41,9 @@ fn io_error_on_a_missing_input_file() {
     let p = Path::new("/nonexistent-vibrofem-dir/mesh.msh");
     let e = vibrofem::io::gmsh::read(p, 1.0).unwrap_err();
     assert!(matches!(e, Error::Io { .. }), "{e:?}");
-    let e = vibrofem::scene::Scene::load(Path::new("/nonexistent-vibrofem-dir/s.toml")).unwrap_err();
+    let e = vibrofem::app::scene::Scene::load(Path::new("/nonexistent-vibrofem-dir/s.toml")).unwrap_err();
     assert!(matches!(e, Error::Io { .. }), "{e:?}");
-    let e = vibrofem::design::Design::from_toml(Path::new("/nonexistent-vibrofem-dir/d.toml")).unwrap_err();
+    let e = vibrofem::app::design::Design::from_toml(Path::new("/nonexistent-vibrofem-dir/d.toml")).unwrap_err();
     assert!(matches!(e, Error::Io { .. }), "{e:?}");
 }
 

@@ -13,20 +13,20 @@
 use std::f64::consts::PI;
 use std::process::Command;
 use std::sync::Arc;
-use vibrofem::analysis::{ModalOptions, ModalReport, ModalTarget, run_modal};
-use vibrofem::assembly::{NodeGraph, assemble, dof_pattern};
+use vibrofem::analysis::modal::{ModalOptions, ModalReport, ModalTarget, run_modal};
 use vibrofem::dof::TRANSLATIONS;
 use vibrofem::element::MassLumping;
-use vibrofem::io::source;
+use vibrofem::input::source;
+use vibrofem::linalg::eigen::{EigenParams, EigenSolution, Target, solve};
+use vibrofem::linalg::factor::{Factor, SymbolicFactor};
+use vibrofem::linalg::sparse::SymMatrix;
 use vibrofem::material::Material;
 use vibrofem::mesh::generate::box_mesh;
 use vibrofem::mesh::{CellKind, CellRef, Group, Mesh};
 use vibrofem::model::{CouplingSpec, Model, ModelSpec, PointMassSpec, ShellPart, SpringSpec};
 use vibrofem::post::modal::{hz, lambda_of_hz};
 use vibrofem::section::ShellSection;
-use vibrofem::solve::eigen::{EigenParams, EigenSolution, Target, solve};
-use vibrofem::solve::factor::{Factor, SymbolicFactor};
-use vibrofem::sparse::SymMatrix;
+use vibrofem::system::{System, SystemOptions};
 
 // ---------------------------------------------------------------------------------------------
 // helpers
@@ -80,14 +80,11 @@ fn assert_verified(what: &str, r: &ModalReport, max_res: f64) {
     );
 }
 
-/// K and M of a model, exactly as `run_modal` assembles them.
+/// K and M of a model, exactly as `run_modal` assembles them (through its `System`).
 fn assemble_km(mesh: &Mesh, spec: &ModelSpec) -> (SymMatrix, SymMatrix) {
     let model = Model::build(mesh, spec, "test").unwrap();
-    let sets = model.element_sets();
-    let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
-    let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
-    let km = assemble(pattern, &model.dofs, &sets, true).unwrap();
-    (km.k, km.m)
+    let sys = System::build(model, &SystemOptions::default(), "test").unwrap();
+    (sys.k().clone(), sys.m().unwrap().clone())
 }
 
 /// The dense oracle on the same K and M (every finite eigenvalue, exact to rounding).

@@ -66,7 +66,7 @@ fn scene_inputs_give_clean_errors() {
     for p in inputs(".scene.toml") {
         let text = std::fs::read_to_string(&p).unwrap();
         let t = Instant::now();
-        let r = vibrofem::scene::Scene::parse(Path::new("/nonexistent-fuzz/scene.toml"), &text);
+        let r = vibrofem::app::scene::Scene::parse(Path::new("/nonexistent-fuzz/scene.toml"), &text);
         assert!(t.elapsed() < FAST, "{}: took {:?}", p.display(), t.elapsed());
         let e = r.err().unwrap_or_else(|| panic!("{}: accepted", p.display()));
         assert_eq!(e.exit_code(), 1, "{}: {e}", p.display());
@@ -76,7 +76,7 @@ fn scene_inputs_give_clean_errors() {
 #[test]
 fn design_inputs_give_clean_errors() {
     for p in inputs(".design.toml") {
-        let e = vibrofem::design::Design::from_toml(&p).unwrap_err();
+        let e = vibrofem::app::design::Design::from_toml(&p).unwrap_err();
         assert_eq!(e.exit_code(), 1, "{}: {e}", p.display());
     }
 }

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use vibrofem::scene::{self, Scene, SceneReport};
+use vibrofem::app::scene::{self, Scene, SceneReport};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -11,7 +11,8 @@
 
 use std::f64::consts::PI;
 
-use vibrofem::analysis::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::analysis::statics::{Load, StaticOptions, run_static};
 use vibrofem::dof::{ALL6, DofMask};
 use vibrofem::material::Material;
 use vibrofem::mesh::generate::box_mesh;
@@ -19,7 +20,6 @@ use vibrofem::mesh::{CellBlock, CellKind, CellRef, Group, Mesh};
 use vibrofem::model::{BeamPart, CouplingSpec, Model, ModelSpec, Orientation, PointMassSpec, ShellPart};
 use vibrofem::post::mass::{MODEL_ENTRY, MassProps, POINT_MASS_ENTRY, group_mass_properties};
 use vibrofem::section::{BeamSection, ShellSection};
-use vibrofem::statics::{Load, StaticOptions, run_static};
 
 // ---------------------------------------------------------------------------------------------
 // helpers
@@ -913,9 +913,9 @@ fn s6_i_beam_torsion_needs_warping() {
 }
 
 /// The S7 shell model with the webs at their clear height (the design chain's model,
-/// `vibrofem::design::sandwich_clear_webs`), with its shell parts and rigid links.
+/// `vibrofem::app::design::sandwich_clear_webs`), with its shell parts and rigid links.
 fn sandwich_clear_webs(p: &vibrofem::mesh::parametric::SandwichParams) -> (Mesh, ModelSpec) {
-    let (mesh, couplings) = vibrofem::design::sandwich_clear_webs(p).unwrap();
+    let (mesh, couplings) = vibrofem::app::design::sandwich_clear_webs(p).unwrap();
     let spec = ModelSpec {
         shells: p
             .thicknesses()

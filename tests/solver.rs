@@ -5,9 +5,9 @@
 //! exact to rounding; copies of the chain give eigenvalues of exact multiplicity.
 
 use std::sync::Arc;
-use vibrofem::solve::eigen::{EigenParams, Target, solve};
-use vibrofem::solve::factor::{Factor, SymbolicFactor};
-use vibrofem::sparse::SymMatrix;
+use vibrofem::linalg::eigen::{EigenParams, Target, solve};
+use vibrofem::linalg::factor::{Factor, SymbolicFactor};
+use vibrofem::linalg::sparse::SymMatrix;
 
 /// `copies` uncoupled free–free chains of `n` masses, interleaved so that copies share no
 /// block structure the ordering could exploit trivially.

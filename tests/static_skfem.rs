@@ -6,12 +6,12 @@
 //! largest force, and the nodal von Mises stresses (same recovery: direct evaluation at the
 //! element nodes, averaged) to 1e-7 of the peak.
 
+use vibrofem::analysis::statics::{Load, StaticOptions, run_static};
 use vibrofem::dof::TRANSLATIONS;
 use vibrofem::io::gmsh;
 use vibrofem::material::Material;
 use vibrofem::model::ModelSpec;
 use vibrofem::post::stress::nodal_stress;
-use vibrofem::statics::{Load, StaticOptions, run_static};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 

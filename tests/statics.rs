@@ -2,12 +2,12 @@
 //! and bad input.
 
 use vibrofem::Error;
-use vibrofem::analysis::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::analysis::statics::{Load, StaticOptions, run_static};
 use vibrofem::dof::TRANSLATIONS;
-use vibrofem::io::source;
+use vibrofem::input::source;
 use vibrofem::material::Material;
 use vibrofem::model::{CouplingSpec, ModelSpec, PointMassSpec};
-use vibrofem::statics::{Load, StaticOptions, run_static};
 
 fn spec(fix: &[&str], couple: &[(&str, Option<usize>)]) -> ModelSpec {
     ModelSpec {

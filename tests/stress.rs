@@ -229,7 +229,7 @@ fn constant_stress_patch_on_distorted_meshes_is_exact() {
         }
         let gp = gauss_point_stress(&m.solids, mesh.n_nodes(), &u).unwrap();
         let n_cells: usize = m.solids.iter().map(|s| s.tags.len()).sum();
-        let per_cell = vibrofem::quadrature::for_cell(kind, solid::stiffness_degree(kind)).len();
+        let per_cell = vibrofem::fe::quadrature::for_cell(kind, solid::stiffness_degree(kind)).len();
         assert_eq!(gp.len(), n_cells * per_cell);
         for (i, s) in gp.stress.iter().enumerate() {
             assert!(diff6(s, &want) < tol, "{kind} gauss point {i}");
@@ -363,7 +363,7 @@ fn averaging_and_unaveraged_maximum() {
             .flat_map(|&a| u[3 * a as usize..3 * a as usize + 3].to_vec())
             .collect();
         for (i, &a) in nodes.iter().enumerate() {
-            let xi = vibrofem::shape::reference_nodes(CellKind::Hex8)[i];
+            let xi = vibrofem::fe::shape::reference_nodes(CellKind::Hex8)[i];
             let s = solid::stress_at(CellKind::Hex8, &x, &mat, &ue, xi).unwrap();
             let a = a as usize;
             for c in 0..6 {

@@ -2,9 +2,9 @@
 //! the Pareto front, a tiny convergence study and the merge of batch shards.
 
 use std::path::{Path, PathBuf};
-use vibrofem::converge;
-use vibrofem::scene::{BatchOptions, BatchRow, run_batch};
-use vibrofem::sweep::{self, Study, SweepOptions, SweepRow, mark_pareto};
+use vibrofem::app::converge;
+use vibrofem::app::scene::{BatchOptions, BatchRow, run_batch};
+use vibrofem::app::sweep::{self, Study, SweepOptions, SweepRow, mark_pareto};
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

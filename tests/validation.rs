@@ -8,15 +8,15 @@
 //! 2. Analytic beam theory (Euler–Bernoulli with a Timoshenko correction) on generated meshes.
 //! 3. Repeated eigenvalues: triple roots of a free cube, pairs of a square bar.
 
-use vibrofem::analysis::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::analysis::modal::{ModalOptions, ModalTarget, run_modal};
 use vibrofem::dof::TRANSLATIONS;
-use vibrofem::io::source;
+use vibrofem::input::source;
 use vibrofem::material::Material;
 use vibrofem::model::ModelSpec;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-fn solve(mesh_spec: &str, scale: f64, mat: Material, fix: &[&str], n: usize) -> vibrofem::analysis::ModalReport {
+fn solve(mesh_spec: &str, scale: f64, mat: Material, fix: &[&str], n: usize) -> vibrofem::analysis::modal::ModalReport {
     let mesh = source::load(mesh_spec, scale).unwrap();
     let spec = ModelSpec {
         material: mat,

@@ -1,6 +1,6 @@
 //! Isoparametric 3D solid elements: stiffness, mass, volume and stress at a point.
 //!
-//! Geometry and displacement share the shape functions of [`crate::shape`]:
+//! Geometry and displacement share the shape functions of [`crate::fe::shape`]:
 //! `x(ξ) = Σ_a N_a(ξ) x_a`, `u(ξ) = Σ_a N_a(ξ) u_a`. With the Jacobian
 //! `J_ij = ∂x_i/∂ξ_j = Σ_a x_a,i ∂N_a/∂ξ_j`, physical gradients are `∇N_a = J⁻ᵀ ∂N_a/∂ξ` and
 //! `dV = det J dξ`. Integrals use the quadrature rules of the table below; the shape values
@@ -52,10 +52,10 @@
 use std::sync::OnceLock;
 
 use crate::element::lumping::{self, MassLumping};
+use crate::fe::quadrature;
+use crate::fe::shape::{self, MAX_NODES};
 use crate::material::Material;
 use crate::mesh::CellKind;
-use crate::quadrature;
-use crate::shape::{self, MAX_NODES};
 
 /// Quadrature degree (in the sense of [`quadrature::for_cell`]) of the stiffness rule of
 /// `kind`; see the table in the module docs. Panics for a kind that is not a solid.
@@ -363,7 +363,7 @@ fn mass_impl<const N: usize, const Q: usize>(
 /// the consistent mass sums to exactly `ρV` per direction). `Err(det)` as for [`stiffness`].
 ///
 /// ```
-/// use vibrofem::{element::solid, mesh::CellKind, shape};
+/// use vibrofem::{element::solid, fe::shape, mesh::CellKind};
 /// let unit: Vec<[f64; 3]> = shape::reference_nodes(CellKind::Hex20)
 ///     .iter().map(|p| p.map(|c| 0.5 * (c + 1.0))).collect();
 /// assert!((solid::volume(CellKind::Hex20, &unit).unwrap() - 1.0).abs() < 1e-14);

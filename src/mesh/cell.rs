@@ -2,7 +2,7 @@
 //!
 //! vibrofem keeps gmsh's node ordering everywhere internally; writers permute only at output
 //! (see `io::vtk`). The reference-element diagrams of each kind are in the docs of
-//! [`crate::shape`].
+//! [`crate::fe::shape`].
 
 /// The cells vibrofem reads. Solid analysis uses the 3D kinds; lower-dimensional kinds carry
 /// boundary groups (and later shells and beams).

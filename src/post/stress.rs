@@ -49,12 +49,12 @@ use serde::Serialize;
 
 use crate::assembly::ElementSet;
 use crate::element::solid;
+use crate::fe::quadrature;
+use crate::fe::shape::{self, MAX_NODES};
 use crate::io::msh_out::NodeView;
 use crate::io::vtk::PointField;
 use crate::mesh::{CellKind, Mesh};
 use crate::model::SolidSet;
-use crate::quadrature;
-use crate::shape::{self, MAX_NODES};
 use crate::{Error, Result};
 
 /// How the stress at an element's nodes is obtained before averaging (see the module docs).

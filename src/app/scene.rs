@@ -10,15 +10,15 @@
 //! - [`run_batch`] runs a template scene over the meshes matched by a glob, in parallel, with
 //!   resume, shards and a CSV/JSON summary.
 
-use crate::analysis::{ModalOptions, ModalReport, ModalTarget, run_modal};
+use crate::analysis::modal::{ModalReport, ModalTarget};
+use crate::analysis::statics::Load;
+use crate::app::report::StaticReport;
 use crate::dof::parse_components;
 use crate::element::MassLumping;
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::model::{CouplingSpec, ModelSpec, PointMassSpec, ShellPart, SpringSpec};
-use crate::report::StaticReport;
 use crate::section::ShellSection;
-use crate::statics::{Load, StaticOptions};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -188,7 +188,7 @@ struct RawOutput {
 pub enum MeshSource {
     /// A gmsh file (already resolved against the scene's folder).
     File(PathBuf),
-    /// A generator spec: any [`crate::io::source::load`] spec (`box:`, `helix:`), or one of the
+    /// A generator spec: any [`crate::input::source::load`] spec (`box:`, `helix:`), or one of the
     /// scene-only generators `sandwich:paper[,SIZE]`, `ibeam-line:L,N`,
     /// `ibeam-shell:H,B,S,T,L,SIZE`, `ibeam-solid:H,B,S,T,L,SIZE,KIND`.
     Generator(String),
@@ -282,13 +282,13 @@ impl SceneReport {
     pub fn text(&self) -> String {
         let mut s = format!("scene    {} ({})\n", self.name, self.scene);
         if let Some(m) = &self.modal {
-            s.push_str(&crate::report::modal_table(m));
+            s.push_str(&crate::app::report::modal_table(m));
         }
         if let Some(st) = &self.statics {
             if self.modal.is_some() {
                 s.push('\n');
             }
-            s.push_str(&crate::report::static_text(st));
+            s.push_str(&crate::app::report::static_text(st));
         }
         s
     }
@@ -554,7 +554,7 @@ impl Scene {
                         }
                         RawOrientation::Text(s) => s.clone(),
                     };
-                    let mut b = crate::cli::parse_beam(&format!("{group}={sec}@{orient}"))
+                    let mut b = crate::app::cli::parse_beam(&format!("{group}={sec}@{orient}"))
                         .map_err(|e| ctx.error(ctx.line(sp.start), format!("{place}: {e}")))?;
                     if let Err(e) = b.section.validate(&place) {
                         return ctx.err(sp, e);
@@ -936,17 +936,32 @@ impl Scene {
         let mut notes: Vec<String> = note.into_iter().collect();
         let source = self.mesh_name();
         let mut outputs = Vec::new();
+        // One model and one system serve both analyses: assembled and ordered once.
+        let t_model = Instant::now();
+        let model = crate::model::Model::build(&mesh, &self.spec, &source)?;
+        let t_model = t_model.elapsed().as_secs_f64();
+        let sys = crate::system::System::build(
+            model,
+            &crate::system::SystemOptions {
+                mass: self.modal.is_some(),
+                ..Default::default()
+            },
+            &source,
+        )?;
         let modal = match &self.modal {
             None => None,
             Some((target, shift_hz, block)) => {
-                let opts = ModalOptions {
-                    spec: self.spec.clone(),
+                let params = crate::analysis::modal::ModalParams {
                     target: *target,
                     shift_hz: *shift_hz,
                     block: *block,
                     ..Default::default()
                 };
-                let run = run_modal(&mesh, &source, &opts, read_time)?;
+                let mut run = crate::analysis::modal::solve(&sys, &params)?;
+                let tm = &mut run.report.timings_s;
+                tm.read = read_time;
+                tm.assemble += t_model;
+                tm.total += read_time + t_model;
                 log::info!(
                     "scene {}: modal: assemble {:.3} s, factor {:.3} s, eigen {:.3} s",
                     self.name,
@@ -955,32 +970,15 @@ impl Scene {
                     run.report.timings_s.solve
                 );
                 if let Some((dir, prefix)) = out {
-                    if self.vtu {
-                        let p = dir.join(format!("{prefix}modes.vtu"));
-                        let fields: Vec<crate::io::vtk::PointField> = run
-                            .shapes
-                            .iter()
-                            .enumerate()
-                            .map(|(i, s)| crate::io::vtk::PointField::mode(i + 1, s))
-                            .collect();
-                        crate::io::vtk::write_vtu(&p, &mesh, &fields)?;
-                        outputs.push(p.display().to_string());
-                    }
-                    if self.msh {
-                        let p = dir.join(format!("{prefix}modes.msh"));
-                        let views: Vec<crate::io::msh_out::NodeView> = run
-                            .shapes
-                            .iter()
-                            .enumerate()
-                            .map(|(i, s)| crate::io::msh_out::NodeView {
-                                name: format!("mode {} ({:.4} Hz)", i + 1, run.report.frequencies_hz[i]),
-                                step: i,
-                                time: run.report.frequencies_hz[i],
-                                n_comp: 3,
-                                data: s,
-                            })
-                            .collect();
-                        crate::io::msh_out::write_msh_views(&p, &mesh, &views)?;
+                    let vtu = self.vtu.then(|| dir.join(format!("{prefix}modes.vtu")));
+                    let msh = self.msh.then(|| dir.join(format!("{prefix}modes.msh")));
+                    for p in crate::io::write_mode_shapes(
+                        &mesh,
+                        &run.shapes,
+                        &run.report.frequencies_hz,
+                        vtu.as_deref(),
+                        msh.as_deref(),
+                    )? {
                         outputs.push(p.display().to_string());
                     }
                 }
@@ -991,25 +989,24 @@ impl Scene {
         let statics = match &self.static_cases {
             None => None,
             Some(cases) => {
-                let opts = StaticOptions {
-                    spec: self.spec.clone(),
-                    cases: cases.clone(),
-                };
-                let run = crate::statics::run_static(&mesh, &source, &opts)?;
+                let mut run = crate::analysis::statics::solve(&sys, &mesh, cases)?;
+                if modal.is_none() {
+                    run.timings.assemble += t_model;
+                }
                 let t = run.timings;
                 log::info!(
                     "scene {}: static: assemble {:.3} s, factor {:.3} s, solve {:.3} s",
                     self.name,
-                    t[0],
-                    t[1],
-                    t[2]
+                    t.assemble,
+                    t.factor,
+                    t.solve
                 );
-                let rep = crate::report::static_report(&mesh, &source, &run)?;
+                let rep = crate::app::report::static_report(&mesh, &source, &run)?;
                 if let Some((dir, prefix)) = out {
                     let vtu = self.vtu.then(|| dir.join(format!("{prefix}static.vtu")));
                     let msh = self.msh.then(|| dir.join(format!("{prefix}static.msh")));
                     if vtu.is_some() || msh.is_some() {
-                        crate::report::write_static_fields(&mesh, &run, vtu.as_deref(), msh.as_deref())?;
+                        crate::app::report::write_static_fields(&mesh, &run, vtu.as_deref(), msh.as_deref())?;
                         outputs.extend(vtu.iter().chain(msh.iter()).map(|p| p.display().to_string()));
                     }
                 }
@@ -1045,7 +1042,7 @@ pub fn run(path: &Path) -> Result<SceneReport> {
 /// table as quad4 shells; groups `top_plate`, `bottom_plate`, `webs_long`, `table`, …),
 /// `ibeam-line:LENGTH,N` (S6 beam line; groups `beam`, `end_a`, `end_b`),
 /// `ibeam-shell:H,B,S,T,LENGTH,SIZE` (groups `flange_top`, `flange_bottom`, `web`, `beam`) and
-/// `ibeam-solid:H,B,S,T,LENGTH,SIZE,KIND`, or anything [`crate::io::source::load`] takes.
+/// `ibeam-solid:H,B,S,T,LENGTH,SIZE,KIND`, or anything [`crate::input::source::load`] takes.
 pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
     use crate::mesh::parametric as pm;
     let nums = |rest: &str, n: usize, usage: &str| -> Result<Vec<f64>> {
@@ -1101,7 +1098,7 @@ pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
         return Ok(m);
     }
     if spec.starts_with("box:") || spec.starts_with("helix:") {
-        return crate::io::source::load(spec, length_scale);
+        return crate::input::source::load(spec, length_scale);
     }
     Err(Error::InvalidInput(format!(
         "unknown generator '{spec}' (box:, helix:, sandwich:, ibeam-line:, ibeam-shell:, ibeam-solid:)"

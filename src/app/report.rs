@@ -1,6 +1,6 @@
 //! Human-readable reports: the mode table and the mesh summary.
 
-use crate::analysis::ModalReport;
+use crate::analysis::modal::ModalReport;
 use crate::element::solid;
 use crate::material::Material;
 use crate::mesh::Mesh;
@@ -218,17 +218,17 @@ pub struct StaticReport {
     /// Free equations.
     pub dofs: usize,
     /// Load cases.
-    pub cases: Vec<crate::statics::CaseReport>,
+    pub cases: Vec<crate::analysis::statics::CaseReport>,
     /// Stress summaries per case.
     pub stress: Vec<StressSummary>,
     /// Wall time of assembly, factorisation, solution and post-processing, s.
-    pub timings_s: [f64; 4],
+    pub timings_s: crate::analysis::statics::StaticTimings,
     /// Notes.
     pub notes: Vec<String>,
 }
 
 /// Displacements of the mesh nodes (3 per node) from a raw solution.
-pub fn mesh_displacements(run: &crate::statics::StaticRun, case: usize) -> Vec<f64> {
+pub fn mesh_displacements(run: &crate::analysis::statics::StaticRun, case: usize) -> Vec<f64> {
     let n = run.model.n_mesh_nodes;
     let u = &run.u[case];
     let mut out = vec![0.0; 3 * n];
@@ -241,7 +241,7 @@ pub fn mesh_displacements(run: &crate::statics::StaticRun, case: usize) -> Vec<f
 }
 
 /// Build the static report (stress recovery included).
-pub fn static_report(mesh: &Mesh, source: &str, run: &crate::statics::StaticRun) -> Result<StaticReport> {
+pub fn static_report(mesh: &Mesh, source: &str, run: &crate::analysis::statics::StaticRun) -> Result<StaticReport> {
     use crate::post::stress::{StressField, group_maxima, nodal_stress};
     let mut stress = Vec::new();
     for ci in 0..run.cases.len() {
@@ -333,7 +333,7 @@ pub fn static_text(r: &StaticReport) -> String {
     let _ = writeln!(
         s,
         "\ntime [s]: assemble {:.3}  factor {:.3}  solve {:.3}  post {:.3}",
-        t[0], t[1], t[2], t[3]
+        t.assemble, t.factor, t.solve, t.post
     );
     s
 }
@@ -341,7 +341,7 @@ pub fn static_text(r: &StaticReport) -> String {
 /// Write displacement and stress fields of every case to VTU and/or gmsh.
 pub fn write_static_fields(
     mesh: &Mesh,
-    run: &crate::statics::StaticRun,
+    run: &crate::analysis::statics::StaticRun,
     vtu: Option<&std::path::Path>,
     msh: Option<&std::path::Path>,
 ) -> Result<()> {

@@ -1,4 +1,4 @@
-//! Quadrature rules on the reference cells of [`crate::shape`].
+//! Quadrature rules on the reference cells of [`crate::fe::shape`].
 //!
 //! A [`Rule`] approximates `∫_ref f(ξ) dξ ≈ Σ_q w_q f(ξ_q)` on the reference cell of a kind, so
 //! the weights sum to the reference measure: 2 (line), 1/2 (triangle), 4 (quadrilateral), 1/6
@@ -69,7 +69,7 @@ impl Rule {
 /// Tricomi's initial guesses and then symmetrised, so they are accurate to about one ulp.
 ///
 /// ```
-/// let (x, w) = vibrofem::quadrature::gauss_legendre(2);
+/// let (x, w) = vibrofem::fe::quadrature::gauss_legendre(2);
 /// assert!((x[1] - 1.0 / 3f64.sqrt()).abs() < 1e-15 && (w[0] - 1.0).abs() < 1e-15);
 /// ```
 pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
@@ -341,7 +341,7 @@ pub fn wedge(tri_degree: usize, n_line: usize) -> Rule {
 /// total degree, `w` degree) on wedges. A point cell gets the single point with weight 1.
 ///
 /// ```
-/// use vibrofem::{mesh::CellKind, quadrature::for_cell};
+/// use vibrofem::{fe::quadrature::for_cell, mesh::CellKind};
 /// assert_eq!(for_cell(CellKind::Hex20, 4).len(), 27);
 /// assert_eq!(for_cell(CellKind::Tet10, 2).len(), 4);
 /// let r = for_cell(CellKind::Tet4, 4);

@@ -204,7 +204,7 @@ pub fn reference_nodes(kind: CellKind) -> &'static [[f64; 3]] {
 /// `n.len()` must equal `kind.n_nodes()` (a wrong length is a programmer error and panics).
 ///
 /// ```
-/// use vibrofem::{mesh::CellKind, shape};
+/// use vibrofem::{fe::shape, mesh::CellKind};
 /// let mut n = [0.0; 4];
 /// shape::values(CellKind::Tet4, [0.2, 0.3, 0.1], &mut n);
 /// assert_eq!(n, [0.4, 0.2, 0.3, 0.1]);

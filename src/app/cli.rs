@@ -2,11 +2,11 @@
 //!
 //! Every parser returns an [`Error::InvalidInput`] that quotes the option and the offending text.
 
+use crate::analysis::statics::Load;
 use crate::dof::parse_components;
 use crate::element::MassLumping;
 use crate::material::Material;
 use crate::model::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
-use crate::statics::Load;
 use crate::{Error, Result};
 
 /// Model options as given on the command line.

@@ -25,7 +25,7 @@
 //! A user shift finds the modes nearest to it.
 
 use super::factor::{Factor, SymbolicFactor};
-use crate::sparse::SymMatrix;
+use crate::linalg::sparse::SymMatrix;
 use crate::{Error, Result};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};

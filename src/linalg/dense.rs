@@ -4,7 +4,7 @@
 //! C = L⁻¹ M L⁻ᵀ give λ = σ + 1/θ; this works for singular M too (θ = 0 is an infinite λ and
 //! is dropped). Otherwise, with M positive definite, C = L_M⁻¹ K L_M⁻ᵀ gives λ directly.
 
-use crate::sparse::SymMatrix;
+use crate::linalg::sparse::SymMatrix;
 use crate::{Error, Result};
 use faer::Mat;
 use nalgebra::DMatrix;

@@ -11,13 +11,13 @@
 //! An under-constrained model is detected from the factorisation (a pivot at rounding level)
 //! and reported with the rigid-body motions it leaves free.
 
-use crate::assembly::{ElementSet, NodeGraph, assemble, dof_pattern};
+use crate::assembly::ElementSet;
 use crate::dof::{DofMap, NCOMP};
+use crate::linalg::factor::Factor;
+use crate::linalg::sparse::SymMatrix;
 use crate::mesh::Mesh;
 use crate::model::{Model, ModelSpec};
-use crate::ordering::nested_dissection;
-use crate::solve::factor::{Factor, SymbolicFactor};
-use crate::sparse::SymMatrix;
+use crate::system::{System, SystemOptions};
 use crate::{Error, Result};
 use faer::Mat;
 use serde::Serialize;
@@ -115,9 +115,22 @@ pub struct StaticRun {
     /// Per case: raw displacements (NCOMP per node, all model nodes).
     pub u: Vec<Vec<f64>>,
     /// The model (for stress recovery and output).
-    pub model: Model,
-    /// Timings: assemble, factor, solve, post (s).
-    pub timings: [f64; 4],
+    pub model: Arc<Model>,
+    /// Wall time per phase.
+    pub timings: StaticTimings,
+}
+
+/// Wall time of a static analysis per phase, seconds.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct StaticTimings {
+    /// Model, graph, pattern and K.
+    pub assemble: f64,
+    /// Ordering, symbolic and numeric factorisation.
+    pub factor: f64,
+    /// Load vectors and the solve.
+    pub solve: f64,
+    /// Reactions, resultants and checks.
+    pub post: f64,
 }
 
 /// Consistent nodal forces of a uniform traction over the cells of a surface group, and the
@@ -135,11 +148,11 @@ fn surface_weights(mesh: &Mesh, group: &str) -> Result<(Vec<(u32, f64)>, f64, Ve
         let kind = b.kind;
         let nodes = b.cell(c.index as usize);
         let nn = kind.n_nodes();
-        let rule = crate::quadrature::for_cell(kind, 2 * kind.order() + 1);
+        let rule = crate::fe::quadrature::for_cell(kind, 2 * kind.order() + 1);
         let mut n = [0.0; 9];
         let mut dn = [[0.0; 3]; 9];
         for (xi, wq) in rule.points.iter().zip(&rule.weights) {
-            crate::shape::values_and_gradients(kind, *xi, &mut n[..nn], &mut dn[..nn]);
+            crate::fe::shape::values_and_gradients(kind, *xi, &mut n[..nn], &mut dn[..nn]);
             let mut t1 = [0.0; 3];
             let mut t2 = [0.0; 3];
             for a in 0..nn {
@@ -433,26 +446,35 @@ fn free_rigid_motions(k: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]]) -> Vec<S
     out
 }
 
-/// Run a static analysis.
+/// Run a static analysis: build the model and its [`System`] (without mass), then [`solve`].
 pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<StaticRun> {
     let t = Instant::now();
     let model = Model::build(mesh, &opts.spec, source)?;
+    let t_model = t.elapsed().as_secs_f64();
+    let sys = System::build(
+        model,
+        &SystemOptions {
+            mass: false,
+            ..Default::default()
+        },
+        source,
+    )?;
+    let mut run = solve(&sys, mesh, &opts.cases)?;
+    run.timings.assemble += t_model;
+    Ok(run)
+}
+
+/// Displacements, reactions, reference-node results and equilibrium of each load case on an
+/// assembled system; `mesh` is the one the model was built from (its groups carry the loads).
+/// An empty `cases` means one case with no loads (e.g. only prescribed displacements).
+pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun> {
+    let model = sys.model();
     let sets = model.element_sets();
-    let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
-    let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
-    let km = assemble(pattern.clone(), &model.dofs, &sets, false)?;
-    let t_asm = t.elapsed().as_secs_f64();
-    if model.dofs.n_free == 0 {
-        return Err(Error::InvalidInput(format!(
-            "{source}: every degree of freedom is constrained; nothing to solve"
-        )));
-    }
+    let t_asm = sys.timings.assemble;
+    let km_k = sys.k();
     let t = Instant::now();
-    let (fwd, inv) = nested_dissection(&graph, &model.dofs)?;
-    let sym = Arc::new(SymbolicFactor::new(&pattern, Some((&fwd, &inv)))?);
-    crate::analysis::check_memory(source, &sym, &pattern, None)?;
     let singular = |extra: String| {
-        let free = free_rigid_motions(&km.k, &model.dofs, &model.nodes);
+        let free = free_rigid_motions(km_k, &model.dofs, &model.nodes);
         Error::Factorization(if free.is_empty() {
             format!("the stiffness matrix is singular ({extra}): a part or a DOF is not held")
         } else {
@@ -462,7 +484,8 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
             )
         })
     };
-    let fa = match Factor::new(sym.clone(), &km.k) {
+    let sym = sys.symbolic().clone();
+    let fa = match Factor::new(sym, km_k) {
         Ok(f) => f,
         Err(e) => return Err(singular(e.to_string())),
     };
@@ -473,14 +496,11 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
             fa.negative_pivots
         )));
     }
-    let t_fac = t.elapsed().as_secs_f64();
+    let t_fac = t.elapsed().as_secs_f64() + sys.timings.order;
 
     let t = Instant::now();
-    let cases = if opts.cases.is_empty() {
-        vec![vec![]]
-    } else {
-        opts.cases.clone()
-    };
+    let no_loads = [vec![]];
+    let cases = if cases.is_empty() { &no_loads[..] } else { cases };
     let n = model.dofs.n_free;
     let mut raw_f = Vec::new();
     let mut rhs = Mat::zeros(n, cases.len());
@@ -498,7 +518,7 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
 
     let t = Instant::now();
     let mut kx = Mat::zeros(n, cases.len());
-    km.k.mul_block(x.as_ref(), kx.as_mut());
+    km_k.mul_block(x.as_ref(), kx.as_mut());
     let mut reports = Vec::new();
     let mut us = Vec::new();
     for ci in 0..cases.len() {
@@ -529,7 +549,7 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
         let fixed_pick = |a: usize, c: usize| model.dofs.fixed[a] & (1 << c) != 0;
         let mut reactions = Vec::new();
         let mut total_react = Resultant::default();
-        for (g, _) in &opts.spec.fixes {
+        for (g, _) in &model.spec.fixes {
             let gn: Vec<u32> = mesh.group_nodes(mesh.group(g)?);
             let set: std::collections::HashSet<u32> = gn.into_iter().collect();
             let res = resultant_of(&model.nodes, &react, |a, c| {
@@ -540,7 +560,7 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
                 resultant: res,
             });
         }
-        for (g, _) in &opts.spec.prescribed {
+        for (g, _) in &model.spec.prescribed {
             if model.references.iter().any(|r| &r.group == g) {
                 continue;
             }
@@ -637,7 +657,12 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
         dofs: n,
         cases: reports,
         u: us,
-        model,
-        timings: [t_asm, t_fac, t_sol, t_post],
+        model: sys.model_arc().clone(),
+        timings: StaticTimings {
+            assemble: t_asm,
+            factor: t_fac,
+            solve: t_sol,
+            post: t_post,
+        },
     })
 }

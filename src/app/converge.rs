@@ -14,9 +14,9 @@
 //! extrapolation of the reference formulation's last three levels (each halving the element size)
 //! when they converge monotonically at an order ≥ 1.5, else its finest level.
 
+use crate::app::scene::{MeshSource, Scene};
+use crate::app::sweep::analyse;
 use crate::mesh::parametric::SandwichParams;
-use crate::scene::{MeshSource, Scene};
-use crate::sweep::analyse;
 use crate::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
@@ -398,7 +398,11 @@ pub fn run_level(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>)> {
         }
     };
     let time = t.elapsed().as_secs_f64();
-    let mem = if reset { crate::analysis::peak_memory() } else { None };
+    let mem = if reset {
+        crate::analysis::modal::peak_memory()
+    } else {
+        None
+    };
     Ok((value, dofs, time, mem))
 }
 

@@ -1,15 +1,13 @@
 //! Orchestration of analyses: mesh → model → assembly → solve → report. No formatting here.
 
-use crate::assembly::{NodeGraph, assemble, dof_pattern};
+use crate::linalg::eigen::{self, EigenParams, SturmCheck, Target};
+use crate::linalg::ordering::Ordering;
 use crate::mesh::Mesh;
 use crate::model::{Model, ModelSpec};
-use crate::ordering::{Ordering, nested_dissection};
 use crate::post::modal::{ParticipationTable, hz, lambda_of_hz, participation};
-use crate::solve::eigen::{self, EigenParams, SturmCheck, Target};
-use crate::solve::factor::SymbolicFactor;
+use crate::system::{System, SystemOptions};
 use crate::{Error, Result};
 use serde::Serialize;
-use std::sync::Arc;
 use std::time::Instant;
 
 /// What a modal analysis computes.
@@ -172,91 +170,84 @@ pub struct ModalRun {
     pub report: ModalReport,
     /// Mode shapes expanded to nodes: per mode, 3 components per node (node-major), M-normalised.
     pub shapes: Vec<Vec<f64>>,
+    /// Eigenvalues ω² (rad²/s²), ascending.
+    pub lambda: Vec<f64>,
+    /// M-normalised eigenvectors over the free DOFs (one column per mode; see
+    /// [`crate::dof::DofMap`] for the DOF of each row).
+    pub vectors: faer::Mat<f64>,
 }
 
-/// Peak resident set size of this process (bytes), from /proc/self/status.
-pub fn peak_memory() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
+pub use crate::system::{available_memory, check_memory, peak_memory};
 
-/// Memory the operating system can still give this process (Linux MemAvailable), bytes.
-pub fn available_memory() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Refuse, before factorising, a model whose factor (estimated from the symbolic analysis) plus
-/// the matrices would not fit in `limit` bytes (`--max-memory`) or, without a limit, in the memory
-/// the system has available — a clear error with the estimate instead of being killed.
-pub fn check_memory(
-    source: &str,
-    sym: &SymbolicFactor,
-    pattern: &crate::sparse::Pattern,
-    limit: Option<u64>,
-) -> Result<()> {
-    // Factor values, K, M, the shifted copy and faer's permuted copy (values + indices).
-    let need = sym.factor_bytes() as u64 + 4 * 16 * pattern.nnz() as u64;
-    let (lim, what) = match limit {
-        Some(l) => (l, "--max-memory is"),
-        None => match available_memory() {
-            Some(a) => (a, "the system has available"),
-            None => return Ok(()),
-        },
-    };
-    if need > lim {
-        return Err(Error::InvalidInput(format!(
-            "{source}: the factorisation needs about {:.2} GiB (factor {:.2} GiB, {} entries) but {what} {:.2} GiB",
-            need as f64 / 1073741824.0,
-            sym.factor_bytes() as f64 / 1073741824.0,
-            sym.nnz_l,
-            lim as f64 / 1073741824.0
-        )));
+impl ModalOptions {
+    /// How to build the system for this analysis.
+    pub fn system_options(&self) -> SystemOptions {
+        SystemOptions {
+            ordering: self.ordering,
+            max_memory: self.max_memory,
+            mass: true,
+        }
     }
-    Ok(())
+
+    /// The eigen-solve parameters.
+    pub fn params(&self) -> ModalParams {
+        ModalParams {
+            target: self.target,
+            shift_hz: self.shift_hz,
+            block: self.block,
+            max_applications: self.max_applications,
+        }
+    }
 }
 
-/// Run a modal analysis on a mesh already in memory. `source` names it in messages.
+/// What a modal solve on an assembled [`System`] computes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModalParams {
+    /// Number of modes nearest the shift (lowest, by default), or a band in Hz.
+    pub target: ModalTarget,
+    /// Shift in Hz (negative means a negative λ shift, −(2πf)²); `None` for the default.
+    pub shift_hz: Option<f64>,
+    /// Lanczos block size.
+    pub block: usize,
+    /// Limit on eigen-iteration work (operator applications).
+    pub max_applications: usize,
+}
+
+impl Default for ModalParams {
+    fn default() -> Self {
+        ModalOptions::default().params()
+    }
+}
+
+/// Run a modal analysis on a mesh already in memory: build the model and its [`System`], then
+/// [`solve`]. `source` names the mesh in messages; `read_time` (s) is reported as the read phase.
 pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64) -> Result<ModalRun> {
-    let t_all = Instant::now();
-    let mut tm = Timings {
-        read: read_time,
-        ..Default::default()
-    };
     let t = Instant::now();
     let model = Model::build(mesh, &opts.spec, source)?;
-    let (volume, solid_mass) = model.volume_and_mass()?;
-    let mass = solid_mass + model.discrete_mass();
-    let sets = model.element_sets();
-    let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
-    let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
-    let km = assemble(pattern.clone(), &model.dofs, &sets, true)?;
-    tm.assemble = t.elapsed().as_secs_f64();
-    if model.dofs.n_free == 0 {
-        return Err(Error::InvalidInput(format!(
-            "{source}: every degree of freedom is fixed; nothing to solve"
-        )));
-    }
+    let t_model = t.elapsed().as_secs_f64();
+    let sys = System::build(model, &opts.system_options(), source)?;
+    let mut run = solve(&sys, &opts.params())?;
+    let tm = &mut run.report.timings_s;
+    tm.read = read_time;
+    tm.assemble += t_model;
+    tm.total += read_time + t_model;
+    Ok(run)
+}
 
-    let t = Instant::now();
-    let sym = match opts.ordering {
-        Ordering::Metis => {
-            let (fwd, inv) = nested_dissection(&graph, &model.dofs)?;
-            SymbolicFactor::new(&pattern, Some((&fwd, &inv)))?
-        }
-        Ordering::Amd => SymbolicFactor::new(&pattern, None)?,
-        Ordering::Natural => {
-            let id: Vec<usize> = (0..pattern.n).collect();
-            SymbolicFactor::new(&pattern, Some((&id, &id)))?
-        }
+/// Natural frequencies and mode shapes of an assembled system, verified: residuals,
+/// M-orthonormality, a Sturm count and the backward error of every factorisation.
+pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
+    let t_all = Instant::now();
+    let model = sys.model();
+    let source = sys.source();
+    let mut tm = Timings {
+        assemble: sys.timings.assemble,
+        order: sys.timings.order,
+        ..Default::default()
     };
-    tm.order = t.elapsed().as_secs_f64();
-    check_memory(source, &sym, &pattern, opts.max_memory)?;
-    let sym = Arc::new(sym);
+    let k_mat = sys.k();
+    let m_mat = sys.m()?;
+    let sym = sys.symbolic();
     let target = match opts.target {
         ModalTarget::Modes(n) => Target::Nearest(n),
         ModalTarget::Band(lo, hi) => {
@@ -275,14 +266,14 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         max_applications: opts.max_applications,
         ..Default::default()
     };
-    let sol = eigen::solve(&km.k, &km.m, &sym, &params)?;
+    let sol = eigen::solve(k_mat, m_mat, sym, &params)?;
     tm.factor = sol.time_factor;
     tm.solve = sol.time_iterate;
     tm.verify = sol.time_verify;
 
     let t = Instant::now();
     let nodes = &model.nodes;
-    let part: ParticipationTable = participation(&km.m, &model.dofs, nodes, sol.vectors.as_ref());
+    let part: ParticipationTable = participation(m_mat, &model.dofs, nodes, sol.vectors.as_ref());
     // Rigid-body modes: shapes in the span of the six rigid-body motions (they come first).
     let n_rigid = part.rigid.iter().take_while(|&&r| r).count();
     let mut modes = Vec::with_capacity(sol.lambda.len());
@@ -307,7 +298,9 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         })
         .collect();
     tm.post = t.elapsed().as_secs_f64();
-    tm.total = t_all.elapsed().as_secs_f64() + read_time;
+    tm.total = t_all.elapsed().as_secs_f64() + tm.assemble + tm.order;
+    let (volume, solid_mass) = model.volume_and_mass()?;
+    let mass = solid_mass + model.discrete_mass();
 
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
     let accurate = max_res <= params.verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
@@ -333,7 +326,7 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
     let factor_flops = sym.flops;
     let report = ModalReport {
         mesh: source.to_string(),
-        nodes: mesh.n_nodes(),
+        nodes: model.n_mesh_nodes,
         cells: model
             .cell_counts()
             .iter()
@@ -342,7 +335,7 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         dofs: model.dofs.n_free,
         volume_m3: volume,
         mass_kg: mass,
-        mass_matrix: opts.spec.lumping.name(),
+        mass_matrix: model.spec.lumping.name(),
         shift: sol.shift,
         frequencies_hz: sol.lambda.iter().map(|&l| hz(l)).collect(),
         n_rigid,
@@ -368,5 +361,10 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
         operator_applications: sol.applications,
         notes,
     };
-    Ok(ModalRun { report, shapes })
+    Ok(ModalRun {
+        report,
+        shapes,
+        lambda: sol.lambda,
+        vectors: sol.vectors,
+    })
 }

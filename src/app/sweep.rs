@@ -31,12 +31,12 @@
 //! steel mass ([`SandwichParams::mass`]) are tabulated, the Pareto front (lighter and stiffer) is
 //! marked and plotted.
 
-use crate::analysis::{ModalOptions, ModalTarget, run_modal};
+use crate::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use crate::app::scene::{BatchRow, BatchSummary, MeshSource, Scene, summary_csv};
 use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::mesh::parametric::{SandwichParams, sandwich_table, sandwich_table_solid};
 use crate::model::{ModelSpec, ShellPart};
-use crate::scene::{BatchRow, BatchSummary, MeshSource, Scene, summary_csv};
 use crate::section::ShellSection;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};

@@ -5,7 +5,7 @@
 //! LDLᵀ without pivoting is used for both SPD and indefinite matrices; its count of negative
 //! pivots is the inertia that the Sturm-sequence check needs (Sylvester's law of inertia).
 
-use crate::sparse::{Pattern, SymMatrix};
+use crate::linalg::sparse::{Pattern, SymMatrix};
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;

@@ -18,17 +18,17 @@
 //! Everything is built in code (no mesh files): a design runs from [`Design::paper`] or a
 //! TOML file with the same fields (unknown keys are errors).
 
-use crate::analysis::{ModalOptions, ModalTarget, run_modal};
-use crate::dynamics::electromagnet::RectifiedDrive;
-use crate::dynamics::isolation::{transmissibility, wahl_factor};
-use crate::dynamics::transient::{TransientOptions, simulate_startup};
-use crate::dynamics::two_mass::TwoMass;
+use crate::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use crate::analysis::statics::{Load, StaticOptions, run_static};
+use crate::app::dynamics::electromagnet::RectifiedDrive;
+use crate::app::dynamics::isolation::{transmissibility, wahl_factor};
+use crate::app::dynamics::transient::{TransientOptions, simulate_startup};
+use crate::app::dynamics::two_mass::TwoMass;
 use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::mesh::parametric::{HelixParams, SandwichParams, helix_beam, sandwich_table};
 use crate::model::{BeamPart, CouplingSpec, ModelSpec, Orientation, ShellPart};
 use crate::section::{BeamSection, ShellSection};
-use crate::statics::{Load, StaticOptions, run_static};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
@@ -476,7 +476,7 @@ pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
     let r = &run.cases[0].references[0];
     let uz = r.displacement[2];
     let k = 1000.0 / uz;
-    let u = crate::report::mesh_displacements(&run, 0);
+    let u = crate::app::report::mesh_displacements(&run, 0);
     let ns = crate::post::stress::nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
     let vm = ns.von_mises.iter().fold(0.0f64, |a, &b| a.max(b));
     Ok((k, vm / uz))
@@ -619,7 +619,7 @@ pub fn sandwich_clear_webs(p: &SandwichParams) -> Result<(crate::mesh::Mesh, Vec
 }
 
 /// Work-table modal analysis (shells, free–free): mass and the first six elastic frequencies.
-pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::ModalRun, crate::mesh::Mesh)> {
+pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
     let p = d.sandwich();
     let (mesh, links) = sandwich_clear_webs(&p)?;
     let mat = Material {
@@ -758,14 +758,14 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     // to X1, the model's dynamic factors, and the load share taken with a margin.
     let x1p = d.drive.power_overload_g * 9.81 / (omega * omega);
     let x2p = x1p * ss.amp2() / x1;
-    let power = crate::dynamics::tuning::drive_power(
+    let power = crate::app::dynamics::tuning::drive_power(
         omega,
         d.drive.efficiency,
         &[(x1p, m1, gamma1), (x2p, m2, gamma2)],
         x1p,
         d.drive.power_load_share,
     )?;
-    let p_req = crate::dynamics::electromagnet::required_peak_force(&model, omega, d.target_amplitude)?
+    let p_req = crate::app::dynamics::electromagnet::required_peak_force(&model, omega, d.target_amplitude)?
         / d.drive.magnets as f64;
     let offset = drive.constant() / c12;
     let m_total = m1 + m2 + d.masses.load;
@@ -932,7 +932,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     ];
     quantities.retain(|x| x.value.is_finite() || x.published.is_some());
     if d.tune == "mass" {
-        let m2_need = crate::dynamics::tuning::reactive_mass_for_detuning(m1, c12, omega, d.target_detuning);
+        let m2_need = crate::app::dynamics::tuning::reactive_mass_for_detuning(m1, c12, omega, d.target_detuning);
         match m2_need {
             Ok(v) => quantities.push(q(
                 "reactive mass for the target z",
@@ -954,7 +954,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             h * 1e3,
             d.leaf.count,
             d.leaf.clamping,
-            crate::dynamics::tuning::leaf_thickness_for_stiffness(
+            crate::app::dynamics::tuning::leaf_thickness_for_stiffness(
                 m_red * (omega / d.target_detuning).powi(2),
                 d.leaf.count,
                 d.leaf.material[0],
@@ -1008,7 +1008,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     if let Some(dir) = out_dir {
         progress("report and plots");
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        crate::dynamics::plot::write_frequency_response_svg(
+        crate::app::dynamics::plot::write_frequency_response_svg(
             dir.join("amplitude_frequency.svg"),
             &model,
             1.0,
@@ -1017,28 +1017,15 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             force,
             Some(d.excitation_hz),
         )?;
-        crate::dynamics::plot::write_transient_svg(dir.join("transient.svg"), &tr, None)?;
-        crate::dynamics::plot::write_electromagnet_svg(dir.join("electromagnet.svg"), &drive, 8, 2.0)?;
-        let views: Vec<crate::io::msh_out::NodeView> = table_run
-            .shapes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| crate::io::msh_out::NodeView {
-                name: format!("mode {} ({:.2} Hz)", i + 1, table_run.report.frequencies_hz[i]),
-                step: i,
-                time: table_run.report.frequencies_hz[i],
-                n_comp: 3,
-                data: s,
-            })
-            .collect();
-        crate::io::msh_out::write_msh_views(&dir.join("table_modes.msh"), &table_mesh, &views)?;
-        let fields: Vec<crate::io::vtk::PointField> = table_run
-            .shapes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| crate::io::vtk::PointField::mode(i + 1, s))
-            .collect();
-        crate::io::vtk::write_vtu(&dir.join("table_modes.vtu"), &table_mesh, &fields)?;
+        crate::app::dynamics::plot::write_transient_svg(dir.join("transient.svg"), &tr, None)?;
+        crate::app::dynamics::plot::write_electromagnet_svg(dir.join("electromagnet.svg"), &drive, 8, 2.0)?;
+        crate::io::write_mode_shapes(
+            &table_mesh,
+            &table_run.shapes,
+            &table_run.report.frequencies_hz,
+            Some(&dir.join("table_modes.vtu")),
+            Some(&dir.join("table_modes.msh")),
+        )?;
         if let Some(k) = table_run.report.modes.iter().position(|m| m.kind == "elastic") {
             write_mode_svg(
                 &dir.join("table_mode7.svg"),
