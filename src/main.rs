@@ -277,7 +277,7 @@ fn modes(a: &ModesArgs) -> Result<i32> {
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&run.report).map_err(|e| Error::InvalidInput(e.to_string()))?
+            serde_json::to_string_pretty(&run.report).map_err(|e| Error::output("JSON", e))?
         );
     } else {
         print!("{}", vibrofem::app::report::modal_table(&run.report));
@@ -328,7 +328,7 @@ fn design_cmd(a: &DesignArgs) -> Result<i32> {
         b.finish_and_clear();
     }
     let r = r?;
-    let json = serde_json::to_string_pretty(&r).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&r).map_err(|e| Error::output("JSON", e))?;
     std::fs::write(a.out.join("report.json"), &json).map_err(|e| Error::io(a.out.join("report.json"), e))?;
     std::fs::write(a.out.join("report.md"), vibrofem::app::design::report_markdown(&r))
         .map_err(|e| Error::io(a.out.join("report.md"), e))?;
@@ -358,7 +358,7 @@ fn static_cmd(a: &StaticArgs) -> Result<i32> {
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| Error::InvalidInput(e.to_string()))?
+            serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?
         );
     } else {
         print!("{}", vibrofem::app::report::static_text(&report));
@@ -380,7 +380,7 @@ fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&info).map_err(|e| Error::InvalidInput(e.to_string()))?
+            serde_json::to_string_pretty(&info).map_err(|e| Error::output("JSON", e))?
         );
     } else {
         print!("{}", vibrofem::app::report::mesh_info_text(&info));
@@ -392,7 +392,7 @@ fn run_cmd(a: &RunArgs) -> Result<i32> {
     let scene = vibrofem::app::scene::Scene::load(&a.scene)?;
     std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
     let report = scene.run(Some((&a.out, "")))?;
-    let json = serde_json::to_string_pretty(&report).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?;
     let path = a.out.join("summary.json");
     std::fs::write(&path, &json).map_err(|e| Error::io(&path, e))?;
     if a.json {

@@ -266,7 +266,7 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
         max_applications: opts.max_applications,
         ..Default::default()
     };
-    let sol = eigen::solve(k_mat, m_mat, sym, &params)?;
+    let sol = eigen::solve(k_mat, m_mat, sym, &params).map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
     tm.factor = sol.time_factor;
     tm.solve = sol.time_iterate;
     tm.verify = sol.time_verify;

@@ -487,7 +487,7 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
     let sym = sys.symbolic().clone();
     let fa = match Factor::new(sym, km_k) {
         Ok(f) => f,
-        Err(e) => return Err(singular(e.to_string())),
+        Err(e) => return Err(singular(e.locate(|eq| sys.describe_equation(eq)).to_string())),
     };
     if fa.negative_pivots > 0 || fa.pivot_range.0 <= fa.pivot_range.1 * 1e-13 {
         return Err(singular(format!(

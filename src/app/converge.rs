@@ -561,7 +561,7 @@ pub fn write_outputs(c: &Convergence, dir: &Path) -> Result<()> {
     let p = dir.join("converge.md");
     std::fs::write(&p, table_markdown(c)).map_err(|e| Error::io(&p, e))?;
     let p = dir.join("converge.json");
-    let text = serde_json::to_string_pretty(c).map_err(|e| invalid(e.to_string()))?;
+    let text = serde_json::to_string_pretty(c).map_err(|e| Error::output("JSON", e))?;
     std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
     write_svg(c, &dir.join("converge.svg"))
 }

@@ -188,9 +188,8 @@ struct RawOutput {
 pub enum MeshSource {
     /// A gmsh file (already resolved against the scene's folder).
     File(PathBuf),
-    /// A generator spec: any [`crate::input::source::load`] spec (`box:`, `helix:`), or one of the
-    /// scene-only generators `sandwich:paper[,SIZE]`, `ibeam-line:L,N`,
-    /// `ibeam-shell:H,B,S,T,L,SIZE`, `ibeam-solid:H,B,S,T,L,SIZE,KIND`.
+    /// A generator spec (the grammar of [`crate::input::source`]: `box:`, `helix:`,
+    /// `sandwich:`, `ibeam-line:`, `ibeam-shell:`, `ibeam-solid:`).
     Generator(String),
     /// No mesh given (a batch template: the batch supplies the file).
     Missing,
@@ -330,7 +329,12 @@ impl Ctx<'_> {
         Err(self.error(self.line(span.start), msg))
     }
     fn error(&self, line: usize, msg: impl std::fmt::Display) -> Error {
-        Error::InvalidInput(format!("{}, line {line}: {msg}", self.file))
+        Error::Input {
+            file: self.file.clone(),
+            line: Some(line),
+            key: None,
+            msg: msg.to_string(),
+        }
     }
     fn need<'v, T>(&self, v: &'v Option<T>, span: std::ops::Range<usize>, key: &str, place: &str) -> Result<&'v T> {
         match v {
@@ -547,15 +551,25 @@ impl Scene {
                     not_for("thickness", r.thickness.is_some())?;
                     not_for("offset", r.offset.is_some())?;
                     let sec = ctx.need(&r.section, sp.clone(), "section", &place)?;
-                    let orient = match ctx.need(&r.orientation, sp.clone(), "orientation", &place)? {
+                    let orientation = match ctx.need(&r.orientation, sp.clone(), "orientation", &place)? {
                         RawOrientation::Vector(v) => {
                             let v = vec3(&ctx, sp.clone(), "'orientation'", v)?;
-                            format!("{},{},{}", v[0], v[1], v[2])
+                            if v.iter().all(|x| *x == 0.0) {
+                                return ctx.err(sp, format!("{place}: orientation must be a non-zero vector x,y,z"));
+                            }
+                            crate::model::Orientation::Vector(v)
                         }
-                        RawOrientation::Text(s) => s.clone(),
+                        RawOrientation::Text(s) => crate::input::options::parse_orientation(s)
+                            .map_err(|e| ctx.error(ctx.line(sp.start), format!("{place}: {e}")))?,
                     };
-                    let mut b = crate::app::cli::parse_beam(&format!("{group}={sec}@{orient}"))
+                    let section = crate::input::options::parse_section(sec)
                         .map_err(|e| ctx.error(ctx.line(sp.start), format!("{place}: {e}")))?;
+                    let mut b = crate::model::BeamPart {
+                        group: group.clone(),
+                        section,
+                        orientation,
+                        material: None,
+                    };
                     if let Err(e) = b.section.validate(&place) {
                         return ctx.err(sp, e);
                     }
@@ -1038,71 +1052,16 @@ pub fn run(path: &Path) -> Result<SceneReport> {
     Scene::load(path)?.run(None)
 }
 
-/// A mesh from a generator spec: the scene-only generators `sandwich:paper[,SIZE]` (the S7 work
-/// table as quad4 shells; groups `top_plate`, `bottom_plate`, `webs_long`, `table`, …),
-/// `ibeam-line:LENGTH,N` (S6 beam line; groups `beam`, `end_a`, `end_b`),
-/// `ibeam-shell:H,B,S,T,LENGTH,SIZE` (groups `flange_top`, `flange_bottom`, `web`, `beam`) and
-/// `ibeam-solid:H,B,S,T,LENGTH,SIZE,KIND`, or anything [`crate::input::source::load`] takes.
+/// A mesh from a generator spec (any of [`crate::input::source::GENERATORS`]); a spec that is
+/// not a generator is an error (a scene names files with `file =`).
 pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
-    use crate::mesh::parametric as pm;
-    let nums = |rest: &str, n: usize, usage: &str| -> Result<Vec<f64>> {
-        let v: std::result::Result<Vec<f64>, _> = rest.split(',').map(|s| s.trim().parse::<f64>()).collect();
-        match v {
-            Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(v),
-            _ => Err(Error::InvalidInput(format!("generator '{spec}': expected {usage}"))),
-        }
-    };
-    if let Some(rest) = spec.strip_prefix("sandwich:") {
-        let mut it = rest.splitn(2, ',');
-        let preset = it.next().unwrap_or("").trim();
-        if preset != "paper" {
-            return Err(Error::InvalidInput(format!(
-                "generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"
-            )));
-        }
-        let mut p = pm::SandwichParams::paper();
-        if let Some(h) = it.next() {
-            p.elem_size = nums(h, 1, "sandwich:paper[,ELEMENT_SIZE]")?[0];
-        }
-        let mut m = pm::sandwich_table(&p)?;
-        m.scale(length_scale);
-        return Ok(m);
+    if !crate::input::source::is_generator(spec) {
+        return Err(Error::InvalidInput(format!(
+            "unknown generator '{spec}' ({})",
+            crate::input::source::GENERATORS
+        )));
     }
-    if let Some(rest) = spec.strip_prefix("ibeam-line:") {
-        let v = nums(rest, 2, "ibeam-line:LENGTH,N_ELEMENTS")?;
-        if v[1] < 1.0 || v[1].fract() != 0.0 {
-            return Err(Error::InvalidInput(format!(
-                "generator '{spec}': the element count must be a whole number ≥ 1"
-            )));
-        }
-        let mut m = pm::i_beam_line(v[0], v[1] as usize)?;
-        m.scale(length_scale);
-        return Ok(m);
-    }
-    if let Some(rest) = spec.strip_prefix("ibeam-shell:") {
-        let v = nums(rest, 6, "ibeam-shell:H,B,S,T,LENGTH,ELEMENT_SIZE")?;
-        let mut m = pm::i_beam_shell(v[0], v[1], v[2], v[3], v[4], v[5])?;
-        m.scale(length_scale);
-        return Ok(m);
-    }
-    if let Some(rest) = spec.strip_prefix("ibeam-solid:") {
-        let (nums_part, kind) = rest.rsplit_once(',').unwrap_or((rest, ""));
-        let v = nums(nums_part, 6, "ibeam-solid:H,B,S,T,LENGTH,ELEMENT_SIZE,KIND")?;
-        let kind = crate::mesh::CellKind::SOLIDS
-            .iter()
-            .copied()
-            .find(|k| k.name() == kind.trim())
-            .ok_or_else(|| Error::InvalidInput(format!("generator '{spec}': unknown cell kind '{kind}'")))?;
-        let mut m = pm::i_beam_solid(v[0], v[1], v[2], v[3], v[4], v[5], kind)?;
-        m.scale(length_scale);
-        return Ok(m);
-    }
-    if spec.starts_with("box:") || spec.starts_with("helix:") {
-        return crate::input::source::load(spec, length_scale);
-    }
-    Err(Error::InvalidInput(format!(
-        "unknown generator '{spec}' (box:, helix:, sandwich:, ibeam-line:, ibeam-shell:, ibeam-solid:)"
-    )))
+    crate::input::source::load(spec, length_scale)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1491,7 +1450,7 @@ pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
     let csv = opts.out.join("summary.csv");
     std::fs::write(&csv, summary_csv(&summary.rows)).map_err(|e| Error::io(&csv, e))?;
     let js = opts.out.join("summary.json");
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| Error::output("summary.json", e))?;
     std::fs::write(&js, text).map_err(|e| Error::io(&js, e))?;
     Ok(summary)
 }

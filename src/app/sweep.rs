@@ -844,7 +844,7 @@ pub fn write_outputs(o: &SweepOutcome, dir: &Path) -> Result<()> {
     let p = dir.join("sweep.csv");
     std::fs::write(&p, sweep_csv(o)).map_err(|e| Error::io(&p, e))?;
     let p = dir.join("sweep.json");
-    let text = serde_json::to_string_pretty(o).map_err(|e| invalid(e.to_string()))?;
+    let text = serde_json::to_string_pretty(o).map_err(|e| Error::output("JSON", e))?;
     std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
     write_pareto_svg(o, &dir.join("pareto.svg"))
 }
@@ -1025,7 +1025,7 @@ pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
         let csv = out.join("summary.csv");
         std::fs::write(&csv, summary_csv(&summary.rows)).map_err(|e| Error::io(&csv, e))?;
         let js = out.join("summary.json");
-        let text = serde_json::to_string_pretty(&summary).map_err(|e| invalid(e.to_string()))?;
+        let text = serde_json::to_string_pretty(&summary).map_err(|e| Error::output("JSON", e))?;
         std::fs::write(&js, text).map_err(|e| Error::io(&js, e))?;
     }
     Ok(summary)

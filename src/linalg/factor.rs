@@ -120,7 +120,25 @@ impl Factor {
                 stack,
                 Default::default(),
             )
-            .map_err(|e| Error::Factorization(format!("LDLᵀ: {e:?}")))?;
+            .map_err(|e| {
+                // A zero pivot names its column of the permuted matrix: map it back to the
+                // equation so the model layer can name the node and component.
+                let equation = match e {
+                    faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                        // faer counts the failing pivot from 1.
+                        let index = index.saturating_sub(1);
+                        Some(match sym.sym.perm() {
+                            Some(p) => p.arrays().0.get(index).copied().unwrap_or(index),
+                            None => index,
+                        })
+                    }
+                };
+                Error::Singular {
+                    equation,
+                    at: None,
+                    msg: format!("LDLᵀ: zero pivot, the matrix is singular ({e:?})"),
+                }
+            })?;
         log::info!(
             "factorised K − σM: {} entries in L, {:.3e} flop, {:.2} s",
             sym.nnz_l,
@@ -149,10 +167,20 @@ impl Factor {
             lo = lo.min(x.abs());
             hi = hi.max(x.abs());
         }
-        if d.iter().any(|x| !x.is_finite()) {
-            return Err(Error::Factorization(
-                "non-finite pivot (singular matrix at this shift)".into(),
-            ));
+        if let Some(i) = d.iter().position(|x| !x.is_finite() || *x == 0.0) {
+            // Pivot i of the permuted matrix: name the equation it belongs to.
+            let equation = match sym.sym.perm() {
+                Some(p) => p.arrays().0.get(i).copied().unwrap_or(i),
+                None => i,
+            };
+            return Err(Error::Singular {
+                equation: Some(equation),
+                at: None,
+                msg: format!(
+                    "{} pivot (singular matrix at this shift)",
+                    if d[i] == 0.0 { "zero" } else { "non-finite" }
+                ),
+            });
         }
         Ok(Factor {
             sym,

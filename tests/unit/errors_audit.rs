@@ -4,7 +4,7 @@
 //! `MeshParse`, `UnsupportedElement`, `EmptyModel`; `stress.rs`: `InvertedElement`;
 //! `elements.rs`: `InvalidMaterial`; `extremes.rs`: `EigenNotConverged`). This file covers the
 //! ones no test matched by variant — `Io` on a write, `UnknownGroup` through the library,
-//! `Factorization` and `Verification` — and checks each variant's exit code.
+//! `Factorization`, `Singular` and `Verification` — and checks each variant's exit code.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -176,8 +176,65 @@ fn every_variant_maps_to_its_documented_exit_code() {
         (Error::EigenNotConverged("e".into()), 2),
         (Error::Verification("v".into()), 2),
         (Error::Factorization("f".into()), 2),
+        (
+            Error::Input {
+                file: "a.toml".into(),
+                line: Some(3),
+                key: Some("modal.modes".into()),
+                msg: "m".into(),
+            },
+            1,
+        ),
+        (
+            Error::Singular {
+                equation: Some(0),
+                at: None,
+                msg: "s".into(),
+            },
+            2,
+        ),
+        (Error::output("summary.json", "disk full"), 4),
     ];
     for (e, code) in cases {
         assert_eq!(e.exit_code(), code, "{e:?}");
+    }
+}
+
+#[test]
+fn a_zero_pivot_names_its_equation_then_its_node_and_component() {
+    // K = diag(1, 2, 3, 4) with one entry zeroed on a diagonal pattern: that equation has no
+    // stiffness. The factorisation must report that equation (whatever the ordering did to it),
+    // and the model layer names it.
+    for z in 0..4 {
+        let k = diag(4, |i| if i == z { 0.0 } else { 1.0 + i as f64 });
+        let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+        let e = vibrofem::linalg::factor::Factor::new(sym, &k).err().expect("singular");
+        match &e {
+            Error::Singular { equation, .. } => assert_eq!(*equation, Some(z), "{e:?}"),
+            other => panic!("expected Error::Singular, got {other:?}"),
+        }
+        assert_eq!(e.exit_code(), 2);
+        let located = e.locate(|eq| format!("node {} uz", 100 + eq));
+        assert!(
+            located.to_string().contains(&format!("(at node {} uz)", 100 + z)),
+            "{located}"
+        );
+    }
+}
+
+#[test]
+fn equations_are_named_by_node_tag_and_component() {
+    // box 2×2×1 hex8: 18 nodes; fixing xmin leaves the other 12 nodes' translations free.
+    let mesh = box_mesh();
+    let spec = ModelSpec {
+        fixes: vec![("xmin".into(), vibrofem::dof::TRANSLATIONS)],
+        ..Default::default()
+    };
+    let model = vibrofem::model::Model::build(&mesh, &spec, "box").unwrap();
+    let sys = vibrofem::system::System::build(model, &vibrofem::system::SystemOptions::default(), "box").unwrap();
+    for eq in [0, 1, 2, sys.n_free() - 1] {
+        let (a, c) = sys.dofs().node_comp_of(eq);
+        let want = format!("node {} {}", mesh.node_tags[a], ["ux", "uy", "uz"][c]);
+        assert_eq!(sys.describe_equation(eq), want);
     }
 }

@@ -4,6 +4,7 @@
 //! snippets, closed forms, a dense eigen solve, a direct complex solve, analytic ODE solutions,
 //! harmonic balance, and scipy (validation/two_mass_transient.py → validation/reference/).
 
+use crate::common::rel;
 use std::f64::consts::{PI, TAU};
 
 use nalgebra::{Complex, Matrix2, Vector2};
@@ -26,10 +27,6 @@ use vibrofem::app::dynamics::{
 
 const OMEGA: f64 = 2.0 * PI * 100.0; // forcing frequency, rad/s
 const F_PAPER: f64 = 1256.0; // harmonic force amplitude, N (paper §18)
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
-}
 
 fn assert_invalid<T: std::fmt::Debug>(r: vibrofem::Result<T>, needle: &str) {
     match r {

@@ -1,14 +1,11 @@
 //! `vibrofem sweep`, `converge` and `merge`: a small sweep's trends, validation before meshing,
 //! the Pareto front, a tiny convergence study and the merge of batch shards.
 
+use crate::common::root;
 use std::path::{Path, PathBuf};
 use vibrofem::app::converge;
 use vibrofem::app::scene::{BatchOptions, BatchRow, run_batch};
 use vibrofem::app::sweep::{self, Study, SweepOptions, SweepRow, mark_pareto};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("vibrofem-test-sweep-{}-{name}", std::process::id()));

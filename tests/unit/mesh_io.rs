@@ -6,6 +6,7 @@
 //! Reference node positions are gmsh's (`gmsh.model.mesh.getElementProperties`) and VTK's
 //! (`GetParametricCoords` of each `vtkCell`).
 
+use crate::common::{cross, dot};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -69,16 +70,6 @@ fn assert_same_mesh(a: &Mesh, b: &Mesh, what: &str) {
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 fn det3(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> f64 {
     dot(cross(a, b), c)

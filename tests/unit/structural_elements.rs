@@ -12,6 +12,7 @@
 
 #![allow(clippy::needless_range_loop)]
 
+use crate::common::{cross, dot};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::f64::consts::{FRAC_PI_3, FRAC_PI_6};
 use vibrofem::element::{MassLumping, beam, shell};
@@ -36,18 +37,6 @@ impl Rng {
     fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 fn unit(a: [f64; 3]) -> [f64; 3] {

@@ -10,6 +10,7 @@
 //! code 2 / flags its report — and print `KNOWN BUG` when they take the failure branch.
 //! Once a defect is fixed, the failure branch of its test should be removed.
 
+use crate::common::rel;
 use std::f64::consts::PI;
 use std::process::Command;
 use std::sync::Arc;
@@ -153,10 +154,6 @@ fn add_point(mesh: &mut Mesh, name: &str, x: [f64; 3]) {
             index: (mesh.blocks[bi].len() - 1) as u32,
         }],
     });
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
 }
 
 /// `[1.2e-3, ...]` for messages.

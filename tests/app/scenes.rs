@@ -2,13 +2,10 @@
 //! (`tests/scenes/bad/*.toml`, first line `#^ expected message fragment`) pins each message, and
 //! `vibrofem run` / `vibrofem batch` behave as documented (exit codes, summaries, resume, shards).
 
+use crate::common::{rel, root};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use vibrofem::app::scene::{self, Scene, SceneReport};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn run_scene(name: &str) -> SceneReport {
     let p = root().join("scenes").join(name);
@@ -17,10 +14,6 @@ fn run_scene(name: &str) -> SceneReport {
 
 fn mode(r: &SceneReport, n: usize) -> f64 {
     r.modal.as_ref().expect("modal report").frequencies_hz[n - 1]
-}
-
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
 }
 
 fn tmp(name: &str) -> PathBuf {
