@@ -151,24 +151,14 @@ fn surface_weights(mesh: &Mesh, group: &str) -> Result<(Vec<(u32, f64)>, f64, Ve
         let rule = crate::fe::quadrature::for_cell(kind, 2 * kind.order() + 1);
         let mut n = [0.0; 9];
         let mut dn = [[0.0; 3]; 9];
+        let mut x = [[0.0; 3]; 9];
+        for a in 0..nn {
+            x[a] = mesh.nodes[nodes[a] as usize];
+        }
         for (xi, wq) in rule.points.iter().zip(&rule.weights) {
             crate::fe::shape::values_and_gradients(kind, *xi, &mut n[..nn], &mut dn[..nn]);
-            let mut t1 = [0.0; 3];
-            let mut t2 = [0.0; 3];
-            for a in 0..nn {
-                let x = mesh.nodes[nodes[a] as usize];
-                for d in 0..3 {
-                    t1[d] += dn[a][0] * x[d];
-                    t2[d] += dn[a][1] * x[d];
-                }
-            }
-            // Area vector (unnormalised normal) of the parametrisation.
-            let nv = [
-                t1[1] * t2[2] - t1[2] * t2[1],
-                t1[2] * t2[0] - t1[0] * t2[2],
-                t1[0] * t2[1] - t1[1] * t2[0],
-            ];
-            let ja = (nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]).sqrt();
+            // Area vector (unnormalised normal) of the parametrisation and area element.
+            let (nv, ja) = crate::fe::geometry::surface_metric(&x[..nn], &dn[..nn]);
             area += ja * wq;
             for a in 0..nn {
                 *w.entry(nodes[a]).or_default() += n[a] * ja * wq;

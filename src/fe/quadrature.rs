@@ -336,6 +336,41 @@ pub fn wedge(tri_degree: usize, n_line: usize) -> Rule {
     r
 }
 
+/// Fixed small rules as constants `(ξ, w)` / `(ξ, η, w)`, for the kernels that integrate
+/// without building a [`Rule`] (shells and beams). Their literal values and point order define
+/// those kernels' results to the last bit; the tests check them against [`gauss_legendre`],
+/// [`quad`] and [`triangle`].
+///
+/// 2-point Gauss–Legendre on [-1, 1].
+pub const GAUSS2: [(f64, f64); 2] = [(-0.577_350_269_189_625_8, 1.0), (0.577_350_269_189_625_8, 1.0)];
+/// 3-point Gauss–Legendre on [-1, 1].
+pub const GAUSS3: [(f64, f64); 3] = [
+    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+    (0.0, 8.0 / 9.0),
+    (0.774_596_669_241_483_4, 5.0 / 9.0),
+];
+/// 4-point Gauss–Legendre on [-1, 1].
+pub const GAUSS4: [(f64, f64); 4] = [
+    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+    (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
+    (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
+];
+/// 2 × 2 Gauss on [-1, 1]², ξ running fastest (the points and order of [`quad`]`(2)`).
+pub const QUAD_2X2: [(f64, f64, f64); 4] = [
+    (-GAUSS2[1].0, -GAUSS2[1].0, 1.0),
+    (GAUSS2[1].0, -GAUSS2[1].0, 1.0),
+    (-GAUSS2[1].0, GAUSS2[1].0, 1.0),
+    (GAUSS2[1].0, GAUSS2[1].0, 1.0),
+];
+/// The 3-point degree-2 rule on the unit triangle (weights summing to 1/2): the points of
+/// [`triangle`]`(2)`, ordered from the one near vertex 0.
+pub const TRIANGLE_3: [(f64, f64, f64); 3] = [
+    (1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0),
+    (2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0),
+    (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0),
+];
+
 /// The rule of a cell kind exact for degree `degree`: total degree on triangles and
 /// tetrahedra, degree per direction on lines, quadrilaterals and hexahedra, and both (triangle
 /// total degree, `w` degree) on wedges. A point cell gets the single point with weight 1.
@@ -378,6 +413,33 @@ mod tests {
         for n in 1..=12 {
             let (_, w) = gauss_legendre(n);
             assert!((w.iter().sum::<f64>() - 2.0).abs() < 1e-14, "n = {n}");
+        }
+    }
+
+    #[test]
+    fn constant_rules_match_the_computed_ones() {
+        for (n, c) in [(2, &GAUSS2[..]), (3, &GAUSS3[..]), (4, &GAUSS4[..])] {
+            let (x, w) = gauss_legendre(n);
+            for i in 0..n {
+                assert!(
+                    (x[i] - c[i].0).abs() < 1e-15 && (w[i] - c[i].1).abs() < 1e-15,
+                    "n = {n}"
+                );
+            }
+        }
+        let q = quad(2);
+        for (i, &(u, v, w)) in QUAD_2X2.iter().enumerate() {
+            let p = q.points[i];
+            assert!((p[0] - u).abs() < 1e-15 && (p[1] - v).abs() < 1e-15 && (q.weights[i] - w).abs() < 1e-15);
+        }
+        let t = triangle(2);
+        for &(u, v, w) in &TRIANGLE_3 {
+            let found = t
+                .points
+                .iter()
+                .zip(&t.weights)
+                .any(|(p, &wt)| (p[0] - u).abs() < 1e-15 && (p[1] - v).abs() < 1e-15 && (wt - w).abs() < 1e-15);
+            assert!(found, "({u}, {v}) is not a point of triangle(2)");
         }
     }
 

@@ -11,11 +11,11 @@ pub mod spec;
 pub use sets::{BeamSet, DiscreteSet, ReferenceNode, ShellSet, SolidSet};
 pub use spec::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
 
-use crate::assembly::ElementSet;
+use crate::Result;
 use crate::dof::DofMap;
+use crate::element::ElementSet;
 use crate::material::Material;
 use crate::mesh::CellKind;
-use crate::{Error, Result};
 
 /// A mesh bound to elements, materials and supports.
 pub struct Model {
@@ -59,44 +59,31 @@ impl Model {
             .collect()
     }
 
-    /// Total volume (m³) and mass (kg) of the solid cells.
+    /// Total volume (m³) and mass (kg) of the continuum elements (solids, shells, beams): the
+    /// sums of [`ElementSet::measure`] and `measure × density` (discrete elements have measure
+    /// 0 and their mass is [`Model::discrete_mass`]). Summed shells first, then beams, then
+    /// solids.
     pub fn volume_and_mass(&self) -> Result<(f64, f64)> {
+        let sets = (self.shells.iter().map(|s| s as &dyn ElementSet))
+            .chain(self.beams.iter().map(|s| s as &dyn ElementSet))
+            .chain(self.solids.iter().map(|s| s as &dyn ElementSet));
         let (mut v, mut m) = (0.0, 0.0);
-        for s in &self.shells {
+        for s in sets {
             for e in 0..s.len() {
-                let x: Vec<[f64; 3]> = s.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
-                let a = crate::element::shell::area(s.kinds[e], &x).map_err(|det| Error::InvertedElement {
-                    element: s.tags[e],
-                    kind: s.kinds[e].name(),
-                    det,
-                })?;
-                v += a * s.section.thickness;
-                m += a * s.section.thickness * s.material.density;
-            }
-        }
-        for b in &self.beams {
-            for e in 0..b.len() {
-                let x: Vec<[f64; 3]> = b.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
-                let l = crate::element::beam::length(b.kinds[e], &x);
-                v += l * b.section.area;
-                m += l * b.section.area * b.material.density;
-            }
-        }
-        for s in &self.solids {
-            for e in 0..s.len() {
-                let ve = s.volume(e)?;
+                let ve = s.measure(e)?;
                 v += ve;
-                m += ve * s.materials[s.mat[e] as usize].density;
+                m += ve * s.density(e);
             }
         }
         Ok((v, m))
     }
 
-    /// Total translational mass of the point masses, kg.
+    /// Total translational mass of the point masses, kg ([`ElementSet::mass`] of the discrete
+    /// elements).
     pub fn discrete_mass(&self) -> f64 {
         self.discrete
             .iter()
-            .flat_map(|d| d.me.iter().map(move |m| m[0] / d.per as f64))
+            .flat_map(|d| (0..d.len()).map(move |e| d.point_mass(e)))
             .sum()
     }
 

@@ -2,11 +2,20 @@
 //! masses and springs. Each implements [`ElementSet`], the one interface assembly, mass
 //! properties and stress recovery use.
 
-use crate::assembly::ElementSet;
-use crate::element::{MassLumping, solid};
+use crate::element::{ElementSet, MassLumping, beam, shell, solid};
 use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::{Error, Result};
+use std::sync::Arc;
+
+/// Copies the coordinates of `nodes` into the front of `buf` and returns that slice: element
+/// coordinates on the stack, no allocation per element.
+fn gather<'a>(all: &[[f64; 3]], nodes: &[u32], buf: &'a mut [[f64; 3]; 27]) -> &'a [[f64; 3]] {
+    for (o, &a) in buf.iter_mut().zip(nodes) {
+        *o = all[a as usize];
+    }
+    &buf[..nodes.len()]
+}
 
 /// Shell cells of one group.
 pub struct ShellSet {
@@ -26,7 +35,41 @@ pub struct ShellSet {
     pub material: Material,
     /// Mass form.
     pub lumping: MassLumping,
-    pub(crate) nodes: std::sync::Arc<Vec<[f64; 3]>>,
+    pub(crate) nodes: Arc<Vec<[f64; 3]>>,
+}
+
+impl ShellSet {
+    /// A set of one element of `kind` on its own nodes `x` (numbered 0..n), for sweeps and
+    /// examples.
+    pub fn single(kind: CellKind, x: Vec<[f64; 3]>, section: crate::section::ShellSection, material: Material) -> Self {
+        let n = x.len();
+        ShellSet {
+            group: format!("{kind} shell"),
+            kinds: vec![kind],
+            conn: (0..n as u32).collect(),
+            ptr: vec![0, n],
+            tags: vec![1],
+            section,
+            material,
+            lumping: MassLumping::Consistent,
+            nodes: Arc::new(x),
+        }
+    }
+
+    fn inverted(&self, e: usize, det: f64) -> Error {
+        Error::InvertedElement {
+            element: self.tags[e],
+            kind: self.kinds[e].name(),
+            det,
+        }
+    }
+
+    /// Area of the (projected, mean-plane) element `e` ([`shell::area`]).
+    pub fn area(&self, e: usize) -> Result<f64> {
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
+        shell::area(self.kinds[e], x).map_err(|det| self.inverted(e, det))
+    }
 }
 
 impl ElementSet for ShellSet {
@@ -37,21 +80,51 @@ impl ElementSet for ShellSet {
         &self.conn[self.ptr[e]..self.ptr[e + 1]]
     }
     fn dofs_per_node(&self) -> usize {
-        6
+        shell::DOFS_PER_NODE
+    }
+    fn group(&self) -> &str {
+        &self.group
+    }
+    fn tag(&self, e: usize) -> Option<u64> {
+        Some(self.tags[e])
+    }
+    fn cell_kind(&self, e: usize) -> Option<CellKind> {
+        Some(self.kinds[e])
     }
     fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
-        let x: Vec<[f64; 3]> = self.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
         let k = self.kinds[e];
-        let bad = |det: f64| Error::InvertedElement {
-            element: self.tags[e],
-            kind: k.name(),
-            det,
-        };
-        crate::element::shell::stiffness(k, &x, &self.section, &self.material, ke).map_err(bad)?;
+        let bad = |det: f64| self.inverted(e, det);
+        shell::stiffness(k, x, &self.section, &self.material, ke).map_err(bad)?;
         if want_mass {
-            crate::element::shell::mass(k, &x, &self.section, self.material.density, self.lumping, me).map_err(bad)?;
+            shell::mass(k, x, &self.section, self.material.density, self.lumping, me).map_err(bad)?;
         }
         Ok(())
+    }
+    fn consistent_mass(&self, e: usize, me: &mut [f64]) -> Result<()> {
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
+        let k = self.kinds[e];
+        shell::mass(k, x, &self.section, self.material.density, MassLumping::Consistent, me)
+            .map_err(|det| self.inverted(e, det))
+    }
+    fn measure(&self, e: usize) -> Result<f64> {
+        Ok(self.area(e)? * self.section.thickness)
+    }
+    fn density(&self, _e: usize) -> f64 {
+        self.material.density
+    }
+    /// The drilling inertia `ρ t³/12 A n nᵀ` (see [`crate::post::mass`]).
+    fn spurious_inertia(&self, e: usize) -> Result<Option<(f64, [f64; 3])>> {
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
+        let k = self.kinds[e];
+        let bad = |det: f64| self.inverted(e, det);
+        let area = shell::area(k, x).map_err(bad)?;
+        let normal = shell::local_frame(k, x).map_err(bad)?[2];
+        let t = self.section.thickness;
+        Ok(Some((self.material.density * t.powi(3) / 12.0 * area, normal)))
     }
 }
 
@@ -75,7 +148,44 @@ pub struct BeamSet {
     pub material: Material,
     /// Mass form.
     pub lumping: MassLumping,
-    pub(crate) nodes: std::sync::Arc<Vec<[f64; 3]>>,
+    pub(crate) nodes: Arc<Vec<[f64; 3]>>,
+}
+
+impl BeamSet {
+    /// A set of one element of `kind` on its own nodes `x` (numbered 0..n) with orientation
+    /// vector `orient`, for sweeps and examples.
+    pub fn single(
+        kind: CellKind,
+        x: Vec<[f64; 3]>,
+        orient: [f64; 3],
+        section: crate::section::BeamSection,
+        material: Material,
+    ) -> Self {
+        let n = x.len();
+        BeamSet {
+            group: format!("{kind} beam"),
+            kinds: vec![kind],
+            conn: (0..n as u32).collect(),
+            ptr: vec![0, n],
+            tags: vec![1],
+            orient: vec![orient],
+            section,
+            material,
+            lumping: MassLumping::Consistent,
+            nodes: Arc::new(x),
+        }
+    }
+
+    fn context(&self, e: usize) -> impl Fn(Error) -> Error + '_ {
+        move |err: Error| Error::InvalidInput(format!("beam '{}', element {}: {err}", self.group, self.tags[e]))
+    }
+
+    /// Length of element `e` ([`beam::length`]).
+    pub fn length(&self, e: usize) -> f64 {
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
+        beam::length(self.kinds[e], x)
+    }
 }
 
 impl ElementSet for BeamSet {
@@ -86,18 +196,48 @@ impl ElementSet for BeamSet {
         &self.conn[self.ptr[e]..self.ptr[e + 1]]
     }
     fn dofs_per_node(&self) -> usize {
-        crate::element::beam::dofs_per_node(&self.section)
+        beam::dofs_per_node(&self.section)
+    }
+    fn group(&self) -> &str {
+        &self.group
+    }
+    fn tag(&self, e: usize) -> Option<u64> {
+        Some(self.tags[e])
+    }
+    fn cell_kind(&self, e: usize) -> Option<CellKind> {
+        Some(self.kinds[e])
     }
     fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
-        let x: Vec<[f64; 3]> = self.nodes(e).iter().map(|&a| self.nodes[a as usize]).collect();
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
         let k = self.kinds[e];
-        let ctx = |err: Error| Error::InvalidInput(format!("beam '{}', element {}: {err}", self.group, self.tags[e]));
-        crate::element::beam::stiffness(k, &x, self.orient[e], &self.section, &self.material, ke).map_err(ctx)?;
+        let ctx = self.context(e);
+        beam::stiffness(k, x, self.orient[e], &self.section, &self.material, ke).map_err(&ctx)?;
         if want_mass {
-            crate::element::beam::mass(k, &x, self.orient[e], &self.section, &self.material, self.lumping, me)
-                .map_err(ctx)?;
+            beam::mass(k, x, self.orient[e], &self.section, &self.material, self.lumping, me).map_err(&ctx)?;
         }
         Ok(())
+    }
+    fn consistent_mass(&self, e: usize, me: &mut [f64]) -> Result<()> {
+        let mut buf = [[0.0; 3]; 27];
+        let x = gather(&self.nodes, self.nodes(e), &mut buf);
+        let k = self.kinds[e];
+        beam::mass(
+            k,
+            x,
+            self.orient[e],
+            &self.section,
+            &self.material,
+            MassLumping::Consistent,
+            me,
+        )
+        .map_err(self.context(e))
+    }
+    fn measure(&self, e: usize) -> Result<f64> {
+        Ok(self.length(e) * self.section.area)
+    }
+    fn density(&self, _e: usize) -> f64 {
+        self.material.density
     }
 }
 
@@ -130,6 +270,12 @@ impl DiscreteSet {
         }
     }
 
+    /// Translational mass of element `e`, kg: the first diagonal entry of its mass matrix per
+    /// node (0 for a spring).
+    pub fn point_mass(&self, e: usize) -> f64 {
+        self.me[e][0] / self.per as f64
+    }
+
     /// Add an element on `nodes` with stiffness `ke` and mass `me` (`(per·ndpn)²`, row-major).
     pub fn push(&mut self, nodes: &[u32], ke: Vec<f64>, me: Vec<f64>, label: String) {
         debug_assert_eq!(nodes.len(), self.per);
@@ -151,12 +297,35 @@ impl ElementSet for DiscreteSet {
     fn dofs_per_node(&self) -> usize {
         self.ndpn
     }
+    fn group(&self) -> &str {
+        "discrete"
+    }
+    fn tag(&self, _e: usize) -> Option<u64> {
+        None
+    }
+    fn cell_kind(&self, _e: usize) -> Option<CellKind> {
+        None
+    }
     fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
         ke.copy_from_slice(&self.ke[e]);
         if want_mass {
             me.copy_from_slice(&self.me[e]);
         }
         Ok(())
+    }
+    fn consistent_mass(&self, e: usize, me: &mut [f64]) -> Result<()> {
+        me.copy_from_slice(&self.me[e]);
+        Ok(())
+    }
+    fn measure(&self, _e: usize) -> Result<f64> {
+        Ok(0.0)
+    }
+    fn density(&self, _e: usize) -> f64 {
+        0.0
+    }
+    /// The translational mass ([`DiscreteSet::point_mass`]).
+    fn mass(&self, e: usize) -> Result<f64> {
+        Ok(self.point_mass(e))
     }
 }
 
@@ -190,10 +359,24 @@ pub struct SolidSet {
     /// Mass form.
     pub lumping: MassLumping,
     /// Node coordinates (shared copy of the mesh's).
-    pub(crate) nodes: std::sync::Arc<Vec<[f64; 3]>>,
+    pub(crate) nodes: Arc<Vec<[f64; 3]>>,
 }
 
 impl SolidSet {
+    /// A set of one cell of `kind` on its own nodes `x` (numbered 0..n, gmsh order), for
+    /// sweeps and examples.
+    pub fn single(kind: CellKind, x: Vec<[f64; 3]>, material: Material) -> Self {
+        SolidSet {
+            kind,
+            conn: (0..x.len() as u32).collect(),
+            tags: vec![1],
+            mat: vec![0],
+            materials: vec![material],
+            lumping: MassLumping::Consistent,
+            nodes: Arc::new(x),
+        }
+    }
+
     /// Coordinates of cell `e`'s nodes, written to `out` (length `kind.n_nodes()`).
     pub fn coords(&self, e: usize, out: &mut [[f64; 3]]) {
         for (o, &a) in out.iter_mut().zip(self.nodes(e)) {
@@ -230,6 +413,15 @@ impl ElementSet for SolidSet {
     fn dofs_per_node(&self) -> usize {
         3
     }
+    fn group(&self) -> &str {
+        self.kind.name()
+    }
+    fn tag(&self, e: usize) -> Option<u64> {
+        Some(self.tags[e])
+    }
+    fn cell_kind(&self, _e: usize) -> Option<CellKind> {
+        Some(self.kind)
+    }
     fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()> {
         let mut x = [[0.0; 3]; 27];
         let nn = self.kind.n_nodes();
@@ -240,5 +432,28 @@ impl ElementSet for SolidSet {
             solid::mass(self.kind, &x[..nn], mat.density, self.lumping, me).map_err(|det| self.inverted(e, det))?;
         }
         Ok(())
+    }
+    fn consistent_mass(&self, e: usize, me: &mut [f64]) -> Result<()> {
+        let mut x = [[0.0; 3]; 27];
+        let nn = self.kind.n_nodes();
+        self.coords(e, &mut x[..nn]);
+        let rho = self.materials[self.mat[e] as usize].density;
+        solid::mass(self.kind, &x[..nn], rho, MassLumping::Consistent, me).map_err(|det| self.inverted(e, det))
+    }
+    fn measure(&self, e: usize) -> Result<f64> {
+        self.volume(e)
+    }
+    fn density(&self, e: usize) -> f64 {
+        self.materials[self.mat[e] as usize].density
+    }
+    fn has_stress(&self) -> bool {
+        true
+    }
+    fn stress_at(&self, e: usize, ue: &[f64], xi: [f64; 3]) -> Result<[f64; 6]> {
+        let mut x = [[0.0; 3]; 27];
+        let nn = self.kind.n_nodes();
+        self.coords(e, &mut x[..nn]);
+        let mat = &self.materials[self.mat[e] as usize];
+        solid::stress_at(self.kind, &x[..nn], mat, ue, xi).map_err(|det| self.inverted(e, det))
     }
 }

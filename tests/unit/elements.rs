@@ -1,5 +1,7 @@
 //! Property sweeps over every cell kind: shape functions, quadrature, material, and the solid
-//! element kernels (stiffness, mass, lumping, volume, stress).
+//! element kernels (stiffness, mass, lumping, volume, stress); and the element sweep over every
+//! formulation through [`ElementSet`] ([`element_sweep`]): one line per element there is all
+//! a new formulation needs to be checked for symmetry, rigid-body modes and mass.
 //!
 //! Geometry is a reference cell under a fixed affine map, optionally with a seeded random
 //! perturbation of every node ("distorted"), so no test depends on axis-aligned cells.
@@ -9,10 +11,12 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 use vibrofem::Error;
-use vibrofem::element::{MassLumping, lumping, solid};
+use vibrofem::element::{ElementSet, MassLumping, lumping, solid};
 use vibrofem::fe::{quadrature, shape};
 use vibrofem::material::Material;
 use vibrofem::mesh::CellKind;
+use vibrofem::model::{BeamSet, DiscreteSet, ShellSet, SolidSet};
+use vibrofem::section::{BeamSection, ShellSection};
 
 // ---------------------------------------------------------------------------------------------
 // helpers
@@ -1008,5 +1012,213 @@ fn inverted_and_degenerate_elements_return_err() {
         let mut x = affine(kind);
         x[0][0] = f64::NAN;
         assert!(solid::stiffness(kind, &x, &m, &mut buf).is_err(), "{kind}: NaN");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// element sweep: every formulation through the ElementSet interface
+
+/// One entry of the element sweep: a name, the node coordinates of its single element, the set.
+type SweepEntry = (String, Vec<[f64; 3]>, Box<dyn ElementSet>);
+
+/// One single-element set per formulation and variant, on distorted geometry. **Adding an
+/// element: add its line here**; the tests below then check it.
+fn element_sweep() -> Vec<SweepEntry> {
+    let mut rng = Rng(SEED ^ 0xE1E5);
+    let mut out: Vec<SweepEntry> = Vec::new();
+    for kind in CellKind::SOLIDS {
+        let x = distorted(kind, &mut rng, 0.1);
+        out.push((
+            format!("solid {kind}"),
+            x.clone(),
+            Box::new(SolidSet::single(kind, x, mat())),
+        ));
+    }
+    let tri = vec![[0.1, 0.0, 0.05], [1.0, 0.2, 0.0], [0.3, 0.9, 0.1]];
+    let quad = vec![[0.0, 0.0, 0.0], [1.1, 0.1, 0.03], [1.0, 0.9, -0.02], [0.1, 1.0, 0.04]];
+    let (thin, mut offset) = (ShellSection::new(0.02), ShellSection::new(0.02));
+    offset.offset = 0.01;
+    let shell = |k, x: &Vec<[f64; 3]>, s: &ShellSection| Box::new(ShellSet::single(k, x.clone(), *s, mat()));
+    out.push(("shell tri3".into(), tri.clone(), shell(CellKind::Tri3, &tri, &thin)));
+    out.push((
+        "shell quad4 warped".into(),
+        quad.clone(),
+        shell(CellKind::Quad4, &quad, &thin),
+    ));
+    out.push((
+        "shell quad4 offset".into(),
+        quad.clone(),
+        shell(CellKind::Quad4, &quad, &offset),
+    ));
+    let mut sc = BeamSection::rectangle(0.05, 0.08);
+    sc.shear_centre = [0.01, -0.005];
+    let mut warp = sc;
+    (warp.warping, warp.cw) = (true, 1e-9);
+    let line2 = vec![[0.0, 0.0, 0.0], [0.8, 0.3, -0.2]];
+    let line3 = vec![[0.0, 0.0, 0.0], [1.0, 0.1, 0.2], [0.5, 0.15, 0.05]];
+    let o = [0.0, 0.3, 1.0];
+    let beam = |k, x: &Vec<[f64; 3]>, s: &BeamSection| Box::new(BeamSet::single(k, x.clone(), o, *s, mat()));
+    out.push(("beam line2".into(), line2.clone(), beam(CellKind::Line2, &line2, &sc)));
+    out.push((
+        "beam line2 warping".into(),
+        line2.clone(),
+        beam(CellKind::Line2, &line2, &warp),
+    ));
+    out.push((
+        "beam line3 curved".into(),
+        line3.clone(),
+        beam(CellKind::Line3, &line3, &sc),
+    ));
+    // Discrete: a spring between two coincident 3-DOF nodes and a 6-DOF point mass.
+    let mut spring = DiscreteSet::new(2, 3);
+    let mut ks = vec![0.0; 36];
+    for i in 0..3 {
+        for (a, b, v) in [(0, 0, 1.0), (1, 1, 1.0), (0, 1, -1.0), (1, 0, -1.0)] {
+            ks[(3 * a + i) * 6 + 3 * b + i] = 1e6 * v;
+        }
+    }
+    spring.push(&[0, 1], ks, vec![0.0; 36], "spring".into());
+    out.push(("spring".into(), vec![[0.2, 0.1, 0.0]; 2], Box::new(spring)));
+    let mut point = DiscreteSet::new(1, 6);
+    let mut mp = vec![0.0; 36];
+    for (i, v) in [2.0, 2.0, 2.0, 0.1, 0.2, 0.3].into_iter().enumerate() {
+        mp[i * 6 + i] = v;
+    }
+    point.push(&[0], vec![0.0; 36], mp, "point mass".into());
+    out.push(("point mass".into(), vec![[0.2, 0.1, 0.0]], Box::new(point)));
+    out
+}
+
+/// Rigid motion (translation `t`, small rotation `w` about the origin) at nodes `x`, `d`
+/// components per node; rotations go to components 3..6, a warping amplitude (7th) stays 0.
+fn rigid(x: &[[f64; 3]], d: usize, t: [f64; 3], w: [f64; 3]) -> Vec<f64> {
+    let mut u = vec![0.0; d * x.len()];
+    for (a, p) in x.iter().enumerate() {
+        let r = [
+            w[1] * p[2] - w[2] * p[1],
+            w[2] * p[0] - w[0] * p[2],
+            w[0] * p[1] - w[1] * p[0],
+        ];
+        for i in 0..3 {
+            u[d * a + i] = t[i] + r[i];
+            if d >= 6 {
+                u[d * a + 3 + i] = w[i];
+            }
+        }
+    }
+    u
+}
+
+/// Stiffness and mass (the set's own form) of the single element of `set`.
+fn set_matrices(set: &dyn ElementSet) -> (Vec<f64>, Vec<f64>) {
+    let nd = set.dofs_per_node() * set.nodes(0).len();
+    let (mut ke, mut me) = (vec![f64::NAN; nd * nd], vec![f64::NAN; nd * nd]);
+    set.matrices(0, &mut ke, &mut me, true).unwrap();
+    (ke, me)
+}
+
+#[test]
+fn sweep_sets_describe_themselves() {
+    for (name, x, set) in element_sweep() {
+        assert_eq!(set.len(), 1, "{name}");
+        assert_eq!(set.nodes(0).len(), x.len(), "{name}");
+        assert!(matches!(set.dofs_per_node(), 3 | 6 | 7), "{name}");
+        assert!(!set.group().is_empty(), "{name}");
+        assert_eq!(set.tag(0).is_some(), set.cell_kind(0).is_some(), "{name}");
+        if let Some(kind) = set.cell_kind(0) {
+            assert_eq!(kind.n_nodes(), x.len(), "{name}");
+            assert!(set.measure(0).unwrap() > 0.0, "{name}: measure");
+        } else {
+            assert_eq!(set.measure(0).unwrap(), 0.0, "{name}: measure");
+        }
+    }
+}
+
+#[test]
+fn sweep_matrices_are_symmetric_and_finite() {
+    for (name, _, set) in element_sweep() {
+        let (ke, me) = set_matrices(set.as_ref());
+        let nd = set.dofs_per_node() * set.nodes(0).len();
+        let (sk, sm) = (max_abs(&ke), max_abs(&me));
+        assert!(ke.iter().chain(&me).all(|v| v.is_finite()), "{name}");
+        for i in 0..nd {
+            for j in 0..nd {
+                assert!(
+                    (ke[i * nd + j] - ke[j * nd + i]).abs() <= 1e-12 * sk,
+                    "{name}: K({i}, {j})"
+                );
+                assert!(
+                    (me[i * nd + j] - me[j * nd + i]).abs() <= 1e-12 * sm,
+                    "{name}: M({i}, {j})"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn sweep_stiffness_annihilates_rigid_motions() {
+    for (name, x, set) in element_sweep() {
+        let (ke, _) = set_matrices(set.as_ref());
+        let d = set.dofs_per_node();
+        let size = x.iter().flatten().fold(1.0f64, |m, v| m.max(v.abs()));
+        for k in 0..6 {
+            let (mut t, mut w) = ([0.0; 3], [0.0; 3]);
+            if k < 3 {
+                t[k] = 1.0;
+            } else {
+                w[k - 3] = 1.0 / size;
+            }
+            let u = rigid(&x, d, t, w);
+            let f = matvec(&ke, &u);
+            assert!(
+                max_abs(&f) <= 1e-9 * max_abs(&ke) * max_abs(&u),
+                "{name}: rigid motion {k}: {}",
+                max_abs(&f)
+            );
+        }
+    }
+}
+
+#[test]
+fn sweep_mass_matches_measure_times_density_and_lumping_keeps_it() {
+    for (name, x, set) in element_sweep() {
+        let d = set.dofs_per_node();
+        let nd = d * x.len();
+        let mut me = vec![f64::NAN; nd * nd];
+        set.consistent_mass(0, &mut me).unwrap();
+        let mass = set.mass(0).unwrap();
+        if set.cell_kind(0).is_some() {
+            let expected = set.measure(0).unwrap() * set.density(0);
+            assert!((mass - expected).abs() <= 1e-15 * expected, "{name}");
+        }
+        // A unit translation in each direction carries the whole mass.
+        for i in 0..3 {
+            let mut t = [0.0; 3];
+            t[i] = 1.0;
+            let u = rigid(&x, d, t, [0.0; 3]);
+            let m: f64 = matvec(&me, &u).iter().zip(&u).map(|(a, b)| a * b).sum();
+            assert!(
+                (m - mass).abs() <= 1e-12 * mass.max(1e-300),
+                "{name}: direction {i}: {m} vs {mass}"
+            );
+        }
+        // The set's own form (lumped for some) has the same total.
+        let (_, ml) = set_matrices(set.as_ref());
+        let u = rigid(&x, d, [1.0, 0.0, 0.0], [0.0; 3]);
+        let m: f64 = matvec(&ml, &u).iter().zip(&u).map(|(a, b)| a * b).sum();
+        assert!((m - mass).abs() <= 1e-12 * mass.max(1e-300), "{name}: own mass form");
+    }
+}
+
+#[test]
+fn sweep_stress_is_available_where_documented() {
+    for (name, x, set) in element_sweep() {
+        let ue = vec![0.0; 3 * x.len()];
+        let r = set.stress_at(0, &ue, [0.25, 0.25, 0.25]);
+        assert_eq!(r.is_ok(), set.has_stress(), "{name}");
+        if let Ok(s) = r {
+            assert_eq!(s, [0.0; 6], "{name}: zero displacement, zero stress");
+        }
     }
 }
