@@ -12,7 +12,7 @@ Every file is MSH 4.1 ASCII, coordinates in METRES, with named physical groups. 
 those of ``make_meshes.py`` (one thread, fixed algorithms), so the output is deterministic for a
 given gmsh version (4.15.2 here): re-running the script rewrites the files byte for byte.
 
-S3 leaf spring (scenes.md S3; paper.md sections 12-14)
+S3 leaf spring (docs/spec/scenes.md S3; docs/spec/paper.md sections 12-14)
     Free length l = 169 mm along x, width b = 146 mm along y, thickness h = 9 mm along z; the box
     [0, l] x [0, b] x [0, h]. Only the free length between the clamping bars is modelled: the two
     end faces are the clamp faces (the parts of the leaf inside the clamps, and the clamp contact
@@ -27,7 +27,7 @@ S3 leaf spring (scenes.md S3; paper.md sections 12-14)
     (``Mesh.SecondOrderLinear=1``), so scikit-fem's P2 / serendipity spaces on the corner mesh are
     the same discrete problem (see validation/skfem_static.py).
 
-S5 coil spring (scenes.md S5; paper.md section 16)
+S5 coil spring (docs/spec/scenes.md S5; docs/spec/paper.md section 16)
     Wire d = 6 mm, mean coil diameter D = 32 mm, 6 active turns, pitch p = 10 mm, helix axis z.
     The centre line is the helix (R cos t, R sin t, p t / 2 pi), t in [0, 12 pi], R = D/2: from
     (R, 0, 0) to (R, 0, 0.06). It is an OCC spline interpolating 48 points per turn (its length

@@ -145,7 +145,7 @@ def all_cases() -> list[Case]:
                    [l, b / 2, h]]
     published = {"deflection_1000N_m": 1.937e-4, "stiffness_N_per_m": P_LEAF / 1.937e-4,
                  "von_mises_max_at_0p46mm_Pa": 83.22e6, "allowable_Pa": 170e6,
-                 "source": "scenes.md S3; paper.md sections 13-14 (SolidWorks FE)"}
+                 "source": "docs/spec/scenes.md S3; docs/spec/paper.md sections 13-14 (SolidWorks FE)"}
     tz = [0.0, 0.0, P_LEAF]
     cases = []
     for mesh in ("s3_leaf_hex20_10x6x1", "s3_leaf_hex20_20x12x2"):

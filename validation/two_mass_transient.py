@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference solutions of vibrofem's lumped two-mass model (paper.md §5-§8, §19; scenes.md S8).
+"""Reference solutions of vibrofem's lumped two-mass model (docs/spec/paper.md §5-§8, §19; docs/spec/scenes.md S8).
 
 Writes
   reference/two_mass_transient.json  start-up from rest under P(t) = P_em |sin wt| (the paper's
@@ -11,7 +11,7 @@ Writes
                                      variants, and the undamped natural frequencies from
                                      scipy.linalg.eigh(K, M).
 
-The Rust test `tests/dynamics.rs` compares against both files. Usage:
+The Rust test `tests/app/dynamics.rs` compares against both files. Usage:
   validation/.venv/bin/python validation/two_mass_transient.py [--check]
 --check recomputes and compares with the committed files instead of overwriting them
 (exit code 1 on a difference beyond 1e-9 relative).
@@ -29,7 +29,7 @@ from scipy.linalg import eigh
 HERE = Path(__file__).resolve().parent
 REF = HERE / "reference"
 
-# The paper's machine (scenes.md S8).
+# The paper's machine (docs/spec/scenes.md S8).
 P = dict(m1=206.7, m2=161.8, c12=3.808e7, c13=8 * 60266.0, mu1=2400.0, mu12=1830.0, mu13=230.0)
 P_EM = 8 * 370.0            # total peak pull of 8 magnets, N
 W_MAINS = 2 * pi * 50.0     # mains angular frequency, rad/s; force period 10 ms

@@ -273,7 +273,7 @@ impl Default for DampingDesign {
 }
 
 impl Design {
-    /// The paper's 100 Hz table (S3–S8 of scenes.md), with the S7 table reconstruction.
+    /// The paper's 100 Hz table (S3–S8 of docs/spec/scenes.md), with the S7 table reconstruction.
     pub fn paper() -> Design {
         Design {
             version: 1,

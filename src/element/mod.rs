@@ -27,7 +27,7 @@
 //! area/length function); `post/mass.rs` (its own moments loop, a `Part` variant, its arms in
 //! the node and moments lookups, its index loop and its link in the total); `model/build.rs`
 //! and the input (`model/spec.rs`, `app/cli.rs`, `app/scene.rs`) to bind it to a group; and
-//! `tests/elements.rs`, whose sweeps call the solid kernels by name — 8 files, of which
+//! `tests/unit/elements.rs`, whose sweeps call the solid kernels by name — 8 files, of which
 //! `model/mod.rs` and `post/mass.rs` held a `match`/loop per formulation.
 //!
 //! **After**:
@@ -35,7 +35,7 @@
 //!    `group`, `tag`, `cell_kind`, `matrices`, `consistent_mass`, `measure`, `density`; and
 //!    `spurious_inertia`, `has_stress`/`stress_at` where they apply) — one file (the existing
 //!    sets live in `model/sets.rs`; a new one can live next to its kernel);
-//! 2. its line in the sweep `element_sweep` of `tests/elements.rs`, which checks symmetry,
+//! 2. its line in the sweep `element_sweep` of `tests/unit/elements.rs`, which checks symmetry,
 //!    rigid-body modes, mass against `measure × density`, its own mass form, and the stress
 //!    availability of every entry;
 //! 3. binding it to the mesh, unchanged: the `Model` field with one line in each of

@@ -23,7 +23,7 @@
 //! old comment in `vtkWedge.h` says the opposite, and gmsh's own VTK export swaps the linear
 //! wedge's corners; VTK 9's `vtkCellValidator` flags such swapped wedges as wrongly oriented
 //! and `vtkCellSizeFilter` gives them negative volumes, while the unswapped ones pass.)
-//! The tables are checked in `tests/mesh_io.rs` against VTK's parametric coordinates of each
+//! The tables are checked in `tests/unit/mesh_io.rs` against VTK's parametric coordinates of each
 //! cell type.
 
 use std::fmt::Write as _;

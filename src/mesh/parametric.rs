@@ -471,7 +471,7 @@ impl Default for SandwichParams {
 }
 
 impl SandwichParams {
-    /// The S7 reconstruction (scenes.md): 1200 × 600 × 25 mm top plate, 1200 × 400 × 8 mm
+    /// The S7 reconstruction (docs/spec/scenes.md): 1200 × 600 × 25 mm top plate, 1200 × 400 × 8 mm
     /// bottom plate, three longitudinal webs 100 mm high (clear) and 4.5 mm thick at
     /// `y = −150, 0, 150` mm, no transverse webs; 25 mm `Quad4` shells.
     pub fn paper() -> Self {

@@ -1,6 +1,6 @@
-//! Lumped two-mass model of the vibratory table (issue 5, paper.md §5–§8, §16–§19, scenes.md S8).
+//! Lumped two-mass model of the vibratory table (issue 5, docs/spec/paper.md §5–§8, §16–§19, docs/spec/scenes.md S8).
 //!
-//! Reference values are the paper's (paper.md §22 table) with the recomputed values of paper.md's
+//! Reference values are the paper's (docs/spec/paper.md §22 table) with the recomputed values of docs/spec/paper.md's
 //! snippets, closed forms, a dense eigen solve, a direct complex solve, analytic ODE solutions,
 //! harmonic balance, and scipy (validation/two_mass_transient.py → validation/reference/).
 
@@ -150,7 +150,7 @@ fn steady_state_vs_direct_solve() {
             }
         }
     }
-    // The k-terms as written in paper.md §6.
+    // The k-terms as written in docs/spec/paper.md §6.
     let p = TwoMass::paper();
     let (m1, m2, c12, c13, mu1, mu12, mu13) = (p.m1, p.m2, p.c12, p.c13, p.mu1, p.mu12, p.mu13);
     let w = OMEGA;
@@ -247,7 +247,7 @@ fn undamped_limits_of_dynamic_factors() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The paper's numbers (paper.md §22)
+// The paper's numbers (docs/spec/paper.md §22)
 
 /// c12 = 3.808e7 N/m from z = 0.97 (m1 206.7, m2 161.8, 100 Hz); m_red = 90.75 kg; the inverse.
 /// The paper prints 4 significant digits: 1e-4 relative.
@@ -267,7 +267,7 @@ fn paper_tuning_c12_from_z() {
     let h = leaf_thickness_for_stiffness(c12, 8, 2.1e11, 0.146, 0.169, 0.75).unwrap();
     assert!(
         (h * 1e3 - 10.00).abs() < 0.005,
-        "h = {} mm (paper.md §12: 10.00 mm)",
+        "h = {} mm (docs/spec/paper.md §12: 10.00 mm)",
         h * 1e3
     );
     let h1 = leaf_thickness_for_stiffness(c12, 8, 2.1e11, 0.146, 0.169, 1.0).unwrap();
@@ -344,7 +344,7 @@ fn fourier_coefficients_numerical() {
 }
 
 /// X1, X2, γ1, γ2 at 100 Hz, F = 1256 N with μ1 2400, μ12 1830, μ13 230, c13 = 8 × 60266
-/// (paper.md §7 snippet: eq. (1) 0.1946 / 0.2505 mm, 12.64 / 12.74; as printed 0.2002 / 0.2543 mm,
+/// (docs/spec/paper.md §7 snippet: eq. (1) 0.1946 / 0.2505 mm, 12.64 / 12.74; as printed 0.2002 / 0.2543 mm,
 /// 13.01 / 12.93). Recomputed values are printed to 4 digits: tolerance half a unit of the last digit.
 #[test]
 fn paper_steady_state_at_100hz() {
@@ -368,7 +368,7 @@ fn paper_steady_state_at_100hz() {
     assert!(rel(s.amp2() / s.amp1(), 1.287) < 1e-3);
 }
 
-/// Main AFC peak 103.25 Hz with X1 = 0.358 mm, X2 = 0.461 mm (paper.md §7 snippet on a 0.01 Hz grid,
+/// Main AFC peak 103.25 Hz with X1 = 0.358 mm, X2 = 0.461 mm (docs/spec/paper.md §7 snippet on a 0.01 Hz grid,
 /// so ±0.005 Hz); the low peak is the isolator mode near 5.8 Hz.
 #[test]
 fn paper_resonance_peaks() {
@@ -637,7 +637,7 @@ fn transient_late_time_equals_harmonic_balance() {
     assert!(sum.settling_time2.is_some());
 }
 
-/// The paper's 0.3–0.4 s window (paper.md §19 snippet with scipy): x1 half p-p 0.1978 mm about
+/// The paper's 0.3–0.4 s window (docs/spec/paper.md §19 snippet with scipy): x1 half p-p 0.1978 mm about
 /// −0.0453 mm, x2 0.2537 mm about +0.0042 mm, relative mean −0.0496 mm (the 5.8 Hz isolator mode
 /// has not died out yet, hence x2's nonzero mean). The snippet used rtol 1e-8 and 20 001 samples:
 /// 4 printed digits, tolerance 1e-4 mm.

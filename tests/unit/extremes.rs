@@ -710,7 +710,7 @@ fn plate(n: usize, t: f64, shift_hz: Option<f64>) -> vibrofem::Result<(f64, Moda
 #[test]
 fn shell_at_thickness_ratio_1e_4_does_not_lock() {
     // Kirchhoff: the first elastic mode of a free square plate (ν = 0.3) has λ = ω a²√(ρh/D)
-    // = 13.468 (Leissa 1969; scenes.md rounds to 13.49). At h/a = 1e-4 shear deformation is
+    // = 13.468 (Leissa 1969; docs/spec/scenes.md rounds to 13.49). At h/a = 1e-4 shear deformation is
     // ~1e-8: Mindlin = Kirchhoff. A shear-locking element would be stiffer by orders of
     // magnitude ((a/(n h))² ~ 4e6 here); MITC4 converges at O(1/n²): measured λ = 13.565,
     // 13.493, 13.474 on 8², 16², 32² (+0.72 %, +0.18 %, +0.05 %; Richardson 13.468).

@@ -689,7 +689,7 @@ fn plate_f7(a: f64, b: f64, t: f64, n: [usize; 2], nu: f64) -> f64 {
 
 #[test]
 fn s1_plate_as_shell_matches_the_converged_solid() {
-    // S1 (scenes.md), 300 × 300 × 20 mm free–free, mode 7. Converged hex20 solids (README):
+    // S1 (docs/spec/scenes.md), 300 × 300 × 20 mm free–free, mode 7. Converged hex20 solids (README):
     // 720.43 Hz at ν = 0.3, 725.59 Hz at ν = 0.28. MITC4 converges from above, O(Δ²):
     // measured 10 × 10 +1.57 %, 20 × 20 +0.59 %, 30 × 30 +0.29 %, 60 × 60 +0.06 % (both ν):
     // a Mindlin plate reproduces the 3D answer at h/a = 1/15. 30 × 30 (5.8k DOFs, a quarter
@@ -771,7 +771,7 @@ fn s5_coil_as_beam_helix_matches_the_spring_formula() {
         rel(k2, k3) > 0.0 && rel(k2, k3) < 6e-3,
         "line2 48/turn: {k2} vs line3 {k3}"
     );
-    // The published FE deflection 9.96 mm at 600 N (scenes.md) is 3.6 % above the beam
+    // The published FE deflection 9.96 mm at 600 N (docs/spec/scenes.md) is 3.6 % above the beam
     // helix's 9.60 mm: the published model's end coils are not reproduced (its value
     // matches the formula at i = 6.3 active turns, 9.93 mm).
     let delta = 600.0 / k3;

@@ -1,4 +1,4 @@
-//! The single-stroke electromagnetic drive (paper.md §8, eq. (8)–(15)).
+//! The single-stroke electromagnetic drive (docs/spec/paper.md §8, eq. (8)–(15)).
 //!
 //! Each magnet is fed from the mains at ω (rad/s) and only attracts, so the total pull of the
 //! magnets is the rectified sine

@@ -1,4 +1,4 @@
-//! Vibration isolation of the table (paper.md §16, eq. (17)–(19)): isolator stiffness from a target
+//! Vibration isolation of the table (docs/spec/paper.md §16, eq. (17)–(19)): isolator stiffness from a target
 //! isolation frequency, transmissibility to the floor, and the helical coil springs that make up
 //! the isolators (turns, Wahl factor, shear stress).
 //!
@@ -133,7 +133,7 @@ impl CoilSpring {
         Ok(s)
     }
 
-    /// The paper's isolator (scenes.md S5): d = 6 mm, D = 32 mm, 6 turns, G = 7.7e10 Pa.
+    /// The paper's isolator (docs/spec/scenes.md S5): d = 6 mm, D = 32 mm, 6 turns, G = 7.7e10 Pa.
     pub fn paper() -> Self {
         CoilSpring {
             wire_d: 0.006,

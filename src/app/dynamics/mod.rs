@@ -1,4 +1,4 @@
-//! Lumped dynamics of the two-mass electromagnetic vibratory table (paper.md §5–§8, §16–§19).
+//! Lumped dynamics of the two-mass electromagnetic vibratory table (docs/spec/paper.md §5–§8, §16–§19).
 //!
 //! - [`two_mass`]: the model of eq. (1) ([`TwoMass`]), steady state by eq. (2)–(4), dynamic factors
 //!   eq. (7), amplitude–frequency and phase curves, resonance peaks, closed-form natural frequencies,

@@ -109,7 +109,7 @@ fn check_leaf(n_leaves: usize, e: f64, b: f64, l: f64, k_clamp: f64) -> Result<(
 /// length l (m) and clamping coefficient k (0 < k ≤ 1; the paper takes 0.75).
 ///
 /// Paper: c12 = 3.808e7, l = 0.169, b = 0.146, E = 2.1e11, i = 8: 10.00 mm with k = 0.75, 9.08 mm
-/// with k = 1 (the paper states 9 mm; see paper.md §12).
+/// with k = 1 (the paper states 9 mm; see docs/spec/paper.md §12).
 pub fn leaf_thickness_for_stiffness(c12: f64, n_leaves: usize, e: f64, b: f64, l: f64, k_clamp: f64) -> Result<f64> {
     pos("c12 (leaf-spring stiffness)", c12, "N/m")?;
     check_leaf(n_leaves, e, b, l, k_clamp)?;

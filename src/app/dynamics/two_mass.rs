@@ -1,4 +1,4 @@
-//! The lumped two-mass model of the vibratory table (paper.md §5–§7, eq. (1)–(7)).
+//! The lumped two-mass model of the vibratory table (docs/spec/paper.md §5–§7, eq. (1)–(7)).
 //!
 //! ```text
 //! m1·x1'' + c12·(x1 − x2) + μ1·x1' + μ12·(x1' − x2')           = −F·sin Ωt
@@ -190,7 +190,7 @@ impl TwoMass {
         Ok(m)
     }
 
-    /// The paper's machine (scenes.md S8): m1 = 206.7 kg, m2 = 161.8 kg, c12 = 3.808e7 N/m,
+    /// The paper's machine (docs/spec/scenes.md S8): m1 = 206.7 kg, m2 = 161.8 kg, c12 = 3.808e7 N/m,
     /// c13 = 8 × 60 266 N/m, μ1 = 2400, μ12 = 1830, μ13 = 230 N·s/m.
     pub fn paper() -> Self {
         TwoMass {
