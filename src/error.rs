@@ -78,7 +78,7 @@ pub enum Error {
     },
     /// An error in an input file at a known place (a scene, design or study file): the file,
     /// the line and the key where known.
-    #[error("{file}{}{}: {msg}", line.map(|l| format!(", line {l}")).unwrap_or_default(), key.as_ref().map(|k| format!(", key '{k}'")).unwrap_or_default())]
+    #[error("{}{msg}", input_prefix(file, *line, key.as_deref()))]
     Input {
         /// The file.
         file: String,
@@ -122,6 +122,25 @@ pub enum Error {
         /// What happened.
         msg: String,
     },
+}
+
+/// `file, line L, key 'k': ` with the parts that are known (nothing when none is).
+fn input_prefix(file: &str, line: Option<usize>, key: Option<&str>) -> String {
+    let mut parts = Vec::new();
+    if !file.is_empty() {
+        parts.push(file.to_string());
+    }
+    if let Some(l) = line {
+        parts.push(format!("line {l}"));
+    }
+    if let Some(k) = key {
+        parts.push(format!("key '{k}'"));
+    }
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!("{}: ", parts.join(", "))
+    }
 }
 
 impl Error {

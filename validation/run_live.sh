@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Live validation of vibrofem against scikit-fem (what CI runs after `cargo test`):
-#   1. set up the Python tools if validation/.venv is missing (validation/setup.sh);
+#   1. resolve the Python interpreter (validation/python.sh; runs validation/setup.sh if needed);
 #   2. run the convention self-tests (skfem_modes.py --selftest, ~10 s), then recompute every
 #      scikit-fem reference from the committed meshes into a temporary folder
 #      and check it equals the committed validation/reference/*.json (elastic frequencies to
@@ -16,11 +16,7 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 BIN="${VIBROFEM:-target/release/vibrofem}"
 
-if [ ! -x validation/.venv/bin/python ] && ! python3 -c "import gmsh, skfem" >/dev/null 2>&1; then
-    bash validation/setup.sh
-fi
-PY=validation/.venv/bin/python
-[ -x "$PY" ] || PY=python3
+PY="$(bash validation/python.sh)"   # the one interpreter resolver (sets up the tools if missing)
 
 if [ "${SKIP_REGEN:-0}" != 1 ]; then
     TMP="$(mktemp -d)"

@@ -294,26 +294,11 @@ impl Design {
 
     /// Read a design TOML file (fields as [`Design`]; missing ones take the paper's values).
     pub fn from_toml(path: &std::path::Path) -> Result<Design> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let d: Design = toml::from_str(&text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-            Error::InvalidInput(format!(
-                "{}{}: {}",
-                path.display(),
-                line.map(|l| format!(", line {l}")).unwrap_or_default(),
-                e.message()
-            ))
-        })?;
-        if d.version != 1 {
-            return Err(Error::InvalidInput(format!(
-                "{}: unsupported design version {}",
-                path.display(),
-                d.version
-            )));
-        }
-        d.validate()?;
+        use crate::app::toml_file;
+        let text = toml_file::read(path)?;
+        let d: Design = toml_file::parse(path, &text)?;
+        toml_file::check_version(path, &text, "design", d.version as i64)?;
+        d.validate().map_err(|e| toml_file::locate(path, &text, e))?;
         Ok(d)
     }
 
@@ -323,9 +308,10 @@ impl Design {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(Error::InvalidInput(format!(
-                    "design: '{name}' must be positive, got {v}"
-                )))
+                Err(crate::app::toml_file::bad_value(
+                    name,
+                    format!("design: '{name}' must be positive, got {v}"),
+                ))
             }
         };
         pos("excitation_hz", self.excitation_hz)?;
@@ -342,22 +328,31 @@ impl Design {
         pos("drive.pull", self.drive.pull)?;
         pos("drive.efficiency", self.drive.efficiency)?;
         if self.leaf.divisions.contains(&0) || self.leaf.divisions.iter().product::<usize>() > 200_000 {
-            return Err(Error::InvalidInput(format!(
-                "design: 'leaf.divisions' must be at least 1 each and at most 200 000 cells in all, got {:?}",
-                self.leaf.divisions
-            )));
+            return Err(crate::app::toml_file::bad_value(
+                "leaf.divisions",
+                format!(
+                    "design: 'leaf.divisions' must be at least 1 each and at most 200 000 cells in all, got {:?}",
+                    self.leaf.divisions
+                ),
+            ));
         }
         if !(self.table.element_size >= 0.002 && self.table.element_size.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "design: 'table.element_size' must be at least 0.002 m, got {}",
-                self.table.element_size
-            )));
+            return Err(crate::app::toml_file::bad_value(
+                "table.element_size",
+                format!(
+                    "design: 'table.element_size' must be at least 0.002 m, got {}",
+                    self.table.element_size
+                ),
+            ));
         }
         if self.coil.elements_per_turn < 3 || self.coil.elements_per_turn > 1000 {
-            return Err(Error::InvalidInput(format!(
-                "design: 'coil.elements_per_turn' must be between 3 and 1000, got {}",
-                self.coil.elements_per_turn
-            )));
+            return Err(crate::app::toml_file::bad_value(
+                "coil.elements_per_turn",
+                format!(
+                    "design: 'coil.elements_per_turn' must be between 3 and 1000, got {}",
+                    self.coil.elements_per_turn
+                ),
+            ));
         }
         if self.leaf.count == 0 || self.coil.count == 0 || self.drive.magnets == 0 {
             return Err(Error::InvalidInput(
@@ -368,10 +363,10 @@ impl Design {
             return Err(Error::InvalidInput("design: masses must not be negative".into()));
         }
         if !["none", "leaf", "mass"].contains(&self.tune.as_str()) {
-            return Err(Error::InvalidInput(format!(
-                "design: 'tune' must be none, leaf or mass, got '{}'",
-                self.tune
-            )));
+            return Err(crate::app::toml_file::bad_value(
+                "tune",
+                format!("design: 'tune' must be none, leaf or mass, got '{}'", self.tune),
+            ));
         }
         Ok(())
     }

@@ -10,3 +10,4 @@ pub mod dynamics;
 pub mod report;
 pub mod scene;
 pub mod sweep;
+pub mod toml_file;

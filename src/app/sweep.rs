@@ -384,14 +384,8 @@ impl Study {
                 check: CheckSpec::default(),
             });
         }
-        let raw: RawStudyFile = toml::from_str(&text).map_err(|e| invalid(format!("{}: {e}", path.display())))?;
-        if raw.study.version != 1 {
-            return Err(invalid(format!(
-                "{}: [study] version = {} is not supported (use 1)",
-                path.display(),
-                raw.study.version
-            )));
-        }
+        let raw: RawStudyFile = crate::app::toml_file::parse(path, &text)?;
+        crate::app::toml_file::check_version(path, &text, "[study]", raw.study.version)?;
         let material = match raw.material {
             None => Material::steel(),
             Some(m) => Material {

@@ -640,3 +640,116 @@ pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
     }
     notes
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::spec::CouplingSpec;
+
+    fn bar() -> Mesh {
+        crate::mesh::generate::box_mesh(CellKind::Hex8, [2.0, 1.0, 1.0], [2, 1, 1])
+    }
+
+    #[test]
+    fn radial_orientation_is_the_offset_from_the_axis() {
+        let o = Orientation::Radial {
+            centre: [0.0, 0.0, 0.0],
+            axis: [0.0, 0.0, 2.0],
+        };
+        assert_eq!(beam_orientation(o, [1.0, 0.5, 5.0]), [1.0, 0.5, 0.0]);
+        assert_eq!(
+            beam_orientation(Orientation::Vector([0.0, 1.0, 0.0]), [9.0; 3]),
+            [0.0, 1.0, 0.0]
+        );
+    }
+
+    #[test]
+    fn reference_nodes_sit_at_the_centroid_after_the_mesh_nodes() {
+        let mesh = bar();
+        let spec = ModelSpec {
+            couplings: vec![CouplingSpec {
+                group: "xmax".into(),
+                guided: Some(2),
+            }],
+            ..Default::default()
+        };
+        let (refs, coupled) = reference_nodes(&mesh, &spec).unwrap();
+        assert_eq!(refs.len(), 1);
+        assert_eq!(refs[0].node, mesh.n_nodes());
+        assert_eq!(refs[0].position, [2.0, 0.5, 0.5]);
+        assert_eq!(coupled[0].len(), 4);
+        let twice = ModelSpec {
+            couplings: vec![spec.couplings[0].clone(), spec.couplings[0].clone()],
+            ..Default::default()
+        };
+        assert!(
+            reference_nodes(&mesh, &twice)
+                .unwrap_err()
+                .to_string()
+                .contains("coupled twice")
+        );
+    }
+
+    #[test]
+    fn solids_activate_translations_and_references_all_six() {
+        let mesh = bar();
+        let spec = ModelSpec::default();
+        let (materials, gm) = materials(&mesh, &spec).unwrap();
+        let nodes: Nodes = Arc::new(mesh.nodes.clone());
+        let solids = solid_parts(&mesh, &spec, &materials, &gm, &nodes).unwrap();
+        assert_eq!(solids.len(), 1);
+        assert_eq!(solids[0].tags.len(), 2);
+        let refs = [ReferenceNode {
+            group: "g".into(),
+            node: mesh.n_nodes(),
+            position: [0.0; 3],
+            slaves: 0,
+            guided: None,
+        }];
+        let active = active_components(mesh.n_nodes() + 1, &solids, &[], &[], &[], &refs);
+        assert!(active[..mesh.n_nodes()].iter().all(|&m| m == TRANSLATIONS));
+        assert_eq!(active[mesh.n_nodes()], ALL6);
+    }
+
+    #[test]
+    fn fixes_report_the_holding_fix_and_refuse_empty_ones() {
+        let mesh = bar();
+        let spec = ModelSpec {
+            fixes: vec![("xmin".into(), TRANSLATIONS)],
+            ..Default::default()
+        };
+        let active = vec![TRANSLATIONS; mesh.n_nodes()];
+        let mut cons = Constraints::new(mesh.n_nodes());
+        let by = fixes(&mesh, &spec, &active, &mut cons).unwrap();
+        assert_eq!(by.iter().filter(|b| b.is_some()).count(), 4);
+        assert_eq!(cons.fixed.iter().filter(|&&m| m == TRANSLATIONS).count(), 4);
+        // Rotations on a solid's nodes: nothing to fix.
+        let rot = ModelSpec {
+            fixes: vec![("xmin".into(), ALL6 & !TRANSLATIONS)],
+            ..Default::default()
+        };
+        let mut cons = Constraints::new(mesh.n_nodes());
+        assert!(fixes(&mesh, &rot, &active, &mut cons).is_err());
+    }
+
+    #[test]
+    fn lints_warn_of_locking_and_orphans() {
+        let mesh = bar();
+        let spec = ModelSpec {
+            material: Material {
+                poisson: 0.495,
+                ..Material::steel()
+            },
+            ..Default::default()
+        };
+        let (materials, gm) = materials(&mesh, &spec).unwrap();
+        let nodes: Nodes = Arc::new(mesh.nodes.clone());
+        let solids = solid_parts(&mesh, &spec, &materials, &gm, &nodes).unwrap();
+        let notes = lints(&solids, 3);
+        assert!(
+            notes[0].contains("nearly incompressible") && notes[0].contains("hex8"),
+            "{notes:?}"
+        );
+        assert!(notes[1].contains("3 nodes"), "{notes:?}");
+    }
+}

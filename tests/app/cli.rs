@@ -203,3 +203,23 @@ fn bad_options_are_input_errors() {
     expect_error(&["modes", &plate(), "--mass", "heavy"], 1, &["heavy"]);
     expect_error(&["modes", &plate(), "--fix", "xmin:uq"], 1, &["uq"]);
 }
+
+#[test]
+fn one_mesh_grammar_on_the_command_line() {
+    // The scene generators are mesh arguments too: the sandwich table is shells, so without
+    // --shell the model is refused for what it is, not as a missing file.
+    let (code, _, err) = run(&["modes", "sandwich:paper,0.1"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(!err.contains("No such file"), "{err}");
+    assert!(err.contains("--shell"), "{err}");
+    let (code, out, err) = run(&["mesh-info", "ibeam-line:1.0,10"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("beam"), "{out}");
+    // An unknown generator lists the known ones.
+    let (code, _, err) = run(&["modes", "disc:0.3,0.01"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("unknown generator") && err.contains("sandwich:") && err.contains("ibeam-solid:"),
+        "{err}"
+    );
+}

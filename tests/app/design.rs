@@ -77,10 +77,19 @@ fn design_files_are_strict() {
     );
     let e = Design::from_toml(&write("neg.toml", "version = 1\n[masses]\nreactive = -5.0\n")).unwrap_err();
     assert!(e.to_string().contains("masses.reactive"), "{e}");
+    // A value error found after parsing names the file, the line and the key like a syntax error.
+    assert!(e.to_string().contains("neg.toml, line 3, key 'masses.reactive'"), "{e}");
+    assert!(matches!(e, vibrofem::Error::Input { line: Some(3), .. }), "{e:?}");
     let e = Design::from_toml(&write("z.toml", "version = 1\ntarget_detuning = 0.0\n")).unwrap_err();
     assert!(e.to_string().contains("target_detuning"), "{e}");
     let e = Design::from_toml(&write("v.toml", "version = 7\n")).unwrap_err();
     assert!(e.to_string().contains("version"), "{e}");
+    // The same versioning message as scene and study files.
+    assert!(
+        e.to_string()
+            .contains("line 1, key 'version': unsupported design version 7 (this vibrofem reads version 1)"),
+        "{e}"
+    );
     let ok = Design::from_toml(&write(
         "ok.toml",
         "version = 1\nname = \"thicker leaves\"\n[leaf]\nthickness = 0.01\n",
