@@ -19,6 +19,7 @@
 //! Which mass carries the isolators is in doubt in the paper (printed k-terms against eq. (1)):
 //! see [`KTerms`].
 
+pub mod autobalancer;
 pub mod crank;
 pub mod electromagnet;
 pub mod isolation;
