@@ -20,6 +20,7 @@
 //! see [`KTerms`].
 
 pub mod autobalancer;
+pub mod balancer_data;
 pub mod crank;
 pub mod electromagnet;
 pub mod isolation;
