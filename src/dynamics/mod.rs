@@ -24,6 +24,7 @@ pub mod balancer_data;
 pub mod crank;
 pub mod electromagnet;
 pub mod isolation;
+pub mod machine_files;
 pub mod ode;
 pub mod plot;
 pub mod transient;
