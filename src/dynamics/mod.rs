@@ -25,6 +25,7 @@ pub mod crank;
 pub mod electromagnet;
 pub mod isolation;
 pub mod machine_files;
+pub mod machine_plot;
 pub mod ode;
 pub mod plot;
 pub mod transient;
