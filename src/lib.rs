@@ -23,6 +23,7 @@ pub mod converge;
 pub mod design;
 pub mod dof;
 pub mod dynamics;
+pub mod machines_cli;
 pub mod model;
 pub mod ordering;
 pub mod post;
