@@ -4,15 +4,14 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
-use std::sync::Arc;
-use vibrofem::assembly::{NodeGraph, assemble, dof_pattern};
+use vibrofem::assembly::assemble;
 use vibrofem::element::{MassLumping, solid};
+use vibrofem::linalg::eigen::{EigenParams, Target, solve};
+use vibrofem::linalg::factor::Factor;
 use vibrofem::material::Material;
 use vibrofem::mesh::{CellKind, generate::box_mesh};
 use vibrofem::model::{Model, ModelSpec};
-use vibrofem::ordering::nested_dissection;
-use vibrofem::solve::eigen::{EigenParams, Target, solve};
-use vibrofem::solve::factor::{Factor, SymbolicFactor};
+use vibrofem::system::{System, SystemOptions};
 
 fn element_kernels(c: &mut Criterion) {
     let mat = Material::steel();
@@ -40,41 +39,35 @@ fn element_kernels(c: &mut Criterion) {
 fn assembly_and_solve(c: &mut Criterion) {
     // S1 plate, tet10, ~20k DOFs.
     let mesh = box_mesh(CellKind::Tet10, [0.3, 0.3, 0.02], [12, 12, 2]);
-    let model = Model::build(&mesh, &ModelSpec::default(), "bench").unwrap();
-    let sets = model.element_sets();
     let mut g = c.benchmark_group("plate tet10 12x12x2");
     g.sample_size(10);
-    g.bench_function("pattern", |b| {
+    g.bench_function("model build", |b| {
+        b.iter(|| Model::build(&mesh, &ModelSpec::default(), "bench").unwrap())
+    });
+    let opts = SystemOptions::default();
+    g.bench_function("system build (graph, pattern, K and M, METIS, symbolic)", |b| {
         b.iter(|| {
-            let graph = NodeGraph::build(mesh.n_nodes(), &sets, Some(&model.dofs));
-            dof_pattern(&graph, &model.dofs)
+            let model = Model::build(&mesh, &ModelSpec::default(), "bench").unwrap();
+            System::build(model, &opts, "bench").unwrap()
         })
     });
-    let graph = NodeGraph::build(mesh.n_nodes(), &sets, Some(&model.dofs));
-    let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
-    g.bench_function("assemble K and M", |b| {
-        b.iter(|| assemble(pattern.clone(), &model.dofs, &sets, true).unwrap())
+    let model = Model::build(&mesh, &ModelSpec::default(), "bench").unwrap();
+    let sys = System::build(model, &opts, "bench").unwrap();
+    g.bench_function("assemble K and M (pattern given)", |b| {
+        let sets = sys.model().element_sets();
+        b.iter(|| assemble(sys.pattern().clone(), sys.dofs(), &sets, true).unwrap())
     });
-    let km = assemble(pattern.clone(), &model.dofs, &sets, true).unwrap();
-    g.bench_function("METIS ordering + symbolic", |b| {
-        b.iter(|| {
-            let (f, i) = nested_dissection(&graph, &model.dofs).unwrap();
-            SymbolicFactor::new(&pattern, Some((&f, &i))).unwrap()
-        })
+    let (k, m) = (sys.k(), sys.m().unwrap());
+    let a = k.sub_scaled(-1e4, m);
+    g.bench_function("numeric LDLT", |b| {
+        b.iter(|| Factor::new(sys.symbolic().clone(), &a).unwrap())
     });
-    g.bench_function("AMD ordering + symbolic", |b| {
-        b.iter(|| SymbolicFactor::new(&pattern, None).unwrap())
-    });
-    let (f, i) = nested_dissection(&graph, &model.dofs).unwrap();
-    let sym = Arc::new(SymbolicFactor::new(&pattern, Some((&f, &i))).unwrap());
-    let a = km.k.sub_scaled(-1e4, &km.m);
-    g.bench_function("numeric LDLT", |b| b.iter(|| Factor::new(sym.clone(), &a).unwrap()));
     g.bench_function("eigen 18 lowest (with verification)", |b| {
         b.iter(|| {
             solve(
-                &km.k,
-                &km.m,
-                &sym,
+                k,
+                m,
+                sys.symbolic(),
                 &EigenParams {
                     target: Target::Nearest(18),
                     ..Default::default()

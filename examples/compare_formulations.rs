@@ -11,7 +11,8 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use vibrofem::analysis::{ModalOptions, ModalRun, ModalTarget, run_modal};
+use vibrofem::analysis::modal::{ModalOptions, ModalRun, ModalTarget, run_modal};
+use vibrofem::analysis::statics::{Load, StaticOptions, run_static};
 use vibrofem::dof::ALL6;
 use vibrofem::material::Material;
 use vibrofem::mesh::generate::box_mesh;
@@ -23,7 +24,6 @@ use vibrofem::mesh::{CellBlock, CellKind, CellRef, Group, Mesh};
 use vibrofem::model::{BeamPart, CouplingSpec, Model, ModelSpec, Orientation, ShellPart};
 use vibrofem::post::mass::group_mass_properties;
 use vibrofem::section::{BeamSection, ShellSection};
-use vibrofem::statics::{Load, StaticOptions, run_static};
 
 type Res<T> = Result<T, Box<dyn std::error::Error>>;
 
@@ -555,9 +555,9 @@ fn sandwich_solid_graded(p: &SandwichParams, hx: f64, hy: f64, hz: f64) -> Res<M
 }
 
 /// The S7 shell model with the webs at their real (clear) height, tied to the plates by rigid
-/// couplings (`vibrofem::design::sandwich_clear_webs`, the design chain's table model).
+/// couplings (`vibrofem::app::design::sandwich_clear_webs`, the design chain's table model).
 fn sandwich_shell_clear_webs(p: &SandwichParams) -> Res<(Mesh, ModelSpec)> {
-    let (mesh, couplings) = vibrofem::design::sandwich_clear_webs(p)?;
+    let (mesh, couplings) = vibrofem::app::design::sandwich_clear_webs(p)?;
     let spec = ModelSpec {
         shells: shell_parts(&p.thicknesses(), |_| 0.0),
         couplings,

@@ -3,33 +3,17 @@
 //! The pattern is built once from the node graph (two nodes are adjacent when they share an
 //! element) and the DOF map. Element matrices are computed in parallel (rayon) in chunks,
 //! and scattered into the global values serially in element order, so the sums never
-//! depend on thread scheduling: results are bit-identical for any thread count.
+//! depend on thread scheduling: results are bit-identical for any thread count. The element
+//! matrices of a chunk go to one buffer reused for every chunk: nothing is allocated per
+//! element.
 
 use crate::Result;
 use crate::dof::DofMap;
-use crate::sparse::{Pattern, SymMatrix};
+use crate::linalg::sparse::{Pattern, SymMatrix};
 use rayon::prelude::*;
 use std::sync::Arc;
 
-/// A set of elements that assembly can iterate over.
-///
-/// Each element has a node list and writes dense, row-major element matrices of size
-/// `(ndpn·n)²`, node-major: local DOF `a·ndpn + c` is component `c` of its `a`-th node.
-pub trait ElementSet: Sync {
-    /// Number of elements.
-    fn len(&self) -> usize;
-    /// True if there are no elements.
-    fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-    /// Dense node indices of element `e`.
-    fn nodes(&self, e: usize) -> &[u32];
-    /// Components per node this set's elements use (3: translations; 6: with rotations).
-    fn dofs_per_node(&self) -> usize;
-    /// Element stiffness `ke` and mass `me` (each `(ndpn·n)²`, row-major). `me` may be left
-    /// zero when `want_mass` is false.
-    fn matrices(&self, e: usize, ke: &mut [f64], me: &mut [f64], want_mass: bool) -> Result<()>;
-}
+pub use crate::element::ElementSet;
 
 /// Node adjacency graph in CSR form (each node is adjacent to itself).
 #[derive(Clone, Debug)]
@@ -169,22 +153,47 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
     let mut k = SymMatrix::zeros(pattern.clone());
     let mut m = SymMatrix::zeros(pattern.clone());
     const CHUNK: usize = 2048;
+    // Element matrices of one chunk, back to back (element e at offs[e - start]); reused.
+    let mut kbuf: Vec<f64> = Vec::new();
+    let mut mbuf: Vec<f64> = Vec::new();
+    let mut offs: Vec<usize> = Vec::with_capacity(CHUNK + 1);
     for set in sets {
         let ndpn = set.dofs_per_node();
         for start in (0..set.len()).step_by(CHUNK) {
             let end = (start + CHUNK).min(set.len());
-            let mats: Vec<(Vec<f64>, Vec<f64>)> = (start..end)
+            offs.clear();
+            offs.push(0);
+            for e in start..end {
+                let nd = ndpn * set.nodes(e).len();
+                offs.push(offs[offs.len() - 1] + nd * nd);
+            }
+            let total = offs[offs.len() - 1];
+            kbuf.clear();
+            kbuf.resize(total, 0.0);
+            mbuf.clear();
+            mbuf.resize(if want_mass { total } else { 0 }, 0.0);
+            // Split the buffers into one disjoint slice per element and fill them in parallel.
+            let mut kparts: Vec<&mut [f64]> = Vec::with_capacity(end - start);
+            let mut mparts: Vec<&mut [f64]> = Vec::with_capacity(end - start);
+            let (mut krest, mut mrest) = (kbuf.as_mut_slice(), mbuf.as_mut_slice());
+            for w in offs.windows(2) {
+                let len = w[1] - w[0];
+                let (kh, kt) = krest.split_at_mut(len);
+                kparts.push(kh);
+                krest = kt;
+                let (mh, mt) = mrest.split_at_mut(if want_mass { len } else { 0 });
+                mparts.push(mh);
+                mrest = mt;
+            }
+            kparts
                 .into_par_iter()
-                .map(|e| {
-                    let nd = ndpn * set.nodes(e).len();
-                    let mut ke = vec![0.0; nd * nd];
-                    let mut me = vec![0.0; if want_mass { nd * nd } else { 0 }];
-                    set.matrices(e, &mut ke, &mut me, want_mass)?;
-                    Ok((ke, me))
-                })
-                .collect::<Result<_>>()?;
-            for (off, (ke, me)) in mats.iter().enumerate() {
+                .zip(mparts)
+                .enumerate()
+                .try_for_each(|(off, (ke, me))| set.matrices(start + off, ke, me, want_mass))?;
+            for (off, w) in offs.windows(2).enumerate() {
                 let nodes = set.nodes(start + off);
+                let ke = &kbuf[w[0]..w[1]];
+                let me = if want_mass { &mbuf[w[0]..w[1]] } else { &[][..] };
                 if nodes.iter().any(|&a| dofs.special[a as usize]) {
                     scatter_general(&pattern, dofs, nodes, ndpn, ke, &mut k.values);
                     if want_mass {

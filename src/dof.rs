@@ -49,9 +49,9 @@ pub struct Constraints {
     /// Fixed components per node.
     pub fixed: Vec<DofMask>,
     /// Prescribed values of fixed raw DOFs (absent: 0).
-    pub value: std::collections::HashMap<usize, f64>,
+    pub value: std::collections::BTreeMap<usize, f64>,
     /// Slave raw DOF → its masters `(raw DOF, coefficient)`.
-    pub mpc: std::collections::HashMap<usize, Vec<(usize, f64)>>,
+    pub mpc: std::collections::BTreeMap<usize, Vec<(usize, f64)>>,
 }
 
 impl Constraints {
@@ -82,9 +82,9 @@ pub struct DofMap {
     /// Number of free DOFs (equations).
     pub n_free: usize,
     /// Prescribed values of fixed raw DOFs.
-    pub value: std::collections::HashMap<usize, f64>,
+    pub value: std::collections::BTreeMap<usize, f64>,
     /// Slave raw DOF → masters.
-    pub mpc: std::collections::HashMap<usize, Vec<(usize, f64)>>,
+    pub mpc: std::collections::BTreeMap<usize, Vec<(usize, f64)>>,
     /// Per node: the other nodes its DOFs depend on through constraints (empty for most).
     pub deps: Vec<Vec<u32>>,
     /// Per node: true if some component is a slave or has a non-zero prescribed value, so

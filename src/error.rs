@@ -76,9 +76,31 @@ pub enum Error {
         /// Description, naming the file.
         what: String,
     },
+    /// An error in an input file at a known place (a scene, design or study file): the file,
+    /// the line and the key where known.
+    #[error("{file}{}{}: {msg}", line.map(|l| format!(", line {l}")).unwrap_or_default(), key.as_ref().map(|k| format!(", key '{k}'")).unwrap_or_default())]
+    Input {
+        /// The file.
+        file: String,
+        /// 1-based line number.
+        line: Option<usize>,
+        /// The key (dotted path), when the error concerns one.
+        key: Option<String>,
+        /// What is wrong.
+        msg: String,
+    },
     /// Any other invalid user input (option, value, combination).
     #[error("{0}")]
     InvalidInput(String),
+    /// A result could not be written or serialised (not the user's input: a full disk, a
+    /// closed output).
+    #[error("cannot write {what}: {msg}")]
+    Output {
+        /// The file or stream.
+        what: String,
+        /// Why.
+        msg: String,
+    },
     /// The eigen solver did not converge.
     #[error("eigen solve did not converge: {0}")]
     EigenNotConverged(String),
@@ -88,6 +110,18 @@ pub enum Error {
     /// A sparse factorisation failed (singular or indefinite where it must not be).
     #[error("factorization failed: {0}")]
     Factorization(String),
+    /// A factorisation met a zero or non-finite pivot: the matrix is singular at that equation.
+    /// `at` names it in the user's terms (node and component) once the model layer has located
+    /// it ([`Error::locate`]).
+    #[error("factorization failed: {msg}{}", at.as_ref().map(|a| format!(" (at {a})")).unwrap_or_default())]
+    Singular {
+        /// The equation (free-DOF index, unpermuted) of the pivot, when known.
+        equation: Option<usize>,
+        /// Node and component, filled by [`Error::locate`].
+        at: Option<String>,
+        /// What happened.
+        msg: String,
+    },
 }
 
 impl Error {
@@ -99,6 +133,7 @@ impl Error {
     /// | 1 | input error (file, mesh, option, material, group) |
     /// | 2 | numerical failure (no convergence, failed verification, singular model) |
     /// | 3 | batch run in which some cases failed |
+    /// | 4 | a result could not be written (disk full, serialisation) |
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Io { .. }
@@ -108,8 +143,38 @@ impl Error {
             | Error::InvertedElement { .. }
             | Error::InvalidMaterial { .. }
             | Error::EmptyModel { .. }
+            | Error::Input { .. }
             | Error::InvalidInput(_) => 1,
-            Error::EigenNotConverged(_) | Error::Verification(_) | Error::Factorization(_) => 2,
+            Error::EigenNotConverged(_) | Error::Verification(_) | Error::Factorization(_) | Error::Singular { .. } => {
+                2
+            }
+            Error::Output { .. } => 4,
+        }
+    }
+
+    /// Name the equation of a [`Error::Singular`] in the user's terms with `describe` (an
+    /// equation → "node 1234 uz" map, e.g. [`crate::system::System::describe_equation`]);
+    /// other errors pass through.
+    pub fn locate(self, describe: impl Fn(usize) -> String) -> Self {
+        match self {
+            Error::Singular {
+                equation: Some(eq),
+                at: None,
+                msg,
+            } => Error::Singular {
+                equation: Some(eq),
+                at: Some(describe(eq)),
+                msg,
+            },
+            e => e,
+        }
+    }
+
+    /// A serialisation or write failure of `what` (a file, or stdout).
+    pub fn output(what: impl std::fmt::Display, e: impl std::fmt::Display) -> Self {
+        Error::Output {
+            what: what.to_string(),
+            msg: e.to_string(),
         }
     }
 

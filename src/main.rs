@@ -4,11 +4,11 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use vibrofem::analysis::{ModalOptions, ModalTarget, run_modal};
-use vibrofem::cli::{LoadArgs, ModelArgs, length_scale};
+use vibrofem::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::app::cli::{LoadArgs, ModelArgs, length_scale};
 use vibrofem::io;
+use vibrofem::linalg::ordering::Ordering;
 use vibrofem::material::Material;
-use vibrofem::ordering::Ordering;
 use vibrofem::{Error, Result};
 
 #[derive(Parser)]
@@ -53,13 +53,13 @@ enum Cmd {
     Merge(MergeArgs),
     /// Crank–slider drives (roller-forming machine): reduced inertia, Kloss motor, motion
     /// non-uniformity; built-in paper drive when no file is given.
-    CrankDrive(vibrofem::machines_cli::CrankDriveArgs),
+    CrankDrive(vibrofem::app::machines_cli::CrankDriveArgs),
     /// Ball autobalancer of a grinder on a rocker: criterion, speed sweep, run-up; built-in grinder
     /// when no file is given.
-    Autobalancer(vibrofem::machines_cli::AutobalancerArgs),
+    Autobalancer(vibrofem::app::machines_cli::AutobalancerArgs),
     /// Autobalancer test-stand data reduction (correction cut, imbalance scatter, sensitivity,
     /// efficiency) from a CSV file; built-in example when no file is given.
-    BalancerData(vibrofem::machines_cli::BalancerDataArgs),
+    BalancerData(vibrofem::app::machines_cli::BalancerDataArgs),
 }
 
 #[derive(clap::Args)]
@@ -279,42 +279,25 @@ fn modes(a: &ModesArgs) -> Result<i32> {
         max_applications: a.max_applications,
     };
     let t = std::time::Instant::now();
-    let mesh = io::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
     let source = a.mesh.clone();
     let run = run_modal(&mesh, &source, &opts, read_time)?;
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&run.report).map_err(|e| Error::InvalidInput(e.to_string()))?
+            serde_json::to_string_pretty(&run.report).map_err(|e| Error::output("JSON", e))?
         );
     } else {
-        print!("{}", vibrofem::report::modal_table(&run.report));
+        print!("{}", vibrofem::app::report::modal_table(&run.report));
     }
-    if let Some(p) = &a.vtu {
-        let fields: Vec<io::vtk::PointField> = run
-            .shapes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| io::vtk::PointField::mode(i + 1, s))
-            .collect();
-        io::vtk::write_vtu(p, &mesh, &fields)?;
-        eprintln!("wrote {}", p.display());
-    }
-    if let Some(p) = &a.msh_out {
-        let views: Vec<io::msh_out::NodeView> = run
-            .shapes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| io::msh_out::NodeView {
-                name: format!("mode {} ({:.4} Hz)", i + 1, run.report.frequencies_hz[i]),
-                step: i,
-                time: run.report.frequencies_hz[i],
-                n_comp: 3,
-                data: s,
-            })
-            .collect();
-        io::msh_out::write_msh_views(p, &mesh, &views)?;
+    for p in io::write_mode_shapes(
+        &mesh,
+        &run.shapes,
+        &run.report.frequencies_hz,
+        a.vtu.as_deref(),
+        a.msh_out.as_deref(),
+    )? {
         eprintln!("wrote {}", p.display());
     }
     for n in &run.report.notes {
@@ -334,8 +317,8 @@ fn modes(a: &ModesArgs) -> Result<i32> {
 fn design_cmd(a: &DesignArgs) -> Result<i32> {
     use std::io::IsTerminal;
     let d = match &a.file {
-        Some(f) => vibrofem::design::Design::from_toml(f)?,
-        None => vibrofem::design::Design::paper(),
+        Some(f) => vibrofem::app::design::Design::from_toml(f)?,
+        None => vibrofem::app::design::Design::paper(),
     };
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new_spinner();
@@ -349,19 +332,19 @@ fn design_cmd(a: &DesignArgs) -> Result<i32> {
         Some(b) => b.set_message(step.to_string()),
         None => eprintln!("[{:6.1} s] {step}", t0.elapsed().as_secs_f64()),
     };
-    let r = vibrofem::design::run_design(&d, Some(&a.out), &progress);
+    let r = vibrofem::app::design::run_design(&d, Some(&a.out), &progress);
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
     let r = r?;
-    let json = serde_json::to_string_pretty(&r).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&r).map_err(|e| Error::output("JSON", e))?;
     std::fs::write(a.out.join("report.json"), &json).map_err(|e| Error::io(a.out.join("report.json"), e))?;
-    std::fs::write(a.out.join("report.md"), vibrofem::design::report_markdown(&r))
+    std::fs::write(a.out.join("report.md"), vibrofem::app::design::report_markdown(&r))
         .map_err(|e| Error::io(a.out.join("report.md"), e))?;
     if a.json {
         println!("{json}");
     } else {
-        print!("{}", vibrofem::design::verdict_text(&r));
+        print!("{}", vibrofem::app::design::verdict_text(&r));
         println!(
             "
 report: {}/report.md (plots and mode shapes beside it)",
@@ -374,23 +357,23 @@ report: {}/report.md (plots and mode shapes beside it)",
 fn static_cmd(a: &StaticArgs) -> Result<i32> {
     let mut spec = a.model.spec()?;
     let loads = a.loads.apply(&mut spec)?;
-    let mesh = io::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
-    let opts = vibrofem::statics::StaticOptions {
+    let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let opts = vibrofem::analysis::statics::StaticOptions {
         spec,
         cases: vec![loads],
     };
-    let run = vibrofem::statics::run_static(&mesh, &a.mesh, &opts)?;
-    let report = vibrofem::report::static_report(&mesh, &a.mesh, &run)?;
+    let run = vibrofem::analysis::statics::run_static(&mesh, &a.mesh, &opts)?;
+    let report = vibrofem::app::report::static_report(&mesh, &a.mesh, &run)?;
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| Error::InvalidInput(e.to_string()))?
+            serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?
         );
     } else {
-        print!("{}", vibrofem::report::static_text(&report));
+        print!("{}", vibrofem::app::report::static_text(&report));
     }
     if a.vtu.is_some() || a.msh_out.is_some() {
-        vibrofem::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
+        vibrofem::app::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
     }
     for n in &run.model.notes {
         eprintln!("note: {n}");
@@ -399,26 +382,26 @@ fn static_cmd(a: &StaticArgs) -> Result<i32> {
 }
 
 fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
-    let mesh = io::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
+    let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
     let mat = Material::parse(&a.material)?;
     mat.validate("--material")?;
-    let info = vibrofem::report::mesh_info(&mesh, &a.mesh, &mat)?;
+    let info = vibrofem::app::report::mesh_info(&mesh, &a.mesh, &mat)?;
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&info).map_err(|e| Error::InvalidInput(e.to_string()))?
+            serde_json::to_string_pretty(&info).map_err(|e| Error::output("JSON", e))?
         );
     } else {
-        print!("{}", vibrofem::report::mesh_info_text(&info));
+        print!("{}", vibrofem::app::report::mesh_info_text(&info));
     }
     Ok(0)
 }
 
 fn run_cmd(a: &RunArgs) -> Result<i32> {
-    let scene = vibrofem::scene::Scene::load(&a.scene)?;
+    let scene = vibrofem::app::scene::Scene::load(&a.scene)?;
     std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
     let report = scene.run(Some((&a.out, "")))?;
-    let json = serde_json::to_string_pretty(&report).map_err(|e| Error::InvalidInput(e.to_string()))?;
+    let json = serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?;
     let path = a.out.join("summary.json");
     std::fs::write(&path, &json).map_err(|e| Error::io(&path, e))?;
     if a.json {
@@ -441,16 +424,16 @@ fn run_cmd(a: &RunArgs) -> Result<i32> {
 
 fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     use std::io::IsTerminal;
-    let opts = vibrofem::scene::BatchOptions {
+    let opts = vibrofem::app::scene::BatchOptions {
         pattern: a.pattern.clone(),
         template: a.scene.clone(),
         out: a.out.clone(),
         jobs: a.jobs,
         force: a.force,
-        shard: a.shard.as_deref().map(vibrofem::scene::parse_shard).transpose()?,
+        shard: a.shard.as_deref().map(vibrofem::app::scene::parse_shard).transpose()?,
         progress_bar: std::io::stderr().is_terminal(),
     };
-    let s = vibrofem::scene::run_batch(&opts)?;
+    let s = vibrofem::app::scene::run_batch(&opts)?;
     println!(
         "{:<48} {:>10} {:>8} {:>14} {:>9}",
         "file", "status", "dofs", "f elastic / k", "time [s]"
@@ -485,7 +468,7 @@ fn batch_cmd(a: &BatchArgs) -> Result<i32> {
 }
 
 fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
-    use vibrofem::sweep;
+    use vibrofem::app::sweep;
     let mut study = sweep::Study::load(&a.study)?;
     for s in &a.set {
         let (k, v) = sweep::parse_set(s)?;
@@ -523,7 +506,7 @@ fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
 }
 
 fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
-    use vibrofem::converge;
+    use vibrofem::app::converge;
     let case = if std::path::Path::new(&a.case).is_file() {
         converge::from_scene(std::path::Path::new(&a.case), a.levels)?
     } else {
@@ -537,7 +520,7 @@ fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
 }
 
 fn merge_cmd(a: &MergeArgs) -> Result<i32> {
-    let s = vibrofem::sweep::merge(&a.dirs, Some(&a.out))?;
+    let s = vibrofem::app::sweep::merge(&a.dirs, Some(&a.out))?;
     println!(
         "{} cases ({} failed) merged from {} folders into {}",
         s.rows.len(),
@@ -572,9 +555,9 @@ fn main() -> ExitCode {
         Cmd::Sweep(a) => sweep_cmd(a),
         Cmd::Converge(a) => converge_cmd(a),
         Cmd::Merge(a) => merge_cmd(a),
-        Cmd::CrankDrive(a) => vibrofem::machines_cli::run_crank_drive(a),
-        Cmd::Autobalancer(a) => vibrofem::machines_cli::run_autobalancer(a),
-        Cmd::BalancerData(a) => vibrofem::machines_cli::run_balancer_data(a),
+        Cmd::CrankDrive(a) => vibrofem::app::machines_cli::run_crank_drive(a),
+        Cmd::Autobalancer(a) => vibrofem::app::machines_cli::run_autobalancer(a),
+        Cmd::BalancerData(a) => vibrofem::app::machines_cli::run_balancer_data(a),
     };
     match r {
         Ok(code) => ExitCode::from(code as u8),

@@ -62,7 +62,7 @@ def main(argv=None) -> int:
         f1 = m["frequencies_hz"][0]
         t = s1["timings_s"]
         print(f"| {d[0]}×{d[1]}×{d[2]} | {s1['dofs']} | {uz * 1e3:.4f} | {k:.4e} | {(k / 5.163e6 - 1) * 100:+.1f} % | "
-              f"{vm / 1e6:.1f} | {f1:.2f} | {(f1 / 109.56 - 1) * 100:+.1f} % | {sum(t):.2f} |")
+              f"{vm / 1e6:.1f} | {f1:.2f} | {(f1 / 109.56 - 1) * 100:+.1f} % | {sum(t.values()):.2f} |")
     G, dw, D, i, Q = 7.7e10, 0.006, 0.032, 6.0, 600.0
     kf = G * dw**4 / (8 * D**3 * i)
     C = D / dw

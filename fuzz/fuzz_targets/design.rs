@@ -6,7 +6,7 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        if let Ok(d) = toml::from_str::<vibrofem::design::Design>(text) {
+        if let Ok(d) = toml::from_str::<vibrofem::app::design::Design>(text) {
             let _ = d.validate();
         }
     }

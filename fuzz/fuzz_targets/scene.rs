@@ -7,6 +7,6 @@ use std::path::Path;
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
         // A path whose parent does not exist: a relative `mesh.file` cannot reach real files.
-        let _ = vibrofem::scene::Scene::parse(Path::new("/nonexistent-fuzz/scene.toml"), text);
+        let _ = vibrofem::app::scene::Scene::parse(Path::new("/nonexistent-fuzz/scene.toml"), text);
     }
 });

@@ -80,26 +80,15 @@
 
 use crate::element::lumping::MassLumping;
 use crate::error::{Error, Result};
+use crate::fe::geometry::{cross, line_metric, norm, scale, sub};
+use crate::fe::quadrature::{GAUSS2, GAUSS3, GAUSS4};
+use crate::fe::shape;
 use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::section::BeamSection;
 
 /// Largest number of element DOFs (`Line3` × 7 would be 21; `Line3` × 6 = 18, `Line2` × 7 = 14).
 const MAXD: usize = 21;
-
-/// Gauss–Legendre points and weights on [-1, 1].
-const GAUSS2: [(f64, f64); 2] = [(-0.577_350_269_189_625_8, 1.0), (0.577_350_269_189_625_8, 1.0)];
-const GAUSS3: [(f64, f64); 3] = [
-    (-0.774_596_669_241_483_4, 5.0 / 9.0),
-    (0.0, 8.0 / 9.0),
-    (0.774_596_669_241_483_4, 5.0 / 9.0),
-];
-const GAUSS4: [(f64, f64); 4] = [
-    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
-    (-0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
-    (0.339_981_043_584_856_3, 0.652_145_154_862_546_1),
-    (0.861_136_311_594_052_6, 0.347_854_845_137_453_9),
-];
 
 /// Components per node for `section`: 7 when it requests the warping DOF, else 6.
 pub fn dofs_per_node(section: &BeamSection) -> usize {
@@ -109,26 +98,6 @@ pub fn dofs_per_node(section: &BeamSection) -> usize {
 /// True for the cell kinds this module handles (`Line2`, `Line3`).
 pub fn supports(kind: CellKind) -> bool {
     matches!(kind, CellKind::Line2 | CellKind::Line3)
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
 }
 
 /// Local axes of a beam at a point with tangent `tangent` (any length) and orientation
@@ -174,8 +143,12 @@ pub fn local_axes(tangent: [f64; 3], orientation: [f64; 3]) -> Result<[[f64; 3];
     Ok([ex, ey, ez])
 }
 
-/// Length of a beam element: the chord for `Line2`, the arc length (3-point Gauss, exact for
-/// straight elements) for `Line3`. Panics for other kinds.
+/// Length of a beam element: the chord for `Line2` (the closed-form element is written in
+/// it), the arc length (3-point Gauss, exact for straight elements) for `Line3`.
+///
+/// # Panics
+/// For a kind that is not a beam (`Line2`, `Line3`): a length has no meaning there and the
+/// function returns a plain number. The match is exhaustive, so a new kind must be placed.
 pub fn length(kind: CellKind, x: &[[f64; 3]]) -> f64 {
     match kind {
         CellKind::Line2 => {
@@ -186,12 +159,20 @@ pub fn length(kind: CellKind, x: &[[f64; 3]]) -> f64 {
             assert_eq!(x.len(), 3, "beam::length: line3 needs 3 nodes");
             GAUSS3.iter().map(|&(xi, w)| w * norm(line3_tangent(x, xi))).sum()
         }
-        _ => panic!("beam::length: {kind} is not a beam cell kind"),
+        CellKind::Point1
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet4
+        | CellKind::Tet10
+        | CellKind::Hex8
+        | CellKind::Hex20
+        | CellKind::Hex27
+        | CellKind::Wedge6
+        | CellKind::Wedge15 => panic!("beam::length: {kind} is not a beam cell kind"),
     }
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// Per-node transformation from global to local degrees of freedom: `local_i = Σ_j g[i][j]
@@ -257,7 +238,7 @@ fn node_transform(r: &[[f64; 3]; 3], nd: usize, shear_centre: Option<[f64; 2]>) 
 
 /// Element stiffness matrix of a beam in global axes.
 ///
-/// - `kind`: `Line2` or `Line3` (panics otherwise: the caller checks [`supports`]).
+/// - `kind`: `Line2` or `Line3` (an [`Error::InvalidInput`] otherwise).
 /// - `x`: node coordinates in gmsh order; `orientation`: local `y` hint (see the module
 ///   docs); `sec`: a validated section; `mat`: the material.
 /// - `ke`: output, `(n·d)²` row-major with `d` = [`dofs_per_node`]`(sec)`; fully written.
@@ -303,8 +284,24 @@ pub fn stiffness(
             assert_eq!(ke.len(), 18 * 18, "beam::stiffness: ke must be 18 × 18 for line3");
             line3_stiffness(x, orientation, sec, mat, ke)
         }
-        _ => panic!("beam::stiffness: {kind} is not a beam cell kind"),
+        CellKind::Point1
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet4
+        | CellKind::Tet10
+        | CellKind::Hex8
+        | CellKind::Hex20
+        | CellKind::Hex27
+        | CellKind::Wedge6
+        | CellKind::Wedge15 => Err(not_a_beam(kind)),
     }
+}
+
+fn not_a_beam(kind: CellKind) -> Error {
+    Error::InvalidInput(format!("{kind} is not a beam cell kind (line2 or line3)"))
 }
 
 fn warping_line3() -> Error {
@@ -551,27 +548,35 @@ pub fn mass(
             assert_eq!(me.len(), 18 * 18, "beam::mass: me must be 18 × 18 for line3");
             line3_mass(x, orientation, sec, mat.density, lumping, me)
         }
-        _ => panic!("beam::mass: {kind} is not a beam cell kind"),
+        CellKind::Point1
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet4
+        | CellKind::Tet10
+        | CellKind::Hex8
+        | CellKind::Hex20
+        | CellKind::Hex27
+        | CellKind::Wedge6
+        | CellKind::Wedge15 => Err(not_a_beam(kind)),
     }
 }
 
-/// Quadratic Lagrange functions on [-1, 1] (nodes −1, +1, 0) and their ξ-derivatives.
+/// Quadratic Lagrange functions on [-1, 1] (nodes −1, +1, 0) and their ξ-derivatives, from
+/// [`crate::fe::shape`].
 fn line3_shape(xi: f64) -> ([f64; 3], [f64; 3]) {
-    (
-        [0.5 * xi * (xi - 1.0), 0.5 * xi * (xi + 1.0), 1.0 - xi * xi],
-        [xi - 0.5, xi + 0.5, -2.0 * xi],
-    )
+    let mut n = [0.0; 3];
+    let mut g = [[0.0; 3]; 3];
+    shape::values_and_gradients(CellKind::Line3, [xi, 0.0, 0.0], &mut n, &mut g);
+    (n, [g[0][0], g[1][0], g[2][0]])
 }
 
+/// Tangent `x_ξ` of a `Line3` element at `ξ` ([`line_metric`]).
 fn line3_tangent(x: &[[f64; 3]], xi: f64) -> [f64; 3] {
     let (_, dn) = line3_shape(xi);
-    let mut t = [0.0; 3];
-    for a in 0..3 {
-        for i in 0..3 {
-            t[i] += dn[a] * x[a][i];
-        }
-    }
-    t
+    line_metric(x, &dn).0
 }
 
 fn line3_stiffness(

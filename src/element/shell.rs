@@ -100,6 +100,9 @@
 
 use crate::element::beam::{NodeTransform, congruence};
 use crate::element::lumping::MassLumping;
+use crate::fe::geometry::{cross, dot, normalize as unit, plane_jacobian, sub};
+use crate::fe::quadrature::{QUAD_2X2, TRIANGLE_3};
+use crate::fe::shape as reference;
 use crate::material::Material;
 use crate::mesh::CellKind;
 pub use crate::section::ShellSection;
@@ -118,33 +121,9 @@ pub fn supports(kind: CellKind) -> bool {
     matches!(kind, CellKind::Tri3 | CellKind::Quad4)
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn unit(a: [f64; 3]) -> Result<[f64; 3], f64> {
-    let l = dot(a, a).sqrt();
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(l > 0.0 && l.is_finite()) {
-        return Err(0.0);
-    }
-    Ok([a[0] / l, a[1] / l, a[2] / l])
-}
-
 /// The flat element: frame, in-plane node coordinates and heights above the mean plane.
 struct Flat {
+    kind: CellKind,
     nn: usize,
     /// Rows `e1, e2, n`: `local = r · global`.
     r: [[f64; 3]; 3],
@@ -154,9 +133,15 @@ struct Flat {
     h: [f64; 4],
 }
 
+/// The error value of every kernel here for a kind that is not a shell: NaN, "no Jacobian"
+/// (a set never holds such a kind: the model checks kinds when it binds the mesh).
+const NOT_A_SHELL: f64 = f64::NAN;
+
 fn flat(kind: CellKind, x: &[[f64; 3]]) -> Result<Flat, f64> {
     let nn = kind.n_nodes();
-    assert!(supports(kind), "shell: {kind} is not a shell cell kind");
+    if !supports(kind) {
+        return Err(NOT_A_SHELL);
+    }
     assert_eq!(x.len(), nn, "shell: {kind} needs {nn} node coordinates");
     let mut c = [0.0; 3];
     for xa in x {
@@ -169,7 +154,7 @@ fn flat(kind: CellKind, x: &[[f64; 3]]) -> Result<Flat, f64> {
             let n = unit(cross(sub(x[1], x[0]), sub(x[2], x[0])))?;
             (n, unit(sub(x[1], x[0]))?)
         }
-        _ => {
+        CellKind::Quad4 => {
             let n = unit(cross(sub(x[2], x[0]), sub(x[3], x[1])))?;
             let mut g = [0.0; 3];
             for i in 0..3 {
@@ -178,9 +163,23 @@ fn flat(kind: CellKind, x: &[[f64; 3]]) -> Result<Flat, f64> {
             let gn = dot(g, n);
             (n, unit([g[0] - gn * n[0], g[1] - gn * n[1], g[2] - gn * n[2]])?)
         }
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri6
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet4
+        | CellKind::Tet10
+        | CellKind::Hex8
+        | CellKind::Hex20
+        | CellKind::Hex27
+        | CellKind::Wedge6
+        | CellKind::Wedge15 => return Err(NOT_A_SHELL),
     };
     let e2 = cross(n, e1);
     let mut f = Flat {
+        kind,
         nn,
         r: [e1, e2, n],
         p: [[0.0; 2]; 4],
@@ -210,45 +209,23 @@ pub fn local_frame(kind: CellKind, x: &[[f64; 3]]) -> Result<[[f64; 3]; 3], f64>
     Ok(flat(kind, x)?.r)
 }
 
-/// Bilinear shape functions at `(ξ, η)` and their reference gradients.
-fn quad_shape(xi: f64, eta: f64) -> ([f64; 4], [[f64; 2]; 4]) {
-    const S: [[f64; 2]; 4] = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+/// Shape functions of the flat element at `(ξ, η)` and their 2D reference gradients, from
+/// [`crate::fe::shape`] (bilinear on `Quad4`, `(1 − r − s, r, s)` on `Tri3`; unused entries 0).
+fn shape(kind: CellKind, xi: f64, eta: f64) -> ([f64; 4], [[f64; 2]; 4]) {
+    let nn = kind.n_nodes();
     let mut n = [0.0; 4];
+    let mut g = [[0.0; 3]; 4];
+    reference::values_and_gradients(kind, [xi, eta, 0.0], &mut n[..nn], &mut g[..nn]);
     let mut dn = [[0.0; 2]; 4];
-    for a in 0..4 {
-        let (sa, ta) = (S[a][0], S[a][1]);
-        n[a] = 0.25 * (1.0 + sa * xi) * (1.0 + ta * eta);
-        dn[a] = [0.25 * sa * (1.0 + ta * eta), 0.25 * ta * (1.0 + sa * xi)];
+    for a in 0..nn {
+        dn[a] = [g[a][0], g[a][1]];
     }
     (n, dn)
 }
 
-/// Linear triangle functions at `(r, s)`: `N = (1 − r − s, r, s)`, constant gradients.
-fn tri_shape(r: f64, s: f64) -> ([f64; 4], [[f64; 2]; 4]) {
-    (
-        [1.0 - r - s, r, s, 0.0],
-        [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0], [0.0, 0.0]],
-    )
-}
-
-/// Determinant and inverse of the 2D Jacobian `J = [[x_ξ, y_ξ], [x_η, y_η]]`. `Err(det)`
-/// unless `det > 0`.
+/// Determinant and inverse of the 2D Jacobian of the flat element.
 fn jac2(p: &[[f64; 2]; 4], dn: &[[f64; 2]; 4], nn: usize) -> Result<(f64, [[f64; 2]; 2]), f64> {
-    let mut j = [[0.0; 2]; 2];
-    for a in 0..nn {
-        for r in 0..2 {
-            for c in 0..2 {
-                j[r][c] += dn[a][r] * p[a][c];
-            }
-        }
-    }
-    let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(det > 0.0) {
-        return Err(det);
-    }
-    let inv = [[j[1][1] / det, -j[0][1] / det], [-j[1][0] / det, j[0][0] / det]];
-    Ok((det, inv))
+    plane_jacobian(p, dn, nn)
 }
 
 /// `inv · [a; b]`: physical gradient from reference gradient, or Cartesian shear from
@@ -258,24 +235,11 @@ fn apply(inv: &[[f64; 2]; 2], a: f64, b: f64) -> [f64; 2] {
 }
 
 /// Integration points `(ξ, η, weight)` of the element's 2D rule: 2 × 2 Gauss (quad) or the
-/// 3-point degree-2 rule (triangle, weights summing to 1/2).
+/// 3-point degree-2 rule (triangle, weights summing to 1/2), from [`crate::fe::quadrature`].
+/// The triangle uses the constant [`TRIANGLE_3`], not `quadrature::triangle(2)`: that rule
+/// lists the same points in another order, and the order of the sums is part of the result.
 fn rule(nn: usize) -> &'static [(f64, f64, f64)] {
-    const G: f64 = 0.577_350_269_189_625_8;
-    const QUAD: [(f64, f64, f64); 4] = [(-G, -G, 1.0), (G, -G, 1.0), (-G, G, 1.0), (G, G, 1.0)];
-    const TRI: [(f64, f64, f64); 3] = [
-        (1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0),
-        (2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0),
-        (1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0),
-    ];
-    if nn == 4 { &QUAD } else { &TRI }
-}
-
-fn shape(nn: usize, xi: f64, eta: f64) -> ([f64; 4], [[f64; 2]; 4]) {
-    if nn == 4 {
-        quad_shape(xi, eta)
-    } else {
-        tri_shape(xi, eta)
-    }
+    if nn == 4 { &QUAD_2X2 } else { &TRIANGLE_3 }
 }
 
 /// Plane-stress matrix times `c`: `c [[1, ν, 0], [ν, 1, 0], [0, 0, (1 − ν)/2]]`.
@@ -325,14 +289,14 @@ fn membrane(f: &Flat, sec: &ShellSection, mat: &Material) -> Result<Membrane, f6
         kaa: [[0.0; 4]; 4],
     };
     let (det0, inv0) = if nn == 4 {
-        let (_, dn0) = quad_shape(0.0, 0.0);
+        let (_, dn0) = shape(CellKind::Quad4, 0.0, 0.0);
         let (d0, i0) = jac2(&f.p, &dn0, 4)?;
         (d0, i0)
     } else {
         (0.0, [[0.0; 2]; 2])
     };
     for &(xi, eta, w) in rule(nn) {
-        let (n, dn) = shape(nn, xi, eta);
+        let (n, dn) = shape(f.kind, xi, eta);
         let (det, inv) = jac2(&f.p, &dn, nn)?;
         let mut g = [[0.0; 2]; 4];
         for a in 0..nn {
@@ -426,7 +390,7 @@ fn inverse4(a: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
 /// Covariant transverse shear row (over `(w, θx, θy)` per node) at `(ξ, η)` in reference
 /// direction `dir`: `e = ∂w/∂ξ_dir + β·∂x/∂ξ_dir`, `β = (θy, −θx)`.
 fn covariant_shear(f: &Flat, xi: f64, eta: f64, dir: usize) -> [f64; 12] {
-    let (n, dn) = shape(f.nn, xi, eta);
+    let (n, dn) = shape(f.kind, xi, eta);
     let mut xd = [0.0; 2];
     for a in 0..f.nn {
         xd[0] += dn[a][dir] * f.p[a][0];
@@ -545,7 +509,7 @@ fn local_stiffness(f: &Flat, sec: &ShellSection, mat: &Material, k: &mut [f64]) 
     let ty = tying(f);
     let mut kp = [[0.0; 12]; 12];
     for &(xi, eta, w) in rule(nn) {
-        let (_, dn) = shape(nn, xi, eta);
+        let (_, dn) = shape(f.kind, xi, eta);
         let (det, inv) = jac2(&f.p, &dn, nn)?;
         let mut g = [[0.0; 2]; 4];
         for a in 0..nn {
@@ -649,7 +613,7 @@ pub fn area(kind: CellKind, x: &[[f64; 3]]) -> Result<f64, f64> {
     let f = flat(kind, x)?;
     let mut a = 0.0;
     for &(xi, eta, w) in rule(f.nn) {
-        let (_, dn) = shape(f.nn, xi, eta);
+        let (_, dn) = shape(f.kind, xi, eta);
         a += w * jac2(&f.p, &dn, f.nn)?.0;
     }
     Ok(a)
@@ -684,7 +648,7 @@ pub fn mass(
     let mut m = [[0.0; 4]; 4];
     let mut total = 0.0;
     for &(xi, eta, w) in rule(nn) {
-        let (n, dn) = shape(nn, xi, eta);
+        let (n, dn) = shape(f.kind, xi, eta);
         let c = w * jac2(&f.p, &dn, nn)?.0 * rt;
         total += c;
         for a in 0..nn {
@@ -778,7 +742,7 @@ pub fn stress_at(
         }
     }
     let (r, s) = (xi[0], xi[1]);
-    let (n, dn) = shape(nn, r, s);
+    let (n, dn) = shape(f.kind, r, s);
     let (det, inv) = jac2(&f.p, &dn, nn)?;
     let mut gr = [[0.0; 2]; 4];
     for a in 0..nn {
@@ -801,7 +765,7 @@ pub fn stress_at(
         for i in 0..4 {
             alpha[i] = -(0..4).map(|j| ia[i][j] * rhs[j]).sum::<f64>();
         }
-        let (_, dn0) = quad_shape(0.0, 0.0);
+        let (_, dn0) = shape(CellKind::Quad4, 0.0, 0.0);
         let (det0, inv0) = jac2(&f.p, &dn0, 4)?;
         let sc = det0 / det;
         let g1 = apply(&inv0, -2.0 * r, 0.0);

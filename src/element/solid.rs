@@ -1,6 +1,6 @@
 //! Isoparametric 3D solid elements: stiffness, mass, volume and stress at a point.
 //!
-//! Geometry and displacement share the shape functions of [`crate::shape`]:
+//! Geometry and displacement share the shape functions of [`crate::fe::shape`]:
 //! `x(ξ) = Σ_a N_a(ξ) x_a`, `u(ξ) = Σ_a N_a(ξ) u_a`. With the Jacobian
 //! `J_ij = ∂x_i/∂ξ_j = Σ_a x_a,i ∂N_a/∂ξ_j`, physical gradients are `∇N_a = J⁻ᵀ ∂N_a/∂ξ` and
 //! `dV = det J dξ`. Integrals use the quadrature rules of the table below; the shape values
@@ -52,29 +52,47 @@
 use std::sync::OnceLock;
 
 use crate::element::lumping::{self, MassLumping};
+use crate::fe::geometry::{physical_gradient, volume_jacobian};
+use crate::fe::quadrature;
+use crate::fe::shape::{self, MAX_NODES};
 use crate::material::Material;
 use crate::mesh::CellKind;
-use crate::quadrature;
-use crate::shape::{self, MAX_NODES};
 
 /// Quadrature degree (in the sense of [`quadrature::for_cell`]) of the stiffness rule of
-/// `kind`; see the table in the module docs. Panics for a kind that is not a solid.
+/// `kind`; see the table in the module docs. A kind that is not a solid has no solid rule:
+/// it gets the degree `2 · order` that integrates `∇N_a·∇N_b` of an affine cell of its order
+/// (used by nothing in vibrofem; given so that the function is total).
 pub fn stiffness_degree(kind: CellKind) -> usize {
     match kind {
         CellKind::Tet4 => 1,
         CellKind::Tet10 | CellKind::Hex8 | CellKind::Wedge6 => 2,
         CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => 4,
-        _ => panic!("{kind} is not a solid cell kind"),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => 2 * kind.order(),
     }
 }
 
 /// Quadrature degree of the mass (and volume) rule of `kind`; see the table in the module
-/// docs. Panics for a kind that is not a solid.
+/// docs. A kind that is not a solid gets `2 · order`, the degree of `N_a N_b` on an affine
+/// cell of its order.
 pub fn mass_degree(kind: CellKind) -> usize {
     match kind {
         CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6 => 2,
         CellKind::Tet10 | CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => 4,
-        _ => panic!("{kind} is not a solid cell kind"),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => 2 * kind.order(),
     }
 }
 
@@ -82,6 +100,8 @@ pub fn mass_degree(kind: CellKind) -> usize {
 struct Table {
     nn: usize,
     nq: usize,
+    /// Points `ξ_q`.
+    points: Vec<[f64; 3]>,
     /// Weights `w_q`.
     w: Vec<f64>,
     /// `N_a(ξ_q)` at `q * nn + a`.
@@ -103,6 +123,7 @@ impl Table {
         Table {
             nn,
             nq,
+            points: rule.points,
             w: rule.weights,
             n,
             dn,
@@ -110,87 +131,54 @@ impl Table {
     }
 }
 
-/// Index of a solid kind in the table caches.
-fn solid_index(kind: CellKind) -> usize {
+/// Index of a solid kind in the table caches; `None` for a kind that is not a solid.
+fn solid_index(kind: CellKind) -> Option<usize> {
     match kind {
-        CellKind::Tet4 => 0,
-        CellKind::Tet10 => 1,
-        CellKind::Hex8 => 2,
-        CellKind::Hex20 => 3,
-        CellKind::Hex27 => 4,
-        CellKind::Wedge6 => 5,
-        CellKind::Wedge15 => 6,
-        _ => panic!("{kind} is not a solid cell kind"),
+        CellKind::Tet4 => Some(0),
+        CellKind::Tet10 => Some(1),
+        CellKind::Hex8 => Some(2),
+        CellKind::Hex20 => Some(3),
+        CellKind::Hex27 => Some(4),
+        CellKind::Wedge6 => Some(5),
+        CellKind::Wedge15 => Some(6),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => None,
     }
 }
+
+/// The error value of every kernel here for a kind that is not a solid: NaN, "no Jacobian"
+/// (a set never holds such a kind: the model checks kinds when it binds the mesh).
+const NOT_A_SOLID: f64 = f64::NAN;
 
 static STIFFNESS_TABLES: [OnceLock<Table>; 7] = [const { OnceLock::new() }; 7];
 static MASS_TABLES: [OnceLock<Table>; 7] = [const { OnceLock::new() }; 7];
 
-fn stiffness_table(kind: CellKind) -> &'static Table {
-    STIFFNESS_TABLES[solid_index(kind)].get_or_init(|| Table::new(kind, stiffness_degree(kind)))
+fn stiffness_table(kind: CellKind) -> Result<&'static Table, f64> {
+    let i = solid_index(kind).ok_or(NOT_A_SOLID)?;
+    Ok(STIFFNESS_TABLES[i].get_or_init(|| Table::new(kind, stiffness_degree(kind))))
 }
 
-fn mass_table(kind: CellKind) -> &'static Table {
-    MASS_TABLES[solid_index(kind)].get_or_init(|| Table::new(kind, mass_degree(kind)))
+fn mass_table(kind: CellKind) -> Result<&'static Table, f64> {
+    let i = solid_index(kind).ok_or(NOT_A_SOLID)?;
+    Ok(MASS_TABLES[i].get_or_init(|| Table::new(kind, mass_degree(kind))))
 }
 
-/// Jacobian determinant and inverse at one point from node coordinates `x` and reference
-/// gradients `dn`: `J_ij = Σ_a x_a,i ∂N_a/∂ξ_j`. `Err(det)` unless `det > 0` (NaN included).
-#[inline(always)]
-fn jacobian(x: &[[f64; 3]], dn: &[[f64; 3]]) -> Result<(f64, [[f64; 3]; 3]), f64> {
-    let mut j = [[0.0; 3]; 3];
-    for (xa, ga) in x.iter().zip(dn) {
-        for r in 0..3 {
-            for c in 0..3 {
-                j[r][c] += xa[r] * ga[c];
-            }
-        }
-    }
-    let c00 = j[1][1] * j[2][2] - j[1][2] * j[2][1];
-    let c01 = j[1][2] * j[2][0] - j[1][0] * j[2][2];
-    let c02 = j[1][0] * j[2][1] - j[1][1] * j[2][0];
-    let det = j[0][0] * c00 + j[0][1] * c01 + j[0][2] * c02;
-    // Written so that a NaN determinant is rejected as well.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(det > 0.0) {
-        return Err(det);
-    }
-    let d = 1.0 / det;
-    let inv = [
-        [
-            c00 * d,
-            (j[0][2] * j[2][1] - j[0][1] * j[2][2]) * d,
-            (j[0][1] * j[1][2] - j[0][2] * j[1][1]) * d,
-        ],
-        [
-            c01 * d,
-            (j[0][0] * j[2][2] - j[0][2] * j[2][0]) * d,
-            (j[0][2] * j[1][0] - j[0][0] * j[1][2]) * d,
-        ],
-        [
-            c02 * d,
-            (j[0][1] * j[2][0] - j[0][0] * j[2][1]) * d,
-            (j[0][0] * j[1][1] - j[0][1] * j[1][0]) * d,
-        ],
-    ];
-    Ok((det, inv))
-}
-
-/// Physical gradient `∇N = J⁻ᵀ ∂N/∂ξ`, i.e. `∂N/∂x_i = Σ_j (J⁻¹)_ji ∂N/∂ξ_j`.
-#[inline(always)]
-fn physical(inv: &[[f64; 3]; 3], g: [f64; 3]) -> [f64; 3] {
-    [
-        inv[0][0] * g[0] + inv[1][0] * g[1] + inv[2][0] * g[2],
-        inv[0][1] * g[0] + inv[1][1] * g[1] + inv[2][1] * g[2],
-        inv[0][2] * g[0] + inv[1][2] * g[1] + inv[2][2] * g[2],
-    ]
+/// The reference points of the stiffness rule of a solid `kind` (where
+/// [`crate::post::stress::gauss_point_stress`] samples); empty for other kinds.
+pub fn stiffness_points(kind: CellKind) -> &'static [[f64; 3]] {
+    stiffness_table(kind).map_or(&[], |t| &t.points)
 }
 
 /// Element stiffness `K = ∫ Bᵀ D B dV` of an isotropic solid, computed in the block form of the
 /// module docs.
 ///
-/// - `kind`: a solid kind (panics otherwise); `x`: its `n` node coordinates in gmsh order.
+/// - `kind`: a solid kind (`Err(NaN)` otherwise); `x`: its `n` node coordinates in gmsh order.
 /// - `ke`: output, `3n × 3n` row-major, node-major dofs (see the module docs); fully written.
 /// - `Err(det)` when the Jacobian determinant at a quadrature point is not positive (inverted
 ///   or degenerate element), with that determinant.
@@ -215,7 +203,14 @@ pub fn stiffness(kind: CellKind, x: &[[f64; 3]], mat: &Material, ke: &mut [f64])
         CellKind::Hex27 => stiffness_impl::<27, 27>(kind, x, mat, ke),
         CellKind::Wedge6 => stiffness_impl::<6, 6>(kind, x, mat, ke),
         CellKind::Wedge15 => stiffness_impl::<15, 18>(kind, x, mat, ke),
-        _ => panic!("solid::stiffness: {kind} is not a solid cell kind"),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => Err(NOT_A_SOLID),
     }
 }
 
@@ -225,7 +220,7 @@ fn stiffness_impl<const N: usize, const Q: usize>(
     mat: &Material,
     ke: &mut [f64],
 ) -> Result<(), f64> {
-    let t = stiffness_table(kind);
+    let t = stiffness_table(kind)?;
     debug_assert!(t.nn == N && t.nq == Q, "stiffness table size of {kind}");
     assert_eq!(x.len(), N, "solid::stiffness: {kind} needs {N} node coordinates");
     assert_eq!(ke.len(), 9 * N * N, "solid::stiffness: ke must be 3n × 3n");
@@ -236,10 +231,10 @@ fn stiffness_impl<const N: usize, const Q: usize>(
     let mut h = [[[0.0; 3]; Q]; N];
     for q in 0..Q {
         let dn = &t.dn[q * N..(q + 1) * N];
-        let (det, inv) = jacobian(x, dn)?;
+        let (det, inv) = volume_jacobian(x, dn)?;
         let c = t.w[q] * det;
         for a in 0..N {
-            let ga = physical(&inv, dn[a]);
+            let ga = physical_gradient(&inv, dn[a]);
             g[a][q] = ga;
             h[a][q] = [c * ga[0], c * ga[1], c * ga[2]];
         }
@@ -298,7 +293,14 @@ pub fn mass(kind: CellKind, x: &[[f64; 3]], density: f64, lumping: MassLumping, 
         CellKind::Hex27 => mass_impl::<27, 27>(kind, x, density, lumping, me),
         CellKind::Wedge6 => mass_impl::<6, 6>(kind, x, density, lumping, me),
         CellKind::Wedge15 => mass_impl::<15, 18>(kind, x, density, lumping, me),
-        _ => panic!("solid::mass: {kind} is not a solid cell kind"),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => Err(NOT_A_SOLID),
     }
 }
 
@@ -309,7 +311,7 @@ fn mass_impl<const N: usize, const Q: usize>(
     lumping: MassLumping,
     me: &mut [f64],
 ) -> Result<(), f64> {
-    let t = mass_table(kind);
+    let t = mass_table(kind)?;
     debug_assert!(t.nn == N && t.nq == Q, "mass table size of {kind}");
     assert_eq!(x.len(), N, "solid::mass: {kind} needs {N} node coordinates");
     assert_eq!(me.len(), 9 * N * N, "solid::mass: me must be 3n × 3n");
@@ -317,7 +319,7 @@ fn mass_impl<const N: usize, const Q: usize>(
     // c_q = ρ w_q det J_q
     let mut c = [0.0; Q];
     for q in 0..Q {
-        let (det, _) = jacobian(x, &t.dn[q * N..(q + 1) * N])?;
+        let (det, _) = volume_jacobian(x, &t.dn[q * N..(q + 1) * N])?;
         c[q] = density * t.w[q] * det;
     }
     let nd = 3 * N;
@@ -363,18 +365,18 @@ fn mass_impl<const N: usize, const Q: usize>(
 /// the consistent mass sums to exactly `ρV` per direction). `Err(det)` as for [`stiffness`].
 ///
 /// ```
-/// use vibrofem::{element::solid, mesh::CellKind, shape};
+/// use vibrofem::{element::solid, fe::shape, mesh::CellKind};
 /// let unit: Vec<[f64; 3]> = shape::reference_nodes(CellKind::Hex20)
 ///     .iter().map(|p| p.map(|c| 0.5 * (c + 1.0))).collect();
 /// assert!((solid::volume(CellKind::Hex20, &unit).unwrap() - 1.0).abs() < 1e-14);
 /// ```
 pub fn volume(kind: CellKind, x: &[[f64; 3]]) -> Result<f64, f64> {
-    let t = mass_table(kind);
+    let t = mass_table(kind)?;
     let n = t.nn;
     assert_eq!(x.len(), n, "solid::volume: {kind} needs {n} node coordinates");
     let mut v = 0.0;
     for q in 0..t.nq {
-        let (det, _) = jacobian(x, &t.dn[q * n..(q + 1) * n])?;
+        let (det, _) = volume_jacobian(x, &t.dn[q * n..(q + 1) * n])?;
         v += t.w[q] * det;
     }
     Ok(v)
@@ -384,17 +386,19 @@ pub fn volume(kind: CellKind, x: &[[f64; 3]]) -> Result<f64, f64> {
 /// Voigt order `[ε_xx, ε_yy, ε_zz, γ_yz, γ_xz, γ_xy]` with engineering shear strains
 /// (`γ_yz = ∂u_y/∂z + ∂u_z/∂y`). `Err(det)` if `det J(ξ) ≤ 0`.
 pub fn strain_at(kind: CellKind, x: &[[f64; 3]], ue: &[f64], xi: [f64; 3]) -> Result<[f64; 6], f64> {
-    assert!(kind.dim() == 3, "solid::strain_at: {kind} is not a solid cell kind");
+    if solid_index(kind).is_none() {
+        return Err(NOT_A_SOLID);
+    }
     let n = kind.n_nodes();
     assert_eq!(x.len(), n, "solid::strain_at: {kind} needs {n} node coordinates");
     assert_eq!(ue.len(), 3 * n, "solid::strain_at: ue must have 3n entries");
     let mut dn = [[0.0; 3]; MAX_NODES];
     shape::gradients(kind, xi, &mut dn[..n]);
-    let (_, inv) = jacobian(x, &dn[..n])?;
+    let (_, inv) = volume_jacobian(x, &dn[..n])?;
     // Displacement gradient H_ij = ∂u_i/∂x_j = Σ_a u_a,i ∂N_a/∂x_j.
     let mut h = [[0.0; 3]; 3];
     for a in 0..n {
-        let g = physical(&inv, dn[a]);
+        let g = physical_gradient(&inv, dn[a]);
         for i in 0..3 {
             let u = ue[3 * a + i];
             for j in 0..3 {

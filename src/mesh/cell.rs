@@ -2,7 +2,7 @@
 //!
 //! vibrofem keeps gmsh's node ordering everywhere internally; writers permute only at output
 //! (see `io::vtk`). The reference-element diagrams of each kind are in the docs of
-//! [`crate::shape`].
+//! [`crate::fe::shape`].
 
 /// The cells vibrofem reads. Solid analysis uses the 3D kinds; lower-dimensional kinds carry
 /// boundary groups (and later shells and beams).
@@ -98,7 +98,13 @@ impl CellKind {
             CellKind::Point1 => 0,
             CellKind::Line2 | CellKind::Line3 => 1,
             CellKind::Tri3 | CellKind::Tri6 | CellKind::Quad4 | CellKind::Quad8 | CellKind::Quad9 => 2,
-            _ => 3,
+            CellKind::Tet4
+            | CellKind::Tet10
+            | CellKind::Hex8
+            | CellKind::Hex20
+            | CellKind::Hex27
+            | CellKind::Wedge6
+            | CellKind::Wedge15 => 3,
         }
     }
 
@@ -112,7 +118,14 @@ impl CellKind {
             | CellKind::Tet4
             | CellKind::Hex8
             | CellKind::Wedge6 => 1,
-            _ => 2,
+            CellKind::Line3
+            | CellKind::Tri6
+            | CellKind::Quad8
+            | CellKind::Quad9
+            | CellKind::Tet10
+            | CellKind::Hex20
+            | CellKind::Hex27
+            | CellKind::Wedge15 => 2,
         }
     }
 

@@ -75,7 +75,15 @@ fn faces(kind: CellKind) -> &'static [&'static [usize]] {
             &[4, 5, 6, 7],
         ],
         CellKind::Wedge6 | CellKind::Wedge15 => &[&[0, 2, 1], &[3, 4, 5], &[0, 1, 4, 3], &[0, 3, 5, 2], &[1, 2, 5, 4]],
-        _ => &[],
+        // Not solids: no faces.
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => &[],
     }
 }
 
@@ -114,18 +122,30 @@ pub fn higher_order_nodes(kind: CellKind) -> &'static [&'static [usize]] {
         CellKind::Wedge15 => &[
             &[0, 1], &[0, 2], &[0, 3], &[1, 2], &[1, 4], &[2, 5], &[3, 4], &[3, 5], &[4, 5],
         ],
-        _ => &[],
+        // First-order kinds: corners only.
+        CellKind::Point1 | CellKind::Line2 | CellKind::Tri3 | CellKind::Quad4
+        | CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6 => &[],
     }
 }
 
-/// The kind of a face with `n_corners` corners of a cell of `kind`.
-fn face_kind(kind: CellKind, n_corners: usize) -> CellKind {
-    match (n_corners, kind) {
-        (3, k) if k.order() == 1 => CellKind::Tri3,
-        (3, _) => CellKind::Tri6,
-        (_, CellKind::Hex27) => CellKind::Quad9,
-        (_, k) if k.order() == 1 => CellKind::Quad4,
-        _ => CellKind::Quad8,
+/// The kind of a face with `n_corners` corners (3 or 4) of a cell of `kind`; `None` for a kind
+/// that is not a solid (it has no faces).
+fn face_kind(kind: CellKind, n_corners: usize) -> Option<CellKind> {
+    let tri = n_corners == 3;
+    match kind {
+        CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6 => Some(if tri { CellKind::Tri3 } else { CellKind::Quad4 }),
+        CellKind::Tet10 | CellKind::Hex20 | CellKind::Wedge15 => {
+            Some(if tri { CellKind::Tri6 } else { CellKind::Quad8 })
+        }
+        CellKind::Hex27 => Some(if tri { CellKind::Tri6 } else { CellKind::Quad9 }),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => None,
     }
 }
 
@@ -187,7 +207,19 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
     let subcells: Vec<&[usize]> = match kind {
         CellKind::Tet4 | CellKind::Tet10 => BRICK_TETS.iter().map(|c| c.as_slice()).collect(),
         CellKind::Wedge6 | CellKind::Wedge15 => BRICK_WEDGES.iter().map(|c| c.as_slice()).collect(),
-        _ => vec![&[0, 1, 2, 3, 4, 5, 6, 7]],
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => vec![&[0, 1, 2, 3, 4, 5, 6, 7]],
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => {
+            return Err(Error::InvalidInput(format!(
+                "box mesh: {kind} is not a solid cell kind"
+            )));
+        }
     };
     let mut cells: Vec<usize> = Vec::new(); // lattice ids, kind.n_nodes() per cell
     let mut boundary: [Vec<(CellKind, Vec<usize>)>; 6] = Default::default();
@@ -208,8 +240,9 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
                         for (g, group) in boundary.iter_mut().enumerate() {
                             let (axis, at_max) = (g / 2, g % 2 == 1);
                             let plane = if at_max { lat[axis] - 1 } else { 0 };
-                            if fc.iter().all(|p| p[axis] == plane) {
-                                let fkind = face_kind(kind, fc.len());
+                            if fc.iter().all(|p| p[axis] == plane)
+                                && let Some(fkind) = face_kind(kind, fc.len())
+                            {
                                 let mut ids = Vec::with_capacity(fkind.n_nodes());
                                 push_cell(&mut ids, &fc, higher_order_nodes(fkind), &lid);
                                 group.push((fkind, ids));

@@ -33,7 +33,7 @@
 //!
 //! # Orientation
 //!
-//! Every cell is in gmsh's node order ([`crate::shape`]) and positively oriented: hexahedra
+//! Every cell is in gmsh's node order ([`crate::fe::shape`]) and positively oriented: hexahedra
 //! have a positive Jacobian; a shell cell's normal (right-hand rule on its nodes) is the same
 //! for the whole group, as listed at each generator; boundary faces of solids point out of the
 //! grid's bounding box.
@@ -267,7 +267,7 @@ fn quad(p: impl Fn(u32, u32) -> [u32; 3]) -> [[u32; 3]; 4] {
 // ---------------------------------------------------------------------------------------------
 // Structured hexahedral meshes on rectilinear grids
 
-/// Corner offsets of a brick in gmsh's hexahedron order (see [`crate::shape`]).
+/// Corner offsets of a brick in gmsh's hexahedron order (see [`crate::fe::shape`]).
 #[rustfmt::skip]
 const BRICK: [[u32; 3]; 8] = [
     [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],

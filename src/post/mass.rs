@@ -44,10 +44,10 @@
 // Index loops over the three axes read like the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use crate::element::MassLumping;
+use crate::Result;
+use crate::element::ElementSet;
 use crate::mesh::{CellKind, Mesh};
 use crate::model::Model;
-use crate::{Error, Result};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::HashMap;
@@ -232,27 +232,28 @@ fn element_moments(x: &[[f64; 3]], d: usize, me: &[f64], drill: Option<(f64, [f6
     Moments { p, m, s, ss }
 }
 
-/// A model element: its kind of set, the set index and the element index in the set.
-type ElementRef = (Part, usize, usize);
+/// A model element: the index of its set in the list of continuum sets and the element index
+/// in the set.
+type ElementRef = (usize, usize);
 
-/// Kind of model element set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Part {
-    Solid,
-    Shell,
-    Beam,
-}
-
-fn coords(model: &Model, nodes: &[u32]) -> Vec<[f64; 3]> {
-    nodes.iter().map(|&a| model.nodes[a as usize]).collect()
-}
-
-fn inverted(tag: u64, kind: CellKind, det: f64) -> Error {
-    Error::InvertedElement {
-        element: tag,
-        kind: kind.name(),
-        det,
+fn coords(model: &Model, nodes: &[u32], buf: &mut [[f64; 3]; 27]) -> usize {
+    for (o, &a) in buf.iter_mut().zip(nodes) {
+        *o = model.nodes[a as usize];
     }
+    nodes.len()
+}
+
+/// Rigid-body moments of element `e` of `set`, from its consistent mass matrix less its
+/// spurious rotary inertia ([`ElementSet::spurious_inertia`]).
+fn moments_of(model: &Model, set: &dyn ElementSet, e: usize) -> Result<Moments> {
+    let mut buf = [[0.0; 3]; 27];
+    let n = coords(model, set.nodes(e), &mut buf);
+    let d = set.dofs_per_node();
+    let nd = d * n;
+    let mut me = vec![0.0; nd * nd];
+    set.consistent_mass(e, &mut me)?;
+    let drill = set.spurious_inertia(e)?;
+    Ok(element_moments(&buf[..n], d, &me, drill))
 }
 
 /// Mass properties of every physical group of `mesh` that contains solid, shell or beam
@@ -275,128 +276,40 @@ fn inverted(tag: u64, kind: CellKind, det: f64) -> Error {
 /// assert!((total.inertia[0][0] / (m * (0.2f64.powi(2) + 0.1f64.powi(2)) / 12.0) - 1.0).abs() < 1e-12);
 /// ```
 pub fn group_mass_properties(model: &Model, mesh: &Mesh) -> Result<Vec<MassProps>> {
+    // The continuum sets (solids, shells, beams, in this order), whose elements are mesh cells
+    // and belong to groups.
+    let sets: Vec<&dyn ElementSet> = (model.solids.iter().map(|s| s as &dyn ElementSet))
+        .chain(model.shells.iter().map(|s| s as &dyn ElementSet))
+        .chain(model.beams.iter().map(|s| s as &dyn ElementSet))
+        .collect();
     // Element moments, set by set (in parallel; stored per element, summed sequentially).
-    let solid: Vec<Vec<Moments>> = model
-        .solids
+    let continuum: Vec<Vec<Moments>> = sets
         .iter()
-        .map(|s| {
-            let nn = s.kind.n_nodes();
-            (0..s.tags.len())
+        .map(|&s| {
+            (0..s.len())
                 .into_par_iter()
-                .map(|e| {
-                    let x = coords(model, &s.conn[e * nn..(e + 1) * nn]);
-                    let mut me = vec![0.0; 9 * nn * nn];
-                    let rho = s.materials[s.mat[e] as usize].density;
-                    crate::element::solid::mass(s.kind, &x, rho, MassLumping::Consistent, &mut me)
-                        .map_err(|det| inverted(s.tags[e], s.kind, det))?;
-                    Ok(element_moments(&x, 3, &me, None))
-                })
-                .collect::<Result<Vec<_>>>()
-        })
-        .collect::<Result<_>>()?;
-    let shell: Vec<Vec<Moments>> = model
-        .shells
-        .iter()
-        .map(|s| {
-            (0..s.tags.len())
-                .into_par_iter()
-                .map(|e| {
-                    let kind = s.kinds[e];
-                    let x = coords(model, &s.conn[s.ptr[e]..s.ptr[e + 1]]);
-                    let nd = 6 * x.len();
-                    let mut me = vec![0.0; nd * nd];
-                    let rho = s.material.density;
-                    let bad = |det| inverted(s.tags[e], kind, det);
-                    crate::element::shell::mass(kind, &x, &s.section, rho, MassLumping::Consistent, &mut me)
-                        .map_err(bad)?;
-                    let area = crate::element::shell::area(kind, &x).map_err(bad)?;
-                    let normal = crate::element::shell::local_frame(kind, &x).map_err(bad)?[2];
-                    let t = s.section.thickness;
-                    let drill = rho * t.powi(3) / 12.0 * area;
-                    Ok(element_moments(&x, 6, &me, Some((drill, normal))))
-                })
-                .collect::<Result<Vec<_>>>()
-        })
-        .collect::<Result<_>>()?;
-    let beam: Vec<Vec<Moments>> = model
-        .beams
-        .iter()
-        .map(|b| {
-            let d = crate::element::beam::dofs_per_node(&b.section);
-            (0..b.tags.len())
-                .into_par_iter()
-                .map(|e| {
-                    let x = coords(model, &b.conn[b.ptr[e]..b.ptr[e + 1]]);
-                    let nd = d * x.len();
-                    let mut me = vec![0.0; nd * nd];
-                    crate::element::beam::mass(
-                        b.kinds[e],
-                        &x,
-                        b.orient[e],
-                        &b.section,
-                        &b.material,
-                        MassLumping::Consistent,
-                        &mut me,
-                    )
-                    .map_err(|err| Error::InvalidInput(format!("beam '{}', element {}: {err}", b.group, b.tags[e])))?;
-                    Ok(element_moments(&x, d, &me, None))
-                })
+                .map(|e| moments_of(model, s, e))
                 .collect::<Result<Vec<_>>>()
         })
         .collect::<Result<_>>()?;
     let discrete: Vec<Moments> = model
         .discrete
         .iter()
-        .flat_map(|d| {
-            (0..d.labels.len()).map(move |e| {
-                let x = coords(model, &d.nodes[e * d.per..(e + 1) * d.per]);
-                element_moments(&x, d.ndpn, &d.me[e], None)
-            })
-        })
+        .flat_map(|d| (0..d.len()).map(move |e| moments_of(model, d, e)))
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
         .filter(|m| m.m != 0.0 || m.ss.iter().flatten().any(|&v| v != 0.0))
         .collect();
 
     // Mesh cell (kind, tag) → model elements with the same nodes.
     let mut index: HashMap<(CellKind, u64), Vec<ElementRef>> = HashMap::new();
-    for (si, s) in model.solids.iter().enumerate() {
-        for (e, &tag) in s.tags.iter().enumerate() {
-            index.entry((s.kind, tag)).or_default().push((Part::Solid, si, e));
-        }
-    }
-    for (si, s) in model.shells.iter().enumerate() {
-        for (e, &tag) in s.tags.iter().enumerate() {
-            index.entry((s.kinds[e], tag)).or_default().push((Part::Shell, si, e));
-        }
-    }
-    for (si, s) in model.beams.iter().enumerate() {
-        for (e, &tag) in s.tags.iter().enumerate() {
-            index.entry((s.kinds[e], tag)).or_default().push((Part::Beam, si, e));
-        }
-    }
-    let element_nodes = |part: Part, si: usize, e: usize| -> &[u32] {
-        match part {
-            Part::Solid => {
-                let s = &model.solids[si];
-                let nn = s.kind.n_nodes();
-                &s.conn[e * nn..(e + 1) * nn]
-            }
-            Part::Shell => {
-                let s = &model.shells[si];
-                &s.conn[s.ptr[e]..s.ptr[e + 1]]
-            }
-            Part::Beam => {
-                let s = &model.beams[si];
-                &s.conn[s.ptr[e]..s.ptr[e + 1]]
+    for (si, s) in sets.iter().enumerate() {
+        for e in 0..s.len() {
+            if let (Some(kind), Some(tag)) = (s.cell_kind(e), s.tag(e)) {
+                index.entry((kind, tag)).or_default().push((si, e));
             }
         }
-    };
-    let moments = |part: Part, si: usize, e: usize| -> &Moments {
-        match part {
-            Part::Solid => &solid[si][e],
-            Part::Shell => &shell[si][e],
-            Part::Beam => &beam[si][e],
-        }
-    };
+    }
     let sum = |items: &mut dyn Iterator<Item = &Moments>| -> Option<Moments> {
         let items: Vec<&Moments> = items.collect();
         if items.is_empty() {
@@ -428,31 +341,21 @@ pub fn group_mass_properties(model: &Model, mesh: &Mesh) -> Result<Vec<MassProps
                 continue;
             };
             let cell = block.cell(i);
-            members.extend(
-                found
-                    .iter()
-                    .copied()
-                    .filter(|&(p, si, e)| element_nodes(p, si, e) == cell),
-            );
+            members.extend(found.iter().copied().filter(|&(si, e)| sets[si].nodes(e) == cell));
         }
         if members.is_empty() {
             continue;
         }
-        members.sort_unstable_by_key(|&(p, si, e)| (p as u8, si, e));
+        members.sort_unstable();
         members.dedup();
-        if let Some(acc) = sum(&mut members.iter().map(|&(p, si, e)| moments(p, si, e))) {
+        if let Some(acc) = sum(&mut members.iter().map(|&(si, e)| &continuum[si][e])) {
             out.push(acc.finish(&g.name));
         }
     }
     if let Some(acc) = sum(&mut discrete.iter()) {
         out.push(acc.finish(POINT_MASS_ENTRY));
     }
-    let mut all = solid
-        .iter()
-        .flatten()
-        .chain(shell.iter().flatten())
-        .chain(beam.iter().flatten())
-        .chain(discrete.iter());
+    let mut all = continuum.iter().flatten().chain(discrete.iter());
     if let Some(acc) = sum(&mut all) {
         out.push(acc.finish(MODEL_ENTRY));
     }

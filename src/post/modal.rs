@@ -9,7 +9,7 @@
 //! move).
 
 use crate::dof::DofMap;
-use crate::sparse::SymMatrix;
+use crate::linalg::sparse::SymMatrix;
 use faer::{Mat, MatRef};
 use serde::Serialize;
 

@@ -49,12 +49,12 @@ use serde::Serialize;
 
 use crate::assembly::ElementSet;
 use crate::element::solid;
+use crate::fe::quadrature;
+use crate::fe::shape::{self, MAX_NODES};
 use crate::io::msh_out::NodeView;
 use crate::io::vtk::PointField;
 use crate::mesh::{CellKind, Mesh};
 use crate::model::SolidSet;
-use crate::quadrature;
-use crate::shape::{self, MAX_NODES};
 use crate::{Error, Result};
 
 /// How the stress at an element's nodes is obtained before averaging (see the module docs).
@@ -304,19 +304,25 @@ fn check_displacements(n_nodes: usize, u: &[f64]) -> Result<()> {
     Ok(())
 }
 
-/// Gathers the coordinates and displacements of element `e` of `set`.
-fn gather(set: &SolidSet, e: usize, n_nodes: usize, u: &[f64], x: &mut [[f64; 3]], ue: &mut [f64]) -> Result<()> {
+/// Gathers the displacements of element `e` of `set`.
+fn gather_u(set: &impl ElementSet, e: usize, n_nodes: usize, u: &[f64], ue: &mut [f64]) -> Result<()> {
     let nodes = set.nodes(e);
     for (a, &g) in nodes.iter().enumerate() {
         let g = g as usize;
         if g >= n_nodes {
             return Err(Error::InvalidInput(format!(
                 "stress recovery: element {} uses node index {g}, but only {n_nodes} nodes were given",
-                set.tags[e]
+                set.tag(e).unwrap_or(e as u64)
             )));
         }
         ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * g..3 * g + 3]);
     }
+    Ok(())
+}
+
+/// Gathers the coordinates and displacements of element `e` of `set`.
+fn gather(set: &SolidSet, e: usize, n_nodes: usize, u: &[f64], x: &mut [[f64; 3]], ue: &mut [f64]) -> Result<()> {
+    gather_u(set, e, n_nodes, u, ue)?;
     set.coords(e, x);
     Ok(())
 }
@@ -324,19 +330,31 @@ fn gather(set: &SolidSet, e: usize, n_nodes: usize, u: &[f64], x: &mut [[f64; 3]
 /// The sampling points and extrapolation matrix of [`Recovery::Extrapolated`] for `kind`:
 /// `(points, E)` with `E` row-major `n_nodes × n_points`, so that the stress at node `a` is
 /// `Σ_q E[a][q] σ(ξ_q)`.
-fn extrapolation(kind: CellKind) -> (Vec<[f64; 3]>, Vec<f64>) {
+/// [`Error::InvalidInput`] for a kind that is not a solid.
+fn extrapolation(kind: CellKind) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
     let nodes = shape::reference_nodes(kind);
     let nn = nodes.len();
     let linear = match kind {
         CellKind::Tet4 => {
             // One point: the constant stress of the element.
             let pts = quadrature::for_cell(kind, 1).points;
-            return (pts, vec![1.0; nn]);
+            return Ok((pts, vec![1.0; nn]));
         }
         CellKind::Tet10 => CellKind::Tet4,
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => CellKind::Hex8,
         CellKind::Wedge6 | CellKind::Wedge15 => CellKind::Wedge6,
-        _ => panic!("{kind} is not a solid cell kind"),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => {
+            return Err(Error::InvalidInput(format!(
+                "stress extrapolation: {kind} is not a solid cell kind"
+            )));
+        }
     };
     let nl = linear.n_nodes();
     let pts = quadrature::for_cell(linear, 2).points;
@@ -358,13 +376,15 @@ fn extrapolation(kind: CellKind) -> (Vec<[f64; 3]>, Vec<f64>) {
             e[i * nl + q] = (0..nl).map(|b| n[b] * inv[(b, q)]).sum();
         }
     }
-    (pts, e)
+    Ok((pts, e))
 }
 
 /// Nodal stresses by direct evaluation at the nodes, averaged over the elements sharing each
 /// node ([`Recovery::Direct`]; see the module docs).
 ///
-/// - `solids`: the model's solid sets (e.g. [`crate::model::Model::solids`]);
+/// - `solids`: element sets (e.g. [`crate::model::Model::solids`], or all of
+///   [`crate::model::Model::element_sets`]); sets without a continuum stress
+///   ([`ElementSet::has_stress`]) are skipped;
 /// - `n_nodes`: number of mesh nodes;
 /// - `u`: displacements, node-major, 3 per node (m).
 ///
@@ -372,37 +392,54 @@ fn extrapolation(kind: CellKind) -> (Vec<[f64; 3]>, Vec<f64>) {
 /// [`Error::InvalidInput`] if `u` does not have `3 n_nodes` finite values or an element uses
 /// a node index `≥ n_nodes`; [`Error::InvertedElement`] if the
 /// Jacobian determinant is not positive at a node of an element.
-pub fn nodal_stress(solids: &[SolidSet], n_nodes: usize, u: &[f64]) -> Result<NodalStress> {
+pub fn nodal_stress<S: ElementSet>(solids: &[S], n_nodes: usize, u: &[f64]) -> Result<NodalStress> {
     nodal_stress_with(solids, n_nodes, u, Recovery::Direct)
 }
 
 /// Nodal stresses with the chosen per-element [`Recovery`], averaged over the elements sharing
 /// each node. Errors as [`nodal_stress`].
-pub fn nodal_stress_with(solids: &[SolidSet], n_nodes: usize, u: &[f64], recovery: Recovery) -> Result<NodalStress> {
+pub fn nodal_stress_with<S: ElementSet>(
+    solids: &[S],
+    n_nodes: usize,
+    u: &[f64],
+    recovery: Recovery,
+) -> Result<NodalStress> {
     check_displacements(n_nodes, u)?;
     let mut sum = vec![[0.0; 6]; n_nodes];
     let mut count = vec![0u32; n_nodes];
     let mut vm_max = vec![0.0f64; n_nodes];
     let mut max_element = vec![0u64; n_nodes];
-    let mut x = [[0.0; 3]; MAX_NODES];
     let mut ue = [0.0; 3 * MAX_NODES];
     let mut node_stress = [[0.0; 6]; MAX_NODES];
     let mut point_stress = [[0.0; 6]; MAX_NODES];
+    // Extrapolation tables per kind, built on first use.
+    let mut tables: Vec<(CellKind, (Vec<[f64; 3]>, Vec<f64>))> = Vec::new();
     for set in solids {
-        let kind = set.kind;
-        let nn = kind.n_nodes();
-        let xi_nodes = shape::reference_nodes(kind);
-        let extra = match recovery {
-            Recovery::Direct => None,
-            Recovery::Extrapolated => Some(extrapolation(kind)),
-        };
+        if !set.has_stress() {
+            continue;
+        }
         for e in 0..set.len() {
-            gather(set, e, n_nodes, u, &mut x[..nn], &mut ue[..3 * nn])?;
-            let mat = &set.materials[set.mat[e] as usize];
-            let eval = |xi: [f64; 3]| {
-                solid::stress_at(kind, &x[..nn], mat, &ue[..3 * nn], xi).map_err(|det| set.inverted(e, det))
+            let Some(kind) = set.cell_kind(e) else {
+                continue;
             };
-            match &extra {
+            let nn = kind.n_nodes();
+            let xi_nodes = shape::reference_nodes(kind);
+            let extra = match recovery {
+                Recovery::Direct => None,
+                Recovery::Extrapolated => {
+                    let i = match tables.iter().position(|(k, _)| *k == kind) {
+                        Some(i) => i,
+                        None => {
+                            tables.push((kind, extrapolation(kind)?));
+                            tables.len() - 1
+                        }
+                    };
+                    Some(&tables[i].1)
+                }
+            };
+            gather_u(set, e, n_nodes, u, &mut ue[..3 * nn])?;
+            let eval = |xi: [f64; 3]| set.stress_at(e, &ue[..3 * nn], xi);
+            match extra {
                 None => {
                     for (a, &xi) in xi_nodes.iter().enumerate() {
                         node_stress[a] = eval(xi)?;
@@ -435,7 +472,7 @@ pub fn nodal_stress_with(solids: &[SolidSet], n_nodes: usize, u: &[f64], recover
                 let vm = von_mises(s);
                 if count[g] == 1 || vm > vm_max[g] {
                     vm_max[g] = vm;
-                    max_element[g] = set.tags[e];
+                    max_element[g] = set.tag(e).unwrap_or(e as u64);
                 }
             }
         }

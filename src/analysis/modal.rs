@@ -1,0 +1,370 @@
+//! Orchestration of analyses: mesh → model → assembly → solve → report. No formatting here.
+
+use crate::linalg::eigen::{self, EigenParams, SturmCheck, Target};
+use crate::linalg::ordering::Ordering;
+use crate::mesh::Mesh;
+use crate::model::{Model, ModelSpec};
+use crate::post::modal::{ParticipationTable, hz, lambda_of_hz, participation};
+use crate::system::{System, SystemOptions};
+use crate::{Error, Result};
+use serde::Serialize;
+use std::time::Instant;
+
+/// What a modal analysis computes.
+#[derive(Clone, Debug)]
+pub struct ModalOptions {
+    /// Model definition.
+    pub spec: ModelSpec,
+    /// Number of modes nearest the shift (lowest, by default), or a band in Hz.
+    pub target: ModalTarget,
+    /// Shift in Hz (negative means a negative λ shift, −(2πf)²); `None` for the default.
+    pub shift_hz: Option<f64>,
+    /// Lanczos block size.
+    pub block: usize,
+    /// Fill-reducing ordering.
+    pub ordering: Ordering,
+    /// Refuse to factorise if the factor would need more than this many bytes.
+    pub max_memory: Option<u64>,
+    /// Limit on eigen-iteration work (operator applications).
+    pub max_applications: usize,
+}
+
+impl Default for ModalOptions {
+    fn default() -> Self {
+        ModalOptions {
+            spec: ModelSpec::default(),
+            target: ModalTarget::Modes(12),
+            shift_hz: None,
+            block: 6,
+            ordering: Ordering::Metis,
+            max_memory: None,
+            max_applications: 20_000,
+        }
+    }
+}
+
+/// Which modes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ModalTarget {
+    /// The lowest N modes (rigid-body modes included), or the N nearest a user shift.
+    Modes(usize),
+    /// All modes with frequency in [lo, hi] Hz.
+    Band(f64, f64),
+}
+
+/// One mode of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModeRow {
+    /// 1-based mode number (rigid-body modes first, as commercial codes number them).
+    pub mode: usize,
+    /// Frequency in Hz.
+    pub frequency_hz: f64,
+    /// Eigenvalue ω² (rad²/s²).
+    pub eigenvalue: f64,
+    /// `"rigid"` or `"elastic"`.
+    pub kind: &'static str,
+    /// Relative residual ‖Kx − λMx‖/‖Kx‖.
+    pub rel_residual: f64,
+    /// Participation factors (X, Y, Z, RX, RY, RZ).
+    pub participation: [f64; 6],
+    /// Effective masses (kg, kg·m²).
+    pub effective_mass: [f64; 6],
+    /// Cumulative effective-mass ratio after this mode.
+    pub cumulative_ratio: [f64; 6],
+}
+
+/// Wall time per phase, seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Timings {
+    /// Reading the mesh.
+    pub read: f64,
+    /// Building the model, pattern and K, M.
+    pub assemble: f64,
+    /// Ordering and symbolic factorisation.
+    pub order: f64,
+    /// Numeric factorisation of K − σM.
+    pub factor: f64,
+    /// Lanczos iteration.
+    pub solve: f64,
+    /// Residuals, orthonormality and Sturm counts.
+    pub verify: f64,
+    /// Post-processing (participation).
+    pub post: f64,
+    /// Total.
+    pub total: f64,
+}
+
+/// Everything a modal run reports (the `--json` document).
+#[derive(Clone, Debug, Serialize)]
+pub struct ModalReport {
+    /// Mesh file.
+    pub mesh: String,
+    /// Nodes in the mesh.
+    pub nodes: usize,
+    /// Solid cells per kind.
+    pub cells: Vec<(String, usize)>,
+    /// Free DOFs (equations).
+    pub dofs: usize,
+    /// Total volume, m³.
+    pub volume_m3: f64,
+    /// Total mass, kg.
+    pub mass_kg: f64,
+    /// `"consistent"` or `"lumped"`.
+    pub mass_matrix: &'static str,
+    /// Shift used, λ units.
+    pub shift: f64,
+    /// Frequencies of all reported modes, Hz, ascending.
+    pub frequencies_hz: Vec<f64>,
+    /// Number of rigid-body modes among them.
+    pub n_rigid: usize,
+    /// Per-mode rows.
+    pub modes: Vec<ModeRow>,
+    /// Sturm-sequence check.
+    pub sturm: SturmCheck,
+    /// No mode was missed.
+    pub complete: bool,
+    /// Every residual below the verification tolerance and the modes M-orthonormal.
+    pub accurate: bool,
+    /// Largest relative residual.
+    pub max_rel_residual: f64,
+    /// max |XᵀMX − I|.
+    pub m_orthonormality: f64,
+    /// Worst backward error of a probe solve with the factorisations used (stability check).
+    pub factor_backward_error: f64,
+    /// Total participating mass per direction and the centre of mass.
+    pub participation_total: [f64; 6],
+    /// Centre of mass, m.
+    pub centre_of_mass: [f64; 3],
+    /// Phase timings.
+    pub timings_s: Timings,
+    /// Peak resident memory of the process, bytes (Linux VmHWM), if known.
+    pub peak_memory_bytes: Option<u64>,
+    /// Flops of one numeric factorisation.
+    pub factor_flops: f64,
+    /// Achieved factorisation rate, GFLOP/s.
+    pub factor_gflops: f64,
+    /// Entries of the factor L.
+    pub factor_nnz: usize,
+    /// Numeric factorisations done (shift plus Sturm points).
+    pub factorizations: usize,
+    /// Operator applications (vectors) in the iteration.
+    pub operator_applications: usize,
+    /// Notes and warnings for the user.
+    pub notes: Vec<String>,
+}
+
+impl ModalReport {
+    /// Frequencies of the elastic (non-rigid-body) modes, ascending, Hz.
+    pub fn elastic_frequencies(&self) -> Vec<f64> {
+        self.modes
+            .iter()
+            .filter(|m| m.kind == "elastic")
+            .map(|m| m.frequency_hz)
+            .collect()
+    }
+}
+
+/// A modal solution with its shapes, for writers.
+pub struct ModalRun {
+    /// The report.
+    pub report: ModalReport,
+    /// Mode shapes expanded to nodes: per mode, 3 components per node (node-major), M-normalised.
+    pub shapes: Vec<Vec<f64>>,
+    /// Eigenvalues ω² (rad²/s²), ascending.
+    pub lambda: Vec<f64>,
+    /// M-normalised eigenvectors over the free DOFs (one column per mode; see
+    /// [`crate::dof::DofMap`] for the DOF of each row).
+    pub vectors: faer::Mat<f64>,
+}
+
+pub use crate::system::{available_memory, check_memory, peak_memory};
+
+impl ModalOptions {
+    /// How to build the system for this analysis.
+    pub fn system_options(&self) -> SystemOptions {
+        SystemOptions {
+            ordering: self.ordering,
+            max_memory: self.max_memory,
+            mass: true,
+        }
+    }
+
+    /// The eigen-solve parameters.
+    pub fn params(&self) -> ModalParams {
+        ModalParams {
+            target: self.target,
+            shift_hz: self.shift_hz,
+            block: self.block,
+            max_applications: self.max_applications,
+        }
+    }
+}
+
+/// What a modal solve on an assembled [`System`] computes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModalParams {
+    /// Number of modes nearest the shift (lowest, by default), or a band in Hz.
+    pub target: ModalTarget,
+    /// Shift in Hz (negative means a negative λ shift, −(2πf)²); `None` for the default.
+    pub shift_hz: Option<f64>,
+    /// Lanczos block size.
+    pub block: usize,
+    /// Limit on eigen-iteration work (operator applications).
+    pub max_applications: usize,
+}
+
+impl Default for ModalParams {
+    fn default() -> Self {
+        ModalOptions::default().params()
+    }
+}
+
+/// Run a modal analysis on a mesh already in memory: build the model and its [`System`], then
+/// [`solve`]. `source` names the mesh in messages; `read_time` (s) is reported as the read phase.
+pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64) -> Result<ModalRun> {
+    let t = Instant::now();
+    let model = Model::build(mesh, &opts.spec, source)?;
+    let t_model = t.elapsed().as_secs_f64();
+    let sys = System::build(model, &opts.system_options(), source)?;
+    let mut run = solve(&sys, &opts.params())?;
+    let tm = &mut run.report.timings_s;
+    tm.read = read_time;
+    tm.assemble += t_model;
+    tm.total += read_time + t_model;
+    Ok(run)
+}
+
+/// Natural frequencies and mode shapes of an assembled system, verified: residuals,
+/// M-orthonormality, a Sturm count and the backward error of every factorisation.
+pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
+    let t_all = Instant::now();
+    let model = sys.model();
+    let source = sys.source();
+    let mut tm = Timings {
+        assemble: sys.timings.assemble,
+        order: sys.timings.order,
+        ..Default::default()
+    };
+    let k_mat = sys.k();
+    let m_mat = sys.m()?;
+    let sym = sys.symbolic();
+    let target = match opts.target {
+        ModalTarget::Modes(n) => Target::Nearest(n),
+        ModalTarget::Band(lo, hi) => {
+            if !(lo < hi) {
+                return Err(Error::InvalidInput(format!(
+                    "--band: lower frequency {lo} must be below the upper {hi}"
+                )));
+            }
+            Target::Band(lambda_of_hz(lo), lambda_of_hz(hi))
+        }
+    };
+    let params = EigenParams {
+        target,
+        shift: opts.shift_hz.map(lambda_of_hz),
+        block: opts.block,
+        max_applications: opts.max_applications,
+        ..Default::default()
+    };
+    let sol = eigen::solve(k_mat, m_mat, sym, &params).map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
+    tm.factor = sol.time_factor;
+    tm.solve = sol.time_iterate;
+    tm.verify = sol.time_verify;
+
+    let t = Instant::now();
+    let nodes = &model.nodes;
+    let part: ParticipationTable = participation(m_mat, &model.dofs, nodes, sol.vectors.as_ref());
+    // Rigid-body modes: shapes in the span of the six rigid-body motions (they come first).
+    let n_rigid = part.rigid.iter().take_while(|&&r| r).count();
+    let mut modes = Vec::with_capacity(sol.lambda.len());
+    for (i, &l) in sol.lambda.iter().enumerate() {
+        modes.push(ModeRow {
+            mode: i + 1,
+            frequency_hz: hz(l),
+            eigenvalue: l,
+            kind: if part.rigid[i] { "rigid" } else { "elastic" },
+            rel_residual: sol.rel_residual[i],
+            participation: part.modes[i].factor,
+            effective_mass: part.modes[i].effective,
+            cumulative_ratio: part.cumulative_ratio[i],
+        });
+    }
+    let n_mesh = model.n_mesh_nodes;
+    let shapes: Vec<Vec<f64>> = (0..sol.vectors.ncols())
+        .map(|c| {
+            let mut s = model.dofs.expand(&eigen::column(&sol.vectors, c), 3);
+            s.truncate(3 * n_mesh);
+            s
+        })
+        .collect();
+    tm.post = t.elapsed().as_secs_f64();
+    tm.total = t_all.elapsed().as_secs_f64() + tm.assemble + tm.order;
+    let (volume, solid_mass) = model.volume_and_mass()?;
+    let mass = solid_mass + model.discrete_mass();
+
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
+    let accurate = max_res <= params.verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
+    let mut notes = model.notes.clone();
+    if !accurate {
+        notes.push(format!(
+            "accuracy not guaranteed: largest residual {max_res:.2e} (tolerance {:.0e}), M-orthonormality error {:.2e}",
+            params.verify_tol, sol.m_orthonormality
+        ));
+    }
+    if sol.factor_backward_error > 1e-8 {
+        notes.push(format!(
+            "a factorisation of K − σM is unstable (probe backward error {:.1e}, pivot growth): results may be wrong",
+            sol.factor_backward_error
+        ));
+    }
+    if !sol.sturm.complete {
+        notes.push(format!(
+            "Sturm check failed: {} modes expected between {:.6e} and {:.6e} rad²/s², {} found",
+            sol.sturm.expected, sol.sturm.lower.0, sol.sturm.upper.0, sol.sturm.found
+        ));
+    }
+    let factor_flops = sym.flops;
+    let report = ModalReport {
+        mesh: source.to_string(),
+        nodes: model.n_mesh_nodes,
+        cells: model
+            .cell_counts()
+            .iter()
+            .map(|(k, n)| (k.name().to_string(), *n))
+            .collect(),
+        dofs: model.dofs.n_free,
+        volume_m3: volume,
+        mass_kg: mass,
+        mass_matrix: model.spec.lumping.name(),
+        shift: sol.shift,
+        frequencies_hz: sol.lambda.iter().map(|&l| hz(l)).collect(),
+        n_rigid,
+        modes,
+        complete: sol.sturm.complete,
+        sturm: sol.sturm,
+        accurate,
+        max_rel_residual: max_res,
+        m_orthonormality: sol.m_orthonormality,
+        factor_backward_error: sol.factor_backward_error,
+        participation_total: part.total,
+        centre_of_mass: part.centre_of_mass,
+        timings_s: tm.clone(),
+        peak_memory_bytes: peak_memory(),
+        factor_flops,
+        factor_gflops: if tm.factor > 0.0 {
+            factor_flops / tm.factor / 1e9
+        } else {
+            0.0
+        },
+        factor_nnz: sym.nnz_l,
+        factorizations: sol.factorizations,
+        operator_applications: sol.applications,
+        notes,
+    };
+    Ok(ModalRun {
+        report,
+        shapes,
+        lambda: sol.lambda,
+        vectors: sol.vectors,
+    })
+}

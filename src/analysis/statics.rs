@@ -1,0 +1,658 @@
+//! Linear static analysis: K̂ û = Tᵀ(f − K g), u = T û + g, on the same assembly as the modal
+//! analysis, with reactions, an equilibrium check and the stiffness along coupled DOFs.
+//!
+//! Loads (per load case, several cases share one factorisation):
+//! - a total force on a group: on a coupled group it acts on the reference node; on a surface
+//!   group it is spread as a uniform traction (consistent nodal forces ∫N·t dA); on other groups
+//!   it is split equally between the group's nodes;
+//! - a pressure on a surface group (positive pushes into the solid, along the inward normal);
+//! - a body acceleration (gravity), consistent: f = M·a.
+//!
+//! An under-constrained model is detected from the factorisation (a pivot at rounding level)
+//! and reported with the rigid-body motions it leaves free.
+
+use crate::assembly::ElementSet;
+use crate::dof::{DofMap, NCOMP};
+use crate::linalg::factor::Factor;
+use crate::linalg::sparse::SymMatrix;
+use crate::mesh::Mesh;
+use crate::model::{Model, ModelSpec};
+use crate::system::{System, SystemOptions};
+use crate::{Error, Result};
+use faer::Mat;
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One load.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Load {
+    /// Total force (N) on a group.
+    Force {
+        /// Group.
+        group: String,
+        /// Fx, Fy, Fz.
+        force: [f64; 3],
+    },
+    /// Pressure (Pa) on a surface group, positive into the solid.
+    Pressure {
+        /// Surface group.
+        group: String,
+        /// Pressure.
+        p: f64,
+    },
+    /// Body acceleration (m/s²), e.g. gravity [0, 0, −9.81].
+    Acceleration([f64; 3]),
+}
+
+/// A static analysis.
+#[derive(Clone, Debug, Default)]
+pub struct StaticOptions {
+    /// The model (supports, couplings, prescribed displacements, springs).
+    pub spec: ModelSpec,
+    /// Load cases; each is a list of loads. An empty list means one case with no loads (e.g.
+    /// only prescribed displacements).
+    pub cases: Vec<Vec<Load>>,
+}
+
+/// Resultant of a set of forces: force (N) and moment about the origin (N·m).
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct Resultant {
+    /// Fx, Fy, Fz.
+    pub force: [f64; 3],
+    /// Mx, My, Mz about the origin.
+    pub moment: [f64; 3],
+}
+
+/// Reaction of one support.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reaction {
+    /// The group (fixed, prescribed or coupled).
+    pub group: String,
+    /// Resultant of the reactions on it (for a coupled group: at its reference node, moments
+    /// about the origin).
+    pub resultant: Resultant,
+}
+
+/// Displacement of a coupling's reference node.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReferenceResult {
+    /// Coupled group.
+    pub group: String,
+    /// ux, uy, uz (m), rx, ry, rz (rad).
+    pub displacement: [f64; 6],
+    /// Force applied to it by loads, N.
+    pub applied: [f64; 3],
+    /// Reaction on it (its fixed components), N and N·m.
+    pub reaction: [f64; 6],
+    /// Stiffness along the guided axis: force / displacement (N/m), where defined.
+    pub stiffness: Option<f64>,
+}
+
+/// Results of one load case.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseReport {
+    /// Largest displacement magnitude (m) and the file tag of its node.
+    pub max_displacement: (f64, u64),
+    /// Reference nodes.
+    pub references: Vec<ReferenceResult>,
+    /// Reactions per support.
+    pub reactions: Vec<Reaction>,
+    /// Applied loads.
+    pub applied: Resultant,
+    /// |Σ reactions + Σ applied| / max(|applied|, |reactions|), forces and moments.
+    pub equilibrium_error: f64,
+    /// ‖K̂û − f̂‖ / ‖f̂‖.
+    pub rel_residual: f64,
+}
+
+/// A static run: report plus the full displacement fields.
+pub struct StaticRun {
+    /// Free equations.
+    pub dofs: usize,
+    /// Per case.
+    pub cases: Vec<CaseReport>,
+    /// Per case: raw displacements (NCOMP per node, all model nodes).
+    pub u: Vec<Vec<f64>>,
+    /// The model (for stress recovery and output).
+    pub model: Arc<Model>,
+    /// Wall time per phase.
+    pub timings: StaticTimings,
+}
+
+/// Wall time of a static analysis per phase, seconds.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct StaticTimings {
+    /// Model, graph, pattern and K.
+    pub assemble: f64,
+    /// Ordering, symbolic and numeric factorisation.
+    pub factor: f64,
+    /// Load vectors and the solve.
+    pub solve: f64,
+    /// Reactions, resultants and checks.
+    pub post: f64,
+}
+
+/// Consistent nodal forces of a uniform traction over the cells of a surface group, and the
+/// group's area. Returns per-node weights w_a = ∫N_a dA (so that force_a = w_a / A · F).
+fn surface_weights(mesh: &Mesh, group: &str) -> Result<(Vec<(u32, f64)>, f64, Vec<(u32, [f64; 3])>)> {
+    let g = mesh.group(group)?;
+    let mut w: std::collections::BTreeMap<u32, f64> = Default::default();
+    let mut wn: std::collections::BTreeMap<u32, [f64; 3]> = Default::default();
+    let mut area = 0.0;
+    for c in &g.cells {
+        let b = &mesh.blocks[c.block as usize];
+        if b.kind.dim() != 2 {
+            continue;
+        }
+        let kind = b.kind;
+        let nodes = b.cell(c.index as usize);
+        let nn = kind.n_nodes();
+        let rule = crate::fe::quadrature::for_cell(kind, 2 * kind.order() + 1);
+        let mut n = [0.0; 9];
+        let mut dn = [[0.0; 3]; 9];
+        let mut x = [[0.0; 3]; 9];
+        for a in 0..nn {
+            x[a] = mesh.nodes[nodes[a] as usize];
+        }
+        for (xi, wq) in rule.points.iter().zip(&rule.weights) {
+            crate::fe::shape::values_and_gradients(kind, *xi, &mut n[..nn], &mut dn[..nn]);
+            // Area vector (unnormalised normal) of the parametrisation and area element.
+            let (nv, ja) = crate::fe::geometry::surface_metric(&x[..nn], &dn[..nn]);
+            area += ja * wq;
+            for a in 0..nn {
+                *w.entry(nodes[a]).or_default() += n[a] * ja * wq;
+                let e = wn.entry(nodes[a]).or_default();
+                for d in 0..3 {
+                    e[d] += n[a] * nv[d] * wq;
+                }
+            }
+        }
+    }
+    if area <= 0.0 {
+        return Err(Error::InvalidInput(format!(
+            "group '{group}' has no surface cells: a distributed force or pressure needs a surface group"
+        )));
+    }
+    Ok((w.into_iter().collect(), area, wn.into_iter().collect()))
+}
+
+/// Raw load vector (NCOMP per node) of one load case.
+fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<Vec<f64>> {
+    let n = model.dofs.n_nodes();
+    let mut f = vec![0.0; NCOMP * n];
+    for load in loads {
+        match load {
+            Load::Force { group, force } => {
+                if force.iter().any(|v| !v.is_finite()) {
+                    return Err(Error::InvalidInput(format!(
+                        "force on '{group}' is not finite: {force:?}"
+                    )));
+                }
+                if let Some(r) = model.references.iter().find(|r| &r.group == group) {
+                    for d in 0..3 {
+                        f[NCOMP * r.node + d] += force[d];
+                    }
+                    continue;
+                }
+                let g = mesh.group(group)?;
+                if g.dim == 2 {
+                    let (w, area, _) = surface_weights(mesh, group)?;
+                    for (a, wa) in w {
+                        for d in 0..3 {
+                            f[NCOMP * a as usize + d] += wa / area * force[d];
+                        }
+                    }
+                } else {
+                    let nodes = mesh.group_nodes(g);
+                    if nodes.is_empty() {
+                        return Err(Error::InvalidInput(format!(
+                            "force on '{group}': the group has no nodes"
+                        )));
+                    }
+                    for a in &nodes {
+                        for d in 0..3 {
+                            f[NCOMP * *a as usize + d] += force[d] / nodes.len() as f64;
+                        }
+                    }
+                }
+            }
+            Load::Pressure { group, p } => {
+                if !p.is_finite() {
+                    return Err(Error::InvalidInput(format!("pressure on '{group}' is not finite: {p}")));
+                }
+                let (_, _, wn) = surface_weights(mesh, group)?;
+                // Orient the surface: its normals must point out of the solid. Compare with the
+                // direction from the solid's centroid near the surface (the mean of the solid
+                // nodes adjacent to the group's nodes).
+                let sign = outward_sign(mesh, model, &wn);
+                for (a, v) in wn {
+                    for d in 0..3 {
+                        f[NCOMP * a as usize + d] -= sign * p * v[d];
+                    }
+                }
+            }
+            Load::Acceleration(acc) => {
+                if acc.iter().any(|v| !v.is_finite()) {
+                    return Err(Error::InvalidInput(format!("acceleration is not finite: {acc:?}")));
+                }
+                // Consistent body force f = M·a over every element set (solids, shells,
+                // beams, point masses): the acceleration acts on the translations.
+                for set in model.element_sets() {
+                    let ndpn = set.dofs_per_node();
+                    for e in 0..set.len() {
+                        let nodes = set.nodes(e);
+                        let nd = ndpn * nodes.len();
+                        let mut ke = vec![0.0; nd * nd];
+                        let mut me = vec![0.0; nd * nd];
+                        set.matrices(e, &mut ke, &mut me, true)?;
+                        for i in 0..nd {
+                            let mut fi = 0.0;
+                            for j in 0..nd {
+                                if j % ndpn < 3 {
+                                    fi += me[i * nd + j] * acc[j % ndpn];
+                                }
+                            }
+                            f[NCOMP * nodes[i / ndpn] as usize + i % ndpn] += fi;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(f)
+}
+
+/// +1 if the accumulated area vectors point out of the solid, −1 otherwise.
+fn outward_sign(mesh: &Mesh, model: &Model, wn: &[(u32, [f64; 3])]) -> f64 {
+    let mut centroid = [0.0; 3];
+    let mut count = 0.0f64;
+    for s in &model.solids {
+        for &a in &s.conn {
+            for d in 0..3 {
+                centroid[d] += mesh.nodes[a as usize][d];
+            }
+            count += 1.0;
+        }
+    }
+    for c in &mut centroid {
+        *c /= count.max(1.0);
+    }
+    let mut dot = 0.0;
+    for (a, v) in wn {
+        let x = mesh.nodes[*a as usize];
+        dot += (0..3).map(|d| (x[d] - centroid[d]) * v[d]).sum::<f64>();
+    }
+    if dot >= 0.0 { 1.0 } else { -1.0 }
+}
+
+/// Reduced right-hand side f̂ = Tᵀ(f − K g).
+fn reduced_rhs(model: &Model, sets: &[&dyn ElementSet], f_raw: &[f64]) -> Result<Vec<f64>> {
+    let dofs = &model.dofs;
+    let mut fh = vec![0.0; dofs.n_free];
+    for (r, &v) in f_raw.iter().enumerate() {
+        if v == 0.0 || dofs.active[r / NCOMP] & (1 << (r % NCOMP)) == 0 {
+            continue;
+        }
+        for (e, c) in dofs.expansion(r).terms {
+            fh[e] += c * v;
+        }
+    }
+    // −Tᵀ K g over the elements touching prescribed values.
+    for set in sets {
+        let ndpn = set.dofs_per_node();
+        for e in 0..set.len() {
+            let nodes = set.nodes(e);
+            if !nodes.iter().any(|&a| dofs.special[a as usize]) {
+                continue;
+            }
+            let nd = ndpn * nodes.len();
+            let exps: Vec<crate::dof::Expansion> = local_expansions(dofs, nodes, ndpn);
+            if exps.iter().all(|x| x.constant == 0.0) {
+                continue;
+            }
+            let mut ke = vec![0.0; nd * nd];
+            let mut me = vec![];
+            set.matrices(e, &mut ke, &mut me, false)?;
+            for i in 0..nd {
+                let kg: f64 = (0..nd).map(|j| ke[i * nd + j] * exps[j].constant).sum();
+                for &(eq, c) in &exps[i].terms {
+                    fh[eq] -= c * kg;
+                }
+            }
+        }
+    }
+    Ok(fh)
+}
+
+fn local_expansions(dofs: &DofMap, nodes: &[u32], ndpn: usize) -> Vec<crate::dof::Expansion> {
+    nodes
+        .iter()
+        .flat_map(|&a| (0..ndpn).map(move |c| (a as usize, c)))
+        .map(|(a, c)| {
+            if dofs.active[a] & (1 << c) != 0 {
+                dofs.expansion(NCOMP * a + c)
+            } else {
+                Default::default()
+            }
+        })
+        .collect()
+}
+
+/// Internal forces K u at every raw DOF (element by element).
+fn internal_forces(model: &Model, sets: &[&dyn ElementSet], u: &[f64]) -> Result<Vec<f64>> {
+    let mut r = vec![0.0; u.len()];
+    for set in sets {
+        let ndpn = set.dofs_per_node();
+        for e in 0..set.len() {
+            let nodes = set.nodes(e);
+            let nd = ndpn * nodes.len();
+            let mut ke = vec![0.0; nd * nd];
+            let mut me = vec![];
+            set.matrices(e, &mut ke, &mut me, false)?;
+            let ue: Vec<f64> = (0..nd)
+                .map(|i| u[NCOMP * nodes[i / ndpn] as usize + i % ndpn])
+                .collect();
+            for i in 0..nd {
+                let v: f64 = (0..nd).map(|j| ke[i * nd + j] * ue[j]).sum();
+                r[NCOMP * nodes[i / ndpn] as usize + i % ndpn] += v;
+            }
+        }
+    }
+    let _ = model;
+    Ok(r)
+}
+
+fn resultant_of(nodes: &[[f64; 3]], f: &[f64], pick: impl Fn(usize, usize) -> bool) -> Resultant {
+    let mut out = Resultant::default();
+    for (a, x) in nodes.iter().enumerate() {
+        let fa = [
+            if pick(a, 0) { f[NCOMP * a] } else { 0.0 },
+            if pick(a, 1) { f[NCOMP * a + 1] } else { 0.0 },
+            if pick(a, 2) { f[NCOMP * a + 2] } else { 0.0 },
+        ];
+        for d in 0..3 {
+            out.force[d] += fa[d];
+        }
+        out.moment[0] += x[1] * fa[2] - x[2] * fa[1];
+        out.moment[1] += x[2] * fa[0] - x[0] * fa[2];
+        out.moment[2] += x[0] * fa[1] - x[1] * fa[0];
+        for d in 0..3 {
+            if pick(a, 3 + d) {
+                out.moment[d] += f[NCOMP * a + 3 + d];
+            }
+        }
+    }
+    out
+}
+
+/// Names of the rigid-body motions (about the centroid) that K̂ leaves free.
+fn free_rigid_motions(k: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]]) -> Vec<String> {
+    let n = dofs.n_free;
+    let mut c = [0.0; 3];
+    for x in nodes {
+        for d in 0..3 {
+            c[d] += x[d] / nodes.len() as f64;
+        }
+    }
+    let mut r = Mat::zeros(n, 6);
+    for (a, x) in nodes.iter().enumerate() {
+        let d = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
+        let rot = [[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]];
+        for comp in 0..3 {
+            if let Some(e) = dofs.eq_of(a, comp) {
+                r[(e, comp)] = 1.0;
+                for ax in 0..3 {
+                    r[(e, 3 + ax)] = rot[ax][comp];
+                }
+            }
+            if let Some(e) = dofs.eq_of(a, 3 + comp) {
+                r[(e, 3 + comp)] = 1.0;
+            }
+        }
+    }
+    let mut kr = Mat::zeros(n, 6);
+    k.mul_block(r.as_ref(), kr.as_mut());
+    let kmax = k.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+    let names = [
+        "translation x",
+        "translation y",
+        "translation z",
+        "rotation about x",
+        "rotation about y",
+        "rotation about z",
+    ];
+    let mut out = Vec::new();
+    for j in 0..6 {
+        let rn: f64 = (0..n).map(|i| r[(i, j)] * r[(i, j)]).sum::<f64>().sqrt();
+        if rn == 0.0 {
+            continue;
+        }
+        let krn: f64 = (0..n).map(|i| kr[(i, j)] * kr[(i, j)]).sum::<f64>().sqrt();
+        if krn <= 1e-8 * kmax * rn {
+            out.push(names[j].to_string());
+        }
+    }
+    out
+}
+
+/// Run a static analysis: build the model and its [`System`] (without mass), then [`solve`].
+pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<StaticRun> {
+    let t = Instant::now();
+    let model = Model::build(mesh, &opts.spec, source)?;
+    let t_model = t.elapsed().as_secs_f64();
+    let sys = System::build(
+        model,
+        &SystemOptions {
+            mass: false,
+            ..Default::default()
+        },
+        source,
+    )?;
+    let mut run = solve(&sys, mesh, &opts.cases)?;
+    run.timings.assemble += t_model;
+    Ok(run)
+}
+
+/// Displacements, reactions, reference-node results and equilibrium of each load case on an
+/// assembled system; `mesh` is the one the model was built from (its groups carry the loads).
+/// An empty `cases` means one case with no loads (e.g. only prescribed displacements).
+pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun> {
+    let model = sys.model();
+    let sets = model.element_sets();
+    let t_asm = sys.timings.assemble;
+    let km_k = sys.k();
+    let t = Instant::now();
+    let singular = |extra: String| {
+        let free = free_rigid_motions(km_k, &model.dofs, &model.nodes);
+        Error::Factorization(if free.is_empty() {
+            format!("the stiffness matrix is singular ({extra}): a part or a DOF is not held")
+        } else {
+            format!(
+                "the model is under-constrained: free rigid-body motion(s): {} ({extra})",
+                free.join(", ")
+            )
+        })
+    };
+    let sym = sys.symbolic().clone();
+    let fa = match Factor::new(sym, km_k) {
+        Ok(f) => f,
+        Err(e) => return Err(singular(e.locate(|eq| sys.describe_equation(eq)).to_string())),
+    };
+    if fa.negative_pivots > 0 || fa.pivot_range.0 <= fa.pivot_range.1 * 1e-13 {
+        return Err(singular(format!(
+            "pivot ratio {:.1e}, {} negative pivots",
+            fa.pivot_range.0 / fa.pivot_range.1.max(f64::MIN_POSITIVE),
+            fa.negative_pivots
+        )));
+    }
+    let t_fac = t.elapsed().as_secs_f64() + sys.timings.order;
+
+    let t = Instant::now();
+    let no_loads = [vec![]];
+    let cases = if cases.is_empty() { &no_loads[..] } else { cases };
+    let n = model.dofs.n_free;
+    let mut raw_f = Vec::new();
+    let mut rhs = Mat::zeros(n, cases.len());
+    for (ci, loads) in cases.iter().enumerate() {
+        let f = load_vector(mesh, &model, loads)?;
+        let fh = reduced_rhs(&model, &sets, &f)?;
+        for i in 0..n {
+            rhs[(i, ci)] = fh[i];
+        }
+        raw_f.push(f);
+    }
+    let mut x = rhs.clone();
+    fa.solve_in_place(x.as_mut());
+    let t_sol = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut kx = Mat::zeros(n, cases.len());
+    km_k.mul_block(x.as_ref(), kx.as_mut());
+    let mut reports = Vec::new();
+    let mut us = Vec::new();
+    for ci in 0..cases.len() {
+        let xc: Vec<f64> = (0..n).map(|i| x[(i, ci)]).collect();
+        let (mut r2, mut f2) = (0.0, 0.0);
+        for i in 0..n {
+            r2 += (kx[(i, ci)] - rhs[(i, ci)]).powi(2);
+            f2 += rhs[(i, ci)].powi(2);
+        }
+        let u = model.dofs.full(&xc);
+        let mut rint = internal_forces(&model, &sets, &u)?;
+        let f = &raw_f[ci];
+        // Move slave forces to masters (Tᵀ), so reference nodes carry their group's forces.
+        let mut moved = vec![0.0; rint.len()];
+        for (&s, masters) in &model.dofs.mpc {
+            for &(m, c) in masters {
+                moved[m] += c * (rint[s] - f[s]);
+            }
+        }
+        for (&s, _) in &model.dofs.mpc {
+            rint[s] = f[s];
+        }
+        for i in 0..rint.len() {
+            rint[i] += moved[i];
+        }
+        // Reaction at constrained (fixed) raw DOFs: R = K u − f.
+        let react: Vec<f64> = rint.iter().zip(f).map(|(a, b)| a - b).collect();
+        let fixed_pick = |a: usize, c: usize| model.dofs.fixed[a] & (1 << c) != 0;
+        let mut reactions = Vec::new();
+        let mut total_react = Resultant::default();
+        for (g, _) in &model.spec.fixes {
+            let gn: Vec<u32> = mesh.group_nodes(mesh.group(g)?);
+            let set: std::collections::HashSet<u32> = gn.into_iter().collect();
+            let res = resultant_of(&model.nodes, &react, |a, c| {
+                set.contains(&(a as u32)) && fixed_pick(a, c)
+            });
+            reactions.push(Reaction {
+                group: g.clone(),
+                resultant: res,
+            });
+        }
+        for (g, _) in &model.spec.prescribed {
+            if model.references.iter().any(|r| &r.group == g) {
+                continue;
+            }
+            let set: std::collections::HashSet<u32> = mesh.group_nodes(mesh.group(g)?).into_iter().collect();
+            let res = resultant_of(&model.nodes, &react, |a, c| {
+                set.contains(&(a as u32)) && fixed_pick(a, c)
+            });
+            reactions.push(Reaction {
+                group: g.clone(),
+                resultant: res,
+            });
+        }
+        let all = resultant_of(&model.nodes, &react, fixed_pick);
+        for d in 0..3 {
+            total_react.force[d] = all.force[d];
+            total_react.moment[d] = all.moment[d];
+        }
+        let applied = resultant_of(&model.nodes, f, |a, c| model.dofs.active[a] & (1 << c) != 0);
+        let mut refs = Vec::new();
+        for r in &model.references {
+            let mut disp = [0.0; 6];
+            let mut reac = [0.0; 6];
+            for c in 0..6 {
+                disp[c] = u[NCOMP * r.node + c];
+                if fixed_pick(r.node, c) {
+                    reac[c] = react[NCOMP * r.node + c];
+                }
+            }
+            let applied_r = [f[NCOMP * r.node], f[NCOMP * r.node + 1], f[NCOMP * r.node + 2]];
+            // Along the guided axis the reference node carries either an applied force or a
+            // prescribed displacement (then the reaction is the force it takes).
+            let stiffness = r.guided.and_then(|ax| {
+                let force = applied_r[ax] + reac[ax];
+                (disp[ax].abs() > 0.0 && force != 0.0).then(|| force / disp[ax])
+            });
+            refs.push(ReferenceResult {
+                group: r.group.clone(),
+                displacement: disp,
+                applied: applied_r,
+                reaction: reac,
+                stiffness,
+            });
+        }
+        for r in &refs {
+            let x = model.nodes[model
+                .references
+                .iter()
+                .find(|q| q.group == r.group)
+                .map_or(0, |q| q.node)];
+            if r.reaction.iter().any(|v| *v != 0.0) {
+                let f3 = [r.reaction[0], r.reaction[1], r.reaction[2]];
+                let m = [
+                    x[1] * f3[2] - x[2] * f3[1] + r.reaction[3],
+                    x[2] * f3[0] - x[0] * f3[2] + r.reaction[4],
+                    x[0] * f3[1] - x[1] * f3[0] + r.reaction[5],
+                ];
+                reactions.push(Reaction {
+                    group: r.group.clone(),
+                    resultant: Resultant { force: f3, moment: m },
+                });
+            }
+        }
+        // Scale: the largest single force involved (the sum of balanced reactions is ~0, so it
+        // cannot serve).
+        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let scale = reactions
+            .iter()
+            .map(|r| norm(r.resultant.force))
+            .fold(norm(applied.force), f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut eq_err = 0.0f64;
+        for d in 0..3 {
+            eq_err = eq_err.max((applied.force[d] + total_react.force[d]).abs() / scale);
+        }
+        let mut maxd = (0.0f64, 0u64);
+        for a in 0..model.n_mesh_nodes {
+            let m = (0..3).map(|c| u[NCOMP * a + c].powi(2)).sum::<f64>().sqrt();
+            if m > maxd.0 {
+                maxd = (m, mesh.node_tags[a]);
+            }
+        }
+        reports.push(CaseReport {
+            max_displacement: maxd,
+            references: refs,
+            reactions,
+            applied,
+            equilibrium_error: eq_err,
+            rel_residual: if f2 > 0.0 { (r2 / f2).sqrt() } else { r2.sqrt() },
+        });
+        us.push(u);
+    }
+    let t_post = t.elapsed().as_secs_f64();
+    Ok(StaticRun {
+        dofs: n,
+        cases: reports,
+        u: us,
+        model: sys.model_arc().clone(),
+        timings: StaticTimings {
+            assemble: t_asm,
+            factor: t_fac,
+            solve: t_sol,
+            post: t_post,
+        },
+    })
+}

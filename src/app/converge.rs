@@ -1,0 +1,646 @@
+//! Speed–accuracy studies (`vibrofem converge`): a case re-run over mesh refinements and
+//! formulations, with value, estimated error, DOFs, wall time and peak memory per run, and the
+//! cheapest run within 1 %, 0.1 % and 0.01 %.
+//!
+//! Built-in cases ([`builtin`]): `s1` (free plate, first elastic frequency: tet4, tet10, hex8,
+//! hex20 boxes and MITC4 shells on the box's bottom face), `s3` (leaf spring stiffness: hex8,
+//! hex20, tet4, tet10 boxes), `s5` (coil stiffness: line2 and line3 beam helices), `s7` (sandwich
+//! table, first elastic frequency: MITC4 mid-surface shells and hex20 solids). A scene whose mesh
+//! is a `box:`, `helix:` or `sandwich:paper` generator is refined by halving its element size
+//! ([`from_scene`]).
+//!
+//! The reference is a documented converged value where one exists (S1: the README's hex20
+//! 45×45×9; S7: the finest graded hex20 of docs/formulations.md), else the Richardson
+//! extrapolation of the reference formulation's last three levels (each halving the element size)
+//! when they converge monotonically at an order ≥ 1.5, else its finest level.
+
+use crate::app::scene::{MeshSource, Scene};
+use crate::app::sweep::analyse;
+use crate::mesh::parametric::SandwichParams;
+use crate::{Error, Result};
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+fn invalid(msg: impl Into<String>) -> Error {
+    Error::InvalidInput(msg.into())
+}
+
+/// How one run of a case is made.
+#[derive(Clone, Debug)]
+pub enum Runner {
+    /// A scene (TOML text); the value is its first elastic frequency (modal) or its stiffness
+    /// (static).
+    Scene(String),
+    /// The S7 table as MITC4 mid-surface shells of this size (m); value: first elastic frequency.
+    TableShell(f64),
+    /// The S7 table as hex20 solids of this size (m); value: first elastic frequency.
+    TableSolid(f64),
+}
+
+/// One run of a convergence study.
+#[derive(Clone, Debug)]
+pub struct LevelSpec {
+    /// Formulation name (`hex20`, `shell`, `line3`, …).
+    pub formulation: String,
+    /// Mesh label (divisions or element size).
+    pub mesh: String,
+    /// How to run it.
+    pub runner: Runner,
+}
+
+/// A convergence study: its runs and which formulation is the reference.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// Name.
+    pub name: String,
+    /// What is measured (`first elastic frequency`, `stiffness`).
+    pub quantity: String,
+    /// Its unit.
+    pub unit: String,
+    /// The runs, grouped by formulation, coarse to fine.
+    pub levels: Vec<LevelSpec>,
+    /// The formulation whose finest levels give the reference.
+    pub reference: String,
+    /// A documented converged value and its source, used as the reference instead.
+    pub known: Option<(f64, String)>,
+}
+
+/// The result of one run.
+#[derive(Clone, Debug, Serialize)]
+pub struct LevelResult {
+    /// Formulation.
+    pub formulation: String,
+    /// Mesh label.
+    pub mesh: String,
+    /// Value.
+    pub value: f64,
+    /// Relative error against the reference.
+    pub error: f64,
+    /// Free DOFs.
+    pub dofs: usize,
+    /// Wall time, s.
+    pub time_s: f64,
+    /// Peak resident memory of the run (bytes), where the OS reports it.
+    pub peak_memory_bytes: Option<u64>,
+}
+
+/// A finished convergence study.
+#[derive(Clone, Debug, Serialize)]
+pub struct Convergence {
+    /// Case name.
+    pub name: String,
+    /// Quantity measured.
+    pub quantity: String,
+    /// Unit.
+    pub unit: String,
+    /// Reference value.
+    pub reference: f64,
+    /// How the reference was obtained.
+    pub reference_kind: String,
+    /// One row per run.
+    pub rows: Vec<LevelResult>,
+    /// Per tolerance (0.01, 0.001, 0.0001): index into `rows` of the cheapest run within it.
+    pub cheapest: Vec<(f64, Option<usize>)>,
+}
+
+fn scene_text(name: &str, mesh: &str, body: &str) -> String {
+    format!("[scene]\nversion = 1\nname = \"{name}\"\n\n[mesh]\ngenerator = \"{mesh}\"\n\n{body}")
+}
+
+const S1_SOLID: &str = "[[part]]\ngroup = \"volume\"\nformulation = \"solid\"\n\n[modal]\nmodes = 7\n";
+const S1_SHELL: &str = "[[part]]\ngroup = \"zmin\"\nformulation = \"shell\"\nthickness = 0.02\noffset = 0.01\n\n\
+                        [modal]\nmodes = 7\n";
+const S3_BODY: &str = "[[part]]\ngroup = \"volume\"\nformulation = \"solid\"\n\n[[fix]]\ngroup = \"xmin\"\n\
+                       dofs = [\"ux\", \"uy\", \"uz\"]\n\n[[couple]]\ngroup = \"xmax\"\nguided = \"z\"\n\n[[load]]\n\
+                       group = \"xmax\"\nforce = [0.0, 0.0, 1000.0]\n";
+const S5_BODY: &str = "[[material]]\nname = \"spring steel\"\nyoung = 2.002e11\npoisson = 0.3\ndensity = 7850.0\n\n\
+                       [[part]]\ngroup = \"wire\"\nformulation = \"beam\"\nsection = \"circle:0.006\"\n\
+                       orientation = \"radial:0,0,0,0,0,1\"\n\n[[fix]]\ngroup = \"end_bottom\"\ndofs = [\"all\"]\n\n\
+                       [[couple]]\ngroup = \"end_top\"\nguided = \"z\"\n\n[[load]]\ngroup = \"end_top\"\n\
+                       force = [0.0, 0.0, -600.0]\n";
+
+/// The built-in cases: `s1`, `s3`, `s5`, `s7`, and `tiny` (a fast S1 variant for tests).
+pub fn builtin(name: &str) -> Result<Case> {
+    let boxes = |dims: &str, kind: &str, divs: &[[usize; 3]], body: &str, form: &str| -> Vec<LevelSpec> {
+        divs.iter()
+            .map(|d| LevelSpec {
+                formulation: form.to_string(),
+                mesh: format!("{}×{}×{}", d[0], d[1], d[2]),
+                runner: Runner::Scene(scene_text(
+                    name,
+                    &format!("box:{dims}:{},{},{}:{kind}", d[0], d[1], d[2]),
+                    body,
+                )),
+            })
+            .collect()
+    };
+    let s1 = "0.3,0.3,0.02";
+    match name {
+        "s1" => {
+            let mut l = boxes(s1, "tet4", &[[6, 6, 1], [12, 12, 2], [24, 24, 4]], S1_SOLID, "tet4");
+            l.extend(boxes(
+                s1,
+                "tet10",
+                &[[4, 4, 1], [8, 8, 2], [16, 16, 4]],
+                S1_SOLID,
+                "tet10",
+            ));
+            l.extend(boxes(
+                s1,
+                "hex8",
+                &[[6, 6, 1], [12, 12, 2], [24, 24, 4]],
+                S1_SOLID,
+                "hex8",
+            ));
+            l.extend(boxes(
+                s1,
+                "hex20",
+                &[[4, 4, 1], [8, 8, 2], [16, 16, 4]],
+                S1_SOLID,
+                "hex20",
+            ));
+            l.extend(boxes(
+                s1,
+                "hex8",
+                &[[10, 10, 1], [20, 20, 1], [40, 40, 1]],
+                S1_SHELL,
+                "shell",
+            ));
+            Ok(Case {
+                name: "S1 free plate 300 × 300 × 20 mm".into(),
+                quantity: "first elastic frequency".into(),
+                unit: "Hz".into(),
+                levels: l,
+                reference: "hex20".into(),
+                known: Some((720.432, "hex20 45×45×9, 244 812 DOFs, README".into())),
+            })
+        }
+        "tiny" => {
+            let mut l = boxes(s1, "hex20", &[[2, 2, 1], [4, 4, 1], [8, 8, 1]], S1_SOLID, "hex20");
+            l.extend(boxes(s1, "hex8", &[[8, 8, 1], [16, 16, 1]], S1_SHELL, "shell"));
+            Ok(Case {
+                name: "tiny S1 plate".into(),
+                quantity: "first elastic frequency".into(),
+                unit: "Hz".into(),
+                levels: l,
+                reference: "hex20".into(),
+                known: None,
+            })
+        }
+        "s3" => {
+            let d = "0.169,0.146,0.009";
+            let mut l = boxes(d, "tet4", &[[8, 6, 1], [16, 12, 2], [32, 24, 4]], S3_BODY, "tet4");
+            l.extend(boxes(
+                d,
+                "tet10",
+                &[[4, 3, 1], [8, 6, 2], [16, 12, 4]],
+                S3_BODY,
+                "tet10",
+            ));
+            l.extend(boxes(
+                d,
+                "hex8",
+                &[[8, 6, 1], [16, 12, 2], [32, 24, 4]],
+                S3_BODY,
+                "hex8",
+            ));
+            l.extend(boxes(
+                d,
+                "hex20",
+                &[[4, 3, 1], [8, 6, 2], [16, 12, 4]],
+                S3_BODY,
+                "hex20",
+            ));
+            Ok(Case {
+                name: "S3 leaf spring 169 × 146 × 9 mm".into(),
+                quantity: "stiffness".into(),
+                unit: "N/m".into(),
+                levels: l,
+                reference: "hex20".into(),
+                known: None,
+            })
+        }
+        "s5" => {
+            let helix = |n: usize, kind: &str| LevelSpec {
+                formulation: kind.to_string(),
+                mesh: format!("{n}/turn"),
+                runner: Runner::Scene(scene_text(name, &format!("helix:0.032,0.01,6,{n},{kind}"), S5_BODY)),
+            };
+            let mut l: Vec<LevelSpec> = [6, 12, 24, 48, 96].iter().map(|&n| helix(n, "line2")).collect();
+            l.extend([3, 6, 12, 24, 48].iter().map(|&n| helix(n, "line3")));
+            Ok(Case {
+                name: "S5 coil, beam helix".into(),
+                quantity: "stiffness".into(),
+                unit: "N/m".into(),
+                levels: l,
+                reference: "line3".into(),
+                known: None,
+            })
+        }
+        "s7" => {
+            let mut l: Vec<LevelSpec> = [0.1, 0.05, 0.025]
+                .iter()
+                .map(|&h| LevelSpec {
+                    formulation: "shell".into(),
+                    mesh: format!("{} mm", h * 1e3),
+                    runner: Runner::TableShell(h),
+                })
+                .collect();
+            l.extend([0.1, 0.05, 0.025].iter().map(|&h| LevelSpec {
+                formulation: "hex20".into(),
+                mesh: format!("{} mm", h * 1e3),
+                runner: Runner::TableSolid(h),
+            }));
+            Ok(Case {
+                name: "S7 sandwich table (reconstruction)".into(),
+                quantity: "first elastic frequency".into(),
+                unit: "Hz".into(),
+                levels: l,
+                reference: "hex20".into(),
+                known: Some((
+                    164.5,
+                    "graded hex20 50/12.5/6.25 mm, 69 177 DOFs, docs/formulations.md".into(),
+                )),
+            })
+        }
+        _ => Err(invalid(format!(
+            "converge: unknown case '{name}' (s1, s3, s5, s7, tiny, or a scene file)"
+        ))),
+    }
+}
+
+/// A scene refined `levels` times by halving its element size: `box:` divisions doubled,
+/// `helix:` elements per turn doubled, `sandwich:paper,SIZE` size halved. One formulation (the
+/// scene's); the reference is its own finest levels.
+pub fn from_scene(path: &Path, levels: usize) -> Result<Case> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let scene = Scene::parse(path, &text)?;
+    let g = match &scene.mesh {
+        MeshSource::Generator(g) => g.clone(),
+        _ => {
+            return Err(invalid(format!(
+                "converge: {}: only scenes with a box:, helix: or sandwich:paper generator can be refined",
+                path.display()
+            )));
+        }
+    };
+    let bad = || invalid(format!("converge: {}: cannot refine generator '{g}'", path.display()));
+    let mut specs = Vec::new();
+    for k in 0..levels.max(1) {
+        let f = 1usize << k;
+        let spec = if let Some(rest) = g.strip_prefix("box:") {
+            let p: Vec<&str> = rest.split(':').collect();
+            if p.len() != 3 {
+                return Err(bad());
+            }
+            let d: Option<Vec<usize>> = p[1].split(',').map(|s| s.trim().parse::<usize>().ok()).collect();
+            let d = d.filter(|d| d.len() == 3).ok_or_else(bad)?;
+            let thin = |i: usize| if d[i] == 1 && p[2] == "hex8" { 1 } else { d[i] * f };
+            format!("box:{}:{},{},{}:{}", p[0], d[0] * f, d[1] * f, thin(2), p[2])
+        } else if let Some(rest) = g.strip_prefix("helix:") {
+            let mut p: Vec<String> = rest.split(',').map(|s| s.trim().to_string()).collect();
+            let n: usize = p.get(3).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
+            p[3] = (n * f).to_string();
+            format!("helix:{}", p.join(","))
+        } else if let Some(rest) = g.strip_prefix("sandwich:paper") {
+            let h: f64 = match rest.strip_prefix(',') {
+                Some(s) => s.trim().parse().map_err(|_| bad())?,
+                None => 0.025,
+            };
+            format!("sandwich:paper,{}", h / f as f64)
+        } else {
+            return Err(bad());
+        };
+        specs.push(spec);
+    }
+    let form = scene
+        .parts
+        .first()
+        .map(|(_, f)| format!("{f:?}").to_lowercase())
+        .unwrap_or_else(|| "model".into());
+    // Re-emit the scene text with each generator: replace the generator line.
+    let levels = specs
+        .into_iter()
+        .map(|s| {
+            let t: String = text
+                .lines()
+                .map(|l| {
+                    if l.trim_start().starts_with("generator") {
+                        format!("generator = \"{s}\"")
+                    } else {
+                        l.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n");
+            LevelSpec {
+                formulation: form.clone(),
+                mesh: s,
+                runner: Runner::Scene(t),
+            }
+        })
+        .collect();
+    let quantity = if scene.modal.is_some() {
+        ("first elastic frequency", "Hz")
+    } else {
+        ("stiffness", "N/m")
+    };
+    Ok(Case {
+        name: scene.name.clone(),
+        quantity: quantity.0.into(),
+        unit: quantity.1.into(),
+        levels,
+        reference: form,
+        known: None,
+    })
+}
+
+/// Reset the kernel's peak-RSS counter of this process (Linux ≥ 4.0), so that the next reading
+/// is the peak of the next run.
+fn reset_peak_memory() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// Run one level: (value, dofs, wall time, peak memory).
+pub fn run_level(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>)> {
+    let reset = reset_peak_memory();
+    let t = Instant::now();
+    let (value, dofs) = match &l.runner {
+        Runner::Scene(text) => {
+            let scene = Scene::parse(Path::new("converge.toml"), text)?;
+            let r = scene.run(None)?;
+            if let Some(m) = &r.modal {
+                if !(m.complete && m.accurate) {
+                    return Err(Error::Verification(format!("{}: modal check failed", l.mesh)));
+                }
+                let f = m
+                    .elastic_frequencies()
+                    .first()
+                    .copied()
+                    .ok_or_else(|| Error::Verification(format!("{}: no elastic mode", l.mesh)))?;
+                (f, m.dofs)
+            } else {
+                let k = r
+                    .stiffness()
+                    .ok_or_else(|| invalid(format!("{}: the scene gives no stiffness", l.mesh)))?;
+                (k, r.statics.as_ref().map(|s| s.dofs).unwrap_or(0))
+            }
+        }
+        Runner::TableShell(h) | Runner::TableSolid(h) => {
+            let mut p = SandwichParams::paper();
+            let solid = matches!(l.runner, Runner::TableSolid(_));
+            if !solid {
+                p.elem_size = *h;
+            }
+            let r = analyse(&p, crate::material::Material::steel(), solid.then_some(*h))?;
+            (r.f1_hz, r.dofs)
+        }
+    };
+    let time = t.elapsed().as_secs_f64();
+    let mem = if reset {
+        crate::analysis::modal::peak_memory()
+    } else {
+        None
+    };
+    Ok((value, dofs, time, mem))
+}
+
+/// Richardson extrapolation of three values at h, h/2, h/4: `Some((limit, order))` when the
+/// differences shrink monotonically at an observed order of at least 1.5 (a lower order means the
+/// levels are not in the asymptotic range, and the extrapolation is not trusted).
+pub fn richardson(v: [f64; 3]) -> Option<(f64, f64)> {
+    let (d1, d2) = (v[1] - v[0], v[2] - v[1]);
+    if d1 * d2 <= 0.0 || d2.abs() * 2f64.powf(1.5) > d1.abs() {
+        return None;
+    }
+    let q = d1 / d2;
+    Some((v[2] + d2 / (q - 1.0), q.log2()))
+}
+
+/// Run every level of a case (`progress` gets one line per run), estimate the errors and pick the
+/// cheapest runs within 1 %, 0.1 % and 0.01 %.
+pub fn run_case(case: &Case, progress: &dyn Fn(&str)) -> Result<Convergence> {
+    let mut raw = Vec::new();
+    for l in &case.levels {
+        let (value, dofs, time_s, mem) =
+            run_level(l).map_err(|e| invalid(format!("{} {}: {e}", l.formulation, l.mesh)))?;
+        progress(&format!(
+            "{} {}: {value:.6e} {} ({dofs} DOFs, {time_s:.2} s)",
+            l.formulation, l.mesh, case.unit
+        ));
+        raw.push(LevelResult {
+            formulation: l.formulation.clone(),
+            mesh: l.mesh.clone(),
+            value,
+            error: 0.0,
+            dofs,
+            time_s,
+            peak_memory_bytes: mem,
+        });
+    }
+    let refs: Vec<f64> = raw
+        .iter()
+        .filter(|r| r.formulation == case.reference)
+        .map(|r| r.value)
+        .collect();
+    let finest = *refs.last().ok_or_else(|| {
+        invalid(format!(
+            "converge: no run of the reference formulation '{}'",
+            case.reference
+        ))
+    })?;
+    let (reference, kind, finest_is_ref) = match (&case.known, refs.len()) {
+        (Some((v, src)), _) => (*v, format!("documented converged value ({src})"), false),
+        (None, n) if n >= 3 => match richardson([refs[n - 3], refs[n - 2], refs[n - 1]]) {
+            Some((v, p)) => (
+                v,
+                format!(
+                    "Richardson extrapolation of the last three {} levels (order {p:.2})",
+                    case.reference
+                ),
+                false,
+            ),
+            None => (
+                finest,
+                format!(
+                    "finest {} level (its levels are not in the asymptotic range)",
+                    case.reference
+                ),
+                true,
+            ),
+        },
+        _ => (finest, format!("finest {} level", case.reference), true),
+    };
+    let ref_idx = raw.iter().rposition(|r| r.formulation == case.reference);
+    for r in raw.iter_mut() {
+        r.error = (r.value - reference) / reference;
+    }
+    let cheapest = [1e-2, 1e-3, 1e-4]
+        .iter()
+        .map(|&tol| {
+            let best = raw
+                .iter()
+                .enumerate()
+                .filter(|(i, r)| r.error.abs() <= tol && !(finest_is_ref && Some(*i) == ref_idx))
+                .min_by(|a, b| a.1.time_s.total_cmp(&b.1.time_s))
+                .map(|(i, _)| i);
+            (tol, best)
+        })
+        .collect();
+    Ok(Convergence {
+        name: case.name.clone(),
+        quantity: case.quantity.clone(),
+        unit: case.unit.clone(),
+        reference,
+        reference_kind: kind,
+        rows: raw,
+        cheapest,
+    })
+}
+
+fn pct(tol: f64) -> String {
+    format!("{} %", tol * 100.0)
+}
+
+/// The study as a markdown table plus the cheapest formulation per tolerance.
+pub fn table_markdown(c: &Convergence) -> String {
+    let mut s = format!(
+        "{}: {} [{}]; reference {:.6e} ({})\n\n",
+        c.name, c.quantity, c.unit, c.reference, c.reference_kind
+    );
+    s.push_str("| formulation | mesh | DOFs | value | error | time [s] | peak memory [MiB] |\n");
+    s.push_str("|---|---|---:|---:|---:|---:|---:|\n");
+    for r in &c.rows {
+        s.push_str(&format!(
+            "| {} | {} | {} | {:.6e} | {:+.3} % | {:.4} | {} |\n",
+            r.formulation,
+            r.mesh,
+            r.dofs,
+            r.value,
+            r.error * 100.0,
+            r.time_s,
+            r.peak_memory_bytes
+                .map(|b| format!("{:.0}", b as f64 / 1048576.0))
+                .unwrap_or_else(|| "–".into())
+        ));
+    }
+    s.push('\n');
+    for (tol, i) in &c.cheapest {
+        match i {
+            Some(i) => {
+                let r = &c.rows[*i];
+                s.push_str(&format!(
+                    "- cheapest within {}: {} {} ({:+.3} %, {:.3} s, {} DOFs)\n",
+                    pct(*tol),
+                    r.formulation,
+                    r.mesh,
+                    r.error * 100.0,
+                    r.time_s,
+                    r.dofs
+                ));
+            }
+            None => s.push_str(&format!("- cheapest within {}: none of the runs\n", pct(*tol))),
+        }
+    }
+    s
+}
+
+/// The cheapest formulation within `tol` (0.01 = 1 %), if any.
+pub fn cheapest_within(c: &Convergence, tol: f64) -> Option<&LevelResult> {
+    c.cheapest
+        .iter()
+        .find(|(t, _)| (*t - tol).abs() < 1e-12)
+        .and_then(|(_, i)| i.map(|i| &c.rows[i]))
+}
+
+/// Write `converge.md`, `converge.json` and `converge.svg` (|error| against time, log–log, one
+/// line per formulation) to `dir` (created).
+pub fn write_outputs(c: &Convergence, dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let p = dir.join("converge.md");
+    std::fs::write(&p, table_markdown(c)).map_err(|e| Error::io(&p, e))?;
+    let p = dir.join("converge.json");
+    let text = serde_json::to_string_pretty(c).map_err(|e| Error::output("JSON", e))?;
+    std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
+    write_svg(c, &dir.join("converge.svg"))
+}
+
+fn write_svg(c: &Convergence, path: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let perr = |e: &dyn std::fmt::Display| Error::io(path, std::io::Error::other(format!("plotting failed: {e}")));
+    let pts: Vec<(f64, f64)> = c
+        .rows
+        .iter()
+        .map(|r| (r.time_s.max(1e-4), r.error.abs()))
+        .filter(|p| p.1 > 0.0 && p.1.is_finite())
+        .collect();
+    let (tx0, tx1) = pts
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let (ey0, ey1) = pts
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.1), b.max(p.1)));
+    let (tx0, tx1) = if pts.is_empty() {
+        (1e-3, 1.0)
+    } else {
+        (tx0 / 2.0, tx1 * 2.0)
+    };
+    let (ey0, ey1) = if pts.is_empty() {
+        (1e-6, 1.0)
+    } else {
+        ((ey0 / 3.0).min(5e-5), (ey1 * 3.0).max(2e-2))
+    };
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| perr(&e))?;
+    let mut ch = ChartBuilder::on(&root)
+        .caption(format!("{}: error against wall time", c.name), ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d((tx0..tx1).log_scale(), (ey0..ey1).log_scale())
+        .map_err(|e| perr(&e))?;
+    ch.configure_mesh()
+        .x_desc("wall time, s")
+        .y_desc(format!("|relative error| of the {}", c.quantity))
+        .draw()
+        .map_err(|e| perr(&e))?;
+    let mut forms: Vec<&str> = Vec::new();
+    for r in &c.rows {
+        if !forms.contains(&r.formulation.as_str()) {
+            forms.push(&r.formulation);
+        }
+    }
+    for (k, f) in forms.iter().enumerate() {
+        let col = Palette99::pick(k).to_rgba();
+        let line: Vec<(f64, f64)> = c
+            .rows
+            .iter()
+            .filter(|r| r.formulation == *f && r.error != 0.0 && r.error.is_finite())
+            .map(|r| (r.time_s.max(1e-4), r.error.abs()))
+            .collect();
+        ch.draw_series(LineSeries::new(line.clone(), col.stroke_width(2)))
+            .map_err(|e| perr(&e))?
+            .label(f.to_string())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2)));
+        ch.draw_series(line.iter().map(|&p| Circle::new(p, 4, col.filled())))
+            .map_err(|e| perr(&e))?;
+    }
+    for tol in [1e-2, 1e-3, 1e-4] {
+        ch.draw_series(DashedLineSeries::new(
+            [(tx0, tol), (tx1, tol)],
+            5,
+            5,
+            RGBColor(160, 160, 160).stroke_width(1),
+        ))
+        .map_err(|e| perr(&e))?;
+    }
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| perr(&e))?;
+    root.present().map_err(|e| perr(&e))?;
+    Ok(())
+}

@@ -1,0 +1,13 @@
+//! The vibratory-table application and the command line, above the FE core (feature `app`).
+//!
+//! - [`dynamics`]: the lumped two-mass machine (paper §5–§8), electromagnet, transient, plots.
+//! - [`design`], [`sweep`], [`converge`]: the design chain and the studies built on the core.
+//! - [`scene`], [`report`], [`cli`]: scene files, batch runs, text reports, clap options.
+pub mod cli;
+pub mod converge;
+pub mod design;
+pub mod dynamics;
+pub mod machines_cli;
+pub mod report;
+pub mod scene;
+pub mod sweep;

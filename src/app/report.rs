@@ -1,0 +1,393 @@
+//! Human-readable reports: the mode table and the mesh summary.
+
+use crate::analysis::modal::ModalReport;
+use crate::element::solid;
+use crate::material::Material;
+use crate::mesh::Mesh;
+use crate::{Error, Result};
+use serde::Serialize;
+use std::fmt::Write;
+
+/// The table `vibrofem modes` prints.
+pub fn modal_table(r: &ModalReport) -> String {
+    let mut s = String::new();
+    let cells: Vec<String> = r.cells.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    let _ = writeln!(s, "mesh     {}", r.mesh);
+    let _ = writeln!(
+        s,
+        "model    {} nodes, {}, {} free DOFs, {} mass",
+        r.nodes,
+        cells.join(", "),
+        r.dofs,
+        r.mass_matrix
+    );
+    let _ = writeln!(s, "mass     {:.6} kg   volume {:.6e} m³", r.mass_kg, r.volume_m3);
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "{:>5} {:>16} {:>8} {:>10}   {:>7} {:>7} {:>7}",
+        "mode", "frequency [Hz]", "kind", "residual", "cum.X", "cum.Y", "cum.Z"
+    );
+    for m in &r.modes {
+        let _ = writeln!(
+            s,
+            "{:>5} {:>16.6} {:>8} {:>10.2e}   {:>7.4} {:>7.4} {:>7.4}",
+            m.mode,
+            m.frequency_hz,
+            m.kind,
+            m.rel_residual,
+            m.cumulative_ratio[0],
+            m.cumulative_ratio[1],
+            m.cumulative_ratio[2]
+        );
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "rigid-body modes: {}   elastic: {}",
+        r.n_rigid,
+        r.modes.len().saturating_sub(r.n_rigid)
+    );
+    let _ = writeln!(
+        s,
+        "complete: {}  (Sturm count {} eigenvalues below {:.6} Hz, {} found between the check points)",
+        if r.complete { "yes" } else { "NO" },
+        r.sturm.upper.1,
+        crate::post::modal::hz(r.sturm.upper.0),
+        r.sturm.found
+    );
+    let _ = writeln!(
+        s,
+        "accuracy: {}  (max residual {:.2e}, M-orthonormality {:.1e})",
+        if r.accurate { "ok" } else { "NOT GUARANTEED" },
+        r.max_rel_residual,
+        r.m_orthonormality
+    );
+    let t = &r.timings_s;
+    let _ = writeln!(
+        s,
+        "time [s]: read {:.3}  assemble {:.3}  order {:.3}  factor {:.3}  solve {:.3}  verify {:.3}  total {:.3}",
+        t.read, t.assemble, t.order, t.factor, t.solve, t.verify, t.total
+    );
+    let _ = writeln!(
+        s,
+        "factor: {} entries, {:.3e} flop ({:.2} GFLOP/s); peak memory {}",
+        r.factor_nnz,
+        r.factor_flops,
+        r.factor_gflops,
+        r.peak_memory_bytes
+            .map_or("n/a".into(), |b| format!("{:.1} MiB", b as f64 / 1048576.0))
+    );
+    s
+}
+
+/// One group of the mesh summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct GroupInfo {
+    /// Name.
+    pub name: String,
+    /// Dimension.
+    pub dim: u8,
+    /// Physical tag.
+    pub tag: i32,
+    /// Cells.
+    pub cells: usize,
+    /// Nodes.
+    pub nodes: usize,
+}
+
+/// What `vibrofem mesh-info` reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct MeshInfo {
+    /// File.
+    pub mesh: String,
+    /// Node count.
+    pub nodes: usize,
+    /// Cells per kind (all dimensions).
+    pub cells: Vec<(String, usize)>,
+    /// Physical groups.
+    pub groups: Vec<GroupInfo>,
+    /// Bounding box min, m.
+    pub bbox_min: [f64; 3],
+    /// Bounding box max, m.
+    pub bbox_max: [f64; 3],
+    /// Volume of the 3D cells, m³.
+    pub volume_m3: f64,
+    /// Mass of the 3D cells with the given density, kg.
+    pub mass_kg: f64,
+    /// Density used, kg/m³.
+    pub density: f64,
+}
+
+/// Summarise a mesh.
+pub fn mesh_info(mesh: &Mesh, source: &str, mat: &Material) -> Result<MeshInfo> {
+    let (lo, hi) = mesh.bounding_box();
+    let mut volume = 0.0;
+    let mut x = [[0.0; 3]; 27];
+    for b in mesh.blocks.iter().filter(|b| b.kind.dim() == 3) {
+        let nn = b.kind.n_nodes();
+        for e in 0..b.len() {
+            for (o, &a) in x.iter_mut().zip(b.cell(e)) {
+                *o = mesh.nodes[a as usize];
+            }
+            volume += solid::volume(b.kind, &x[..nn]).map_err(|det| Error::InvertedElement {
+                element: b.tags[e],
+                kind: b.kind.name(),
+                det,
+            })?;
+        }
+    }
+    Ok(MeshInfo {
+        mesh: source.into(),
+        nodes: mesh.n_nodes(),
+        cells: mesh
+            .blocks
+            .iter()
+            .map(|b| (b.kind.name().to_string(), b.len()))
+            .collect(),
+        groups: mesh
+            .groups
+            .iter()
+            .map(|g| GroupInfo {
+                name: g.name.clone(),
+                dim: g.dim,
+                tag: g.tag,
+                cells: g.cells.len(),
+                nodes: mesh.group_nodes(g).len(),
+            })
+            .collect(),
+        bbox_min: lo,
+        bbox_max: hi,
+        volume_m3: volume,
+        mass_kg: volume * mat.density,
+        density: mat.density,
+    })
+}
+
+/// Text form of [`MeshInfo`].
+pub fn mesh_info_text(i: &MeshInfo) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "mesh    {}", i.mesh);
+    let _ = writeln!(s, "nodes   {}", i.nodes);
+    for (k, n) in &i.cells {
+        let _ = writeln!(s, "cells   {n:>10} {k}");
+    }
+    let _ = writeln!(s, "groups  {}", if i.groups.is_empty() { "(none)" } else { "" });
+    for g in &i.groups {
+        let _ = writeln!(
+            s,
+            "  {:<24} dim {}  tag {:>4}  {:>9} cells  {:>9} nodes",
+            g.name, g.dim, g.tag, g.cells, g.nodes
+        );
+    }
+    let _ = writeln!(
+        s,
+        "bbox    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}] m",
+        i.bbox_min[0], i.bbox_min[1], i.bbox_min[2], i.bbox_max[0], i.bbox_max[1], i.bbox_max[2]
+    );
+    let _ = writeln!(
+        s,
+        "size    {:.6} x {:.6} x {:.6} m",
+        i.bbox_max[0] - i.bbox_min[0],
+        i.bbox_max[1] - i.bbox_min[1],
+        i.bbox_max[2] - i.bbox_min[2]
+    );
+    let _ = writeln!(s, "volume  {:.6e} m³", i.volume_m3);
+    let _ = writeln!(s, "mass    {:.6} kg (density {} kg/m³)", i.mass_kg, i.density);
+    s
+}
+
+/// Stress summary of one load case.
+#[derive(Clone, Debug, Serialize)]
+pub struct StressSummary {
+    /// Maximum von Mises (averaged nodal) per group and overall.
+    pub von_mises: Vec<crate::post::stress::GroupMax>,
+    /// Maximum unaveraged element von Mises at nodes, overall.
+    pub von_mises_unaveraged: Vec<crate::post::stress::GroupMax>,
+    /// Maximum Tresca per group and overall.
+    pub tresca: Vec<crate::post::stress::GroupMax>,
+    /// Maximum shear stress (Tresca/2) per group and overall.
+    pub max_shear: Vec<crate::post::stress::GroupMax>,
+}
+
+/// The `--json` document of `vibrofem static`.
+#[derive(Clone, Debug, Serialize)]
+pub struct StaticReport {
+    /// Mesh.
+    pub mesh: String,
+    /// Free equations.
+    pub dofs: usize,
+    /// Load cases.
+    pub cases: Vec<crate::analysis::statics::CaseReport>,
+    /// Stress summaries per case.
+    pub stress: Vec<StressSummary>,
+    /// Wall time of assembly, factorisation, solution and post-processing, s.
+    pub timings_s: crate::analysis::statics::StaticTimings,
+    /// Notes.
+    pub notes: Vec<String>,
+}
+
+/// Displacements of the mesh nodes (3 per node) from a raw solution.
+pub fn mesh_displacements(run: &crate::analysis::statics::StaticRun, case: usize) -> Vec<f64> {
+    let n = run.model.n_mesh_nodes;
+    let u = &run.u[case];
+    let mut out = vec![0.0; 3 * n];
+    for a in 0..n {
+        for c in 0..3 {
+            out[3 * a + c] = u[crate::dof::NCOMP * a + c];
+        }
+    }
+    out
+}
+
+/// Build the static report (stress recovery included).
+pub fn static_report(mesh: &Mesh, source: &str, run: &crate::analysis::statics::StaticRun) -> Result<StaticReport> {
+    use crate::post::stress::{StressField, group_maxima, nodal_stress};
+    let mut stress = Vec::new();
+    for ci in 0..run.cases.len() {
+        let u = mesh_displacements(run, ci);
+        let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+        stress.push(StressSummary {
+            von_mises: group_maxima(mesh, &ns, StressField::VonMises)?,
+            von_mises_unaveraged: group_maxima(mesh, &ns, StressField::VonMisesMaxUnaveraged)?
+                .into_iter()
+                .filter(|g| g.group == "(all)")
+                .collect(),
+            tresca: group_maxima(mesh, &ns, StressField::Tresca)?,
+            max_shear: group_maxima(mesh, &ns, StressField::MaxShear)?,
+        });
+    }
+    Ok(StaticReport {
+        mesh: source.into(),
+        dofs: run.dofs,
+        cases: run.cases.clone(),
+        stress,
+        timings_s: run.timings,
+        notes: run.model.notes.clone(),
+    })
+}
+
+/// Text form of a static report.
+pub fn static_text(r: &StaticReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "mesh     {}", r.mesh);
+    let _ = writeln!(s, "model    {} free DOFs", r.dofs);
+    for (ci, c) in r.cases.iter().enumerate() {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "load case {}", ci + 1);
+        let _ = writeln!(
+            s,
+            "  applied force   [{:.6e}, {:.6e}, {:.6e}] N",
+            c.applied.force[0], c.applied.force[1], c.applied.force[2]
+        );
+        let _ = writeln!(
+            s,
+            "  max |u|         {:.6e} m at node {}",
+            c.max_displacement.0, c.max_displacement.1
+        );
+        for rf in &c.references {
+            let d = rf.displacement;
+            let _ = writeln!(
+                s,
+                "  reference '{}': u = [{:.6e}, {:.6e}, {:.6e}] m, rot = [{:.3e}, {:.3e}, {:.3e}] rad",
+                rf.group, d[0], d[1], d[2], d[3], d[4], d[5]
+            );
+            if let Some(k) = rf.stiffness {
+                let _ = writeln!(s, "    stiffness along the guided axis: {k:.6e} N/m");
+            }
+        }
+        for re in &c.reactions {
+            let f = re.resultant.force;
+            let _ = writeln!(
+                s,
+                "  reaction '{}': F = [{:.6e}, {:.6e}, {:.6e}] N",
+                re.group, f[0], f[1], f[2]
+            );
+        }
+        let _ = writeln!(s, "  equilibrium     |ΣR + ΣF| / |F| = {:.2e}", c.equilibrium_error);
+        let _ = writeln!(s, "  solve residual  {:.2e}", c.rel_residual);
+        if let Some(st) = r.stress.get(ci) {
+            for g in &st.von_mises {
+                let _ = writeln!(
+                    s,
+                    "  von Mises max {:<16} {:>10.3} MPa at node {} ({:.4}, {:.4}, {:.4}) m",
+                    g.group,
+                    g.value / 1e6,
+                    g.node.unwrap_or(0),
+                    g.coords[0],
+                    g.coords[1],
+                    g.coords[2]
+                );
+            }
+            for g in st.max_shear.iter().filter(|g| g.group == "(all)") {
+                let _ = writeln!(
+                    s,
+                    "  max shear stress             {:>10.3} MPa at node {}",
+                    g.value / 1e6,
+                    g.node.unwrap_or(0)
+                );
+            }
+        }
+    }
+    let t = r.timings_s;
+    let _ = writeln!(
+        s,
+        "\ntime [s]: assemble {:.3}  factor {:.3}  solve {:.3}  post {:.3}",
+        t.assemble, t.factor, t.solve, t.post
+    );
+    s
+}
+
+/// Write displacement and stress fields of every case to VTU and/or gmsh.
+pub fn write_static_fields(
+    mesh: &Mesh,
+    run: &crate::analysis::statics::StaticRun,
+    vtu: Option<&std::path::Path>,
+    msh: Option<&std::path::Path>,
+) -> Result<()> {
+    use crate::io::{msh_out, vtk};
+    use crate::post::stress::{StressFields, nodal_stress};
+    let mut disps = Vec::new();
+    let mut fields = Vec::new();
+    for ci in 0..run.cases.len() {
+        let u = mesh_displacements(run, ci);
+        let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+        fields.push(StressFields::new(
+            &ns,
+            &if run.cases.len() > 1 {
+                format!("case{}_", ci + 1)
+            } else {
+                String::new()
+            },
+        ));
+        disps.push(u);
+    }
+    if let Some(p) = vtu {
+        let mut pf = Vec::new();
+        for (ci, u) in disps.iter().enumerate() {
+            let name = if disps.len() > 1 {
+                format!("case{}_displacement", ci + 1)
+            } else {
+                "displacement".into()
+            };
+            pf.push(vtk::PointField::new(name, 3, u));
+            pf.extend(fields[ci].point_fields());
+        }
+        vtk::write_vtu(p, mesh, &pf)?;
+    }
+    if let Some(p) = msh {
+        let mut views = Vec::new();
+        for (ci, u) in disps.iter().enumerate() {
+            views.push(msh_out::NodeView {
+                name: "displacement".into(),
+                step: ci,
+                time: ci as f64,
+                n_comp: 3,
+                data: u,
+            });
+            views.extend(fields[ci].node_views(ci, ci as f64));
+        }
+        msh_out::write_msh_views(p, mesh, &views)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,1032 @@
+//! Parametric studies of the sandwich work table (`vibrofem sweep`) and merging of batch shards
+//! (`vibrofem merge`).
+//!
+//! A study is either a scene whose mesh is `generator = "sandwich:paper[,SIZE]"` (its material is
+//! used) or a study file (TOML, see `docs/sweeps.md`):
+//!
+//! ```toml
+//! [study]
+//! version = 1
+//! name = "S7 work table"
+//! formulation = "shell"          # or "solid" (hex20, `solid_size`)
+//! [material]                     # optional, default steel
+//! young = 2.1e11
+//! poisson = 0.3
+//! density = 7850.0
+//! [table]                        # TableSpec fields; omitted fields take the S7 reconstruction
+//! top_thickness = 0.025
+//! n_long_webs = 3
+//! [sweep]                        # ranges, as on the command line
+//! "table.top_thickness" = "0.015:0.025:0.005"
+//! "table.n_trans_webs" = [0, 2, 4]
+//! [constraints]
+//! min_f1_hz = 300.0
+//! max_mass_kg = 165.0
+//! [check]                        # re-run the best designs finer and as hex20 solids
+//! designs = 3
+//! ```
+//!
+//! Every combination is validated ([`SandwichParams::validate`]) before any meshing; an error names
+//! the key and value. Each design is analysed free–free; its first elastic frequency and its real
+//! steel mass ([`SandwichParams::mass`]) are tabulated, the Pareto front (lighter and stiffer) is
+//! marked and plotted.
+
+use crate::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use crate::app::scene::{BatchRow, BatchSummary, MeshSource, Scene, summary_csv};
+use crate::material::Material;
+use crate::mesh::CellKind;
+use crate::mesh::parametric::{SandwichParams, sandwich_table, sandwich_table_solid};
+use crate::model::{ModelSpec, ShellPart};
+use crate::section::ShellSection;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn invalid(msg: impl Into<String>) -> Error {
+    Error::InvalidInput(msg.into())
+}
+
+/// The table of a study: [`SandwichParams`] with the webs given by count and span (evenly spaced,
+/// centred), so that web counts can be swept.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TableSpec {
+    /// Length along x (m).
+    pub length: f64,
+    /// Top plate width (m).
+    pub top_width: f64,
+    /// Top plate thickness (m).
+    pub top_thickness: f64,
+    /// Bottom plate width (m).
+    pub bottom_width: f64,
+    /// Bottom plate thickness (m).
+    pub bottom_thickness: f64,
+    /// Clear web height between the plates (m).
+    pub web_height: f64,
+    /// Number of longitudinal webs (along x), evenly spaced over `long_web_span`.
+    pub n_long_webs: usize,
+    /// Distance between the outermost longitudinal webs (m); one web sits at y = 0.
+    pub long_web_span: f64,
+    /// Longitudinal web thickness (m).
+    pub long_web_thickness: f64,
+    /// Number of transverse webs (diaphragms, along y), evenly spaced over `trans_web_span`.
+    pub n_trans_webs: usize,
+    /// Distance between the outermost transverse webs (m); one web sits at x = 0.
+    pub trans_web_span: f64,
+    /// Transverse web thickness (m).
+    pub trans_web_thickness: f64,
+    /// Shell element size (m).
+    pub elem_size: f64,
+}
+
+impl Default for TableSpec {
+    /// The S7 reconstruction ([`SandwichParams::paper`]); transverse webs, when counted, span
+    /// 1100 mm (end diaphragms 50 mm in from the plate ends).
+    fn default() -> Self {
+        let p = SandwichParams::paper();
+        TableSpec {
+            length: p.length,
+            top_width: p.top_width,
+            top_thickness: p.top_thickness,
+            bottom_width: p.bottom_width,
+            bottom_thickness: p.bottom_thickness,
+            web_height: p.web_height,
+            n_long_webs: 3,
+            long_web_span: 0.3,
+            long_web_thickness: p.long_web_thickness,
+            n_trans_webs: 0,
+            trans_web_span: 1.1,
+            trans_web_thickness: p.trans_web_thickness,
+            elem_size: p.elem_size,
+        }
+    }
+}
+
+/// The keys a sweep may set (`table.<key>`); `web_thickness` sets both web thicknesses.
+pub const KEYS: &[&str] = &[
+    "length",
+    "top_width",
+    "top_thickness",
+    "bottom_width",
+    "bottom_thickness",
+    "web_height",
+    "n_long_webs",
+    "long_web_span",
+    "long_web_thickness",
+    "n_trans_webs",
+    "trans_web_span",
+    "trans_web_thickness",
+    "web_thickness",
+    "elem_size",
+];
+
+impl TableSpec {
+    /// Set one parameter by key (`table.top_thickness` or `top_thickness`). Counts must be
+    /// non-negative integers.
+    pub fn set(&mut self, key: &str, v: f64) -> Result<()> {
+        let k = key.strip_prefix("table.").unwrap_or(key);
+        let count = |v: f64| -> Result<usize> {
+            if v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 1e4 {
+                Ok(v as usize)
+            } else {
+                Err(invalid(format!(
+                    "{key} = {v}: a web count must be a non-negative integer"
+                )))
+            }
+        };
+        match k {
+            "length" => self.length = v,
+            "top_width" => self.top_width = v,
+            "top_thickness" => self.top_thickness = v,
+            "bottom_width" => self.bottom_width = v,
+            "bottom_thickness" => self.bottom_thickness = v,
+            "web_height" => self.web_height = v,
+            "n_long_webs" => self.n_long_webs = count(v)?,
+            "long_web_span" => self.long_web_span = v,
+            "long_web_thickness" => self.long_web_thickness = v,
+            "n_trans_webs" => self.n_trans_webs = count(v)?,
+            "trans_web_span" => self.trans_web_span = v,
+            "trans_web_thickness" => self.trans_web_thickness = v,
+            "web_thickness" => {
+                self.long_web_thickness = v;
+                self.trans_web_thickness = v;
+            }
+            "elem_size" => self.elem_size = v,
+            _ => {
+                return Err(invalid(format!(
+                    "unknown sweep key '{key}' (keys: {})",
+                    KEYS.iter().map(|k| format!("table.{k}")).collect::<Vec<_>>().join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The [`SandwichParams`] (quad4 shells), validated.
+    pub fn params(&self) -> Result<SandwichParams> {
+        let (hl, ht) = (0.5 * self.long_web_span, 0.5 * self.trans_web_span);
+        let p = SandwichParams {
+            length: self.length,
+            top_width: self.top_width,
+            top_thickness: self.top_thickness,
+            bottom_width: self.bottom_width,
+            bottom_thickness: self.bottom_thickness,
+            web_height: self.web_height,
+            long_webs: SandwichParams::evenly_spaced(self.n_long_webs, -hl, hl),
+            long_web_thickness: self.long_web_thickness,
+            trans_webs: SandwichParams::evenly_spaced(self.n_trans_webs, -ht, ht),
+            trans_web_thickness: self.trans_web_thickness,
+            elem_size: self.elem_size,
+            shell_kind: CellKind::Quad4,
+        };
+        if self.n_long_webs > 1 && (self.long_web_span.is_nan() || self.long_web_span <= 0.0) {
+            return Err(invalid(format!(
+                "long_web_span = {} must be positive",
+                self.long_web_span
+            )));
+        }
+        if self.n_trans_webs > 1 && (self.trans_web_span.is_nan() || self.trans_web_span <= 0.0) {
+            return Err(invalid(format!(
+                "trans_web_span = {} must be positive",
+                self.trans_web_span
+            )));
+        }
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+/// Parse a range: `a:b:step` (inclusive of `b` within 1e-9 of a step), `v1,v2,…` or one value.
+pub fn parse_values(key: &str, s: &str) -> Result<Vec<f64>> {
+    let bad = |why: &str| invalid(format!("--set {key}={s}: {why}; expected a:b:step, v1,v2,… or a value"));
+    let num = |t: &str| t.trim().parse::<f64>().ok().filter(|x| x.is_finite());
+    if s.contains(':') {
+        let p: Vec<&str> = s.split(':').collect();
+        if p.len() != 3 {
+            return Err(bad("a range has three parts"));
+        }
+        let (a, b, st) = match (num(p[0]), num(p[1]), num(p[2])) {
+            (Some(a), Some(b), Some(c)) => (a, b, c),
+            _ => return Err(bad("not a number")),
+        };
+        if st <= 0.0 || b < a {
+            return Err(bad("the step must be positive and b ≥ a"));
+        }
+        let n = ((b - a) / st + 1e-9).floor() as usize;
+        if n > 10_000 {
+            return Err(bad("more than 10 000 values"));
+        }
+        // Round to 12 significant digits so that 0.015 + 2 × 0.0025 prints as 0.02.
+        let r = |x: f64| format!("{x:.12e}").parse::<f64>().unwrap_or(x);
+        return Ok((0..=n).map(|i| r(a + st * i as f64)).collect());
+    }
+    let v: Option<Vec<f64>> = s.split(',').map(num).collect();
+    match v {
+        Some(v) if !v.is_empty() => Ok(v),
+        _ => Err(bad("not a number")),
+    }
+}
+
+/// Parse `KEY=RANGE` (a `--set` argument).
+pub fn parse_set(arg: &str) -> Result<(String, Vec<f64>)> {
+    let (k, v) = arg
+        .split_once('=')
+        .ok_or_else(|| invalid(format!("--set '{arg}': expected KEY=a:b:step or KEY=v1,v2,…")))?;
+    let k = k.trim().to_string();
+    let mut probe = TableSpec::default();
+    probe.set(&k, 1.0)?;
+    Ok((k.clone(), parse_values(&k, v.trim())?))
+}
+
+/// Which model the sweep analyses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SweepFormulation {
+    /// MITC4 mid-surface shells ([`sandwich_table`]); about 10 % soft in racking (formulations.md).
+    Shell,
+    /// Hex20 solids ([`sandwich_table_solid`]) of size `solid_size`.
+    Solid,
+}
+
+/// Design constraints: a design is feasible when `f1 ≥ min_f1_hz` and `mass ≤ max_mass_kg`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Constraints {
+    /// Lowest admissible first elastic frequency (Hz).
+    pub min_f1_hz: f64,
+    /// Highest admissible real steel mass (kg).
+    pub max_mass_kg: f64,
+}
+
+impl Default for Constraints {
+    fn default() -> Self {
+        Constraints {
+            min_f1_hz: 300.0,
+            max_mass_kg: 165.0,
+        }
+    }
+}
+
+/// Re-analysis of the best designs: shells refined by `shell_refine`, and hex20 solids of
+/// `solid_size`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CheckSpec {
+    /// How many designs to check (0: none).
+    pub designs: usize,
+    /// Shell element size divisor of the check.
+    pub shell_refine: f64,
+    /// Hex20 element size of the check (m).
+    pub solid_size: f64,
+}
+
+impl Default for CheckSpec {
+    fn default() -> Self {
+        CheckSpec {
+            designs: 0,
+            shell_refine: 2.0,
+            solid_size: 0.025,
+        }
+    }
+}
+
+/// A parametric study of the sandwich table.
+#[derive(Clone, Debug, Serialize)]
+pub struct Study {
+    /// Name.
+    pub name: String,
+    /// Model of the sweep.
+    pub formulation: SweepFormulation,
+    /// Hex20 size for `formulation = "solid"` (m).
+    pub solid_size: f64,
+    /// Material (`[material]`, default steel).
+    #[serde(skip)]
+    pub material: Material,
+    /// The base design.
+    pub table: TableSpec,
+    /// Swept keys and their values, in order (the first varies slowest).
+    pub sweep: Vec<(String, Vec<f64>)>,
+    /// Feasibility limits.
+    pub constraints: Constraints,
+    /// Check of the best designs.
+    pub check: CheckSpec,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStudyFile {
+    study: RawStudyHeader,
+    material: Option<RawMaterial>,
+    #[serde(default)]
+    table: TableSpec,
+    #[serde(default)]
+    sweep: toml::Table,
+    #[serde(default)]
+    constraints: Constraints,
+    #[serde(default)]
+    check: CheckSpec,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStudyHeader {
+    version: i64,
+    name: Option<String>,
+    formulation: Option<SweepFormulation>,
+    solid_size: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    young: f64,
+    poisson: f64,
+    density: f64,
+}
+
+impl Study {
+    /// Load a study file (`[study]` table) or a scene whose mesh is `sandwich:paper[,SIZE]`.
+    pub fn load(path: &Path) -> Result<Study> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let is_study = text.lines().any(|l| l.trim() == "[study]");
+        if !is_study {
+            let scene = Scene::parse(path, &text)?;
+            let mut table = TableSpec::default();
+            match &scene.mesh {
+                MeshSource::Generator(g) if g.starts_with("sandwich:paper") => {
+                    if let Some((_, size)) = g.split_once(',') {
+                        table.elem_size = size
+                            .trim()
+                            .parse()
+                            .map_err(|_| invalid(format!("{}: generator '{g}': bad element size", path.display())))?;
+                    }
+                }
+                _ => {
+                    return Err(invalid(format!(
+                        "{}: a sweep needs a study file ([study]) or a scene with generator = \"sandwich:paper[,SIZE]\"",
+                        path.display()
+                    )));
+                }
+            }
+            return Ok(Study {
+                name: scene.name.clone(),
+                formulation: SweepFormulation::Shell,
+                solid_size: 0.025,
+                material: scene.spec.material,
+                table,
+                sweep: Vec::new(),
+                constraints: Constraints::default(),
+                check: CheckSpec::default(),
+            });
+        }
+        let raw: RawStudyFile = toml::from_str(&text).map_err(|e| invalid(format!("{}: {e}", path.display())))?;
+        if raw.study.version != 1 {
+            return Err(invalid(format!(
+                "{}: [study] version = {} is not supported (use 1)",
+                path.display(),
+                raw.study.version
+            )));
+        }
+        let material = match raw.material {
+            None => Material::steel(),
+            Some(m) => Material {
+                young: m.young,
+                poisson: m.poisson,
+                density: m.density,
+            },
+        };
+        let mut sweep = Vec::new();
+        for (k, v) in &raw.sweep {
+            let vals = match v {
+                toml::Value::String(s) => parse_values(k, s)?,
+                toml::Value::Array(a) => a
+                    .iter()
+                    .map(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
+                    .collect::<Option<Vec<f64>>>()
+                    .ok_or_else(|| invalid(format!("{}: [sweep] '{k}': values must be numbers", path.display())))?,
+                toml::Value::Float(f) => vec![*f],
+                toml::Value::Integer(i) => vec![*i as f64],
+                _ => {
+                    return Err(invalid(format!(
+                        "{}: [sweep] '{k}': expected a range or a list",
+                        path.display()
+                    )));
+                }
+            };
+            TableSpec::default().set(k, 1.0)?;
+            sweep.push((k.clone(), vals));
+        }
+        Ok(Study {
+            name: raw.study.name.unwrap_or(stem),
+            formulation: raw.study.formulation.unwrap_or(SweepFormulation::Shell),
+            solid_size: raw.study.solid_size.unwrap_or(0.025),
+            material,
+            table: raw.table,
+            sweep,
+            constraints: raw.constraints,
+            check: raw.check,
+        })
+    }
+
+    /// Replace or add swept keys (command-line `--set` wins over the file's `[sweep]`).
+    pub fn set(&mut self, key: &str, values: Vec<f64>) {
+        let norm = |k: &str| k.strip_prefix("table.").unwrap_or(k).to_string();
+        if let Some(e) = self.sweep.iter_mut().find(|(k, _)| norm(k) == norm(key)) {
+            e.1 = values;
+        } else {
+            self.sweep.push((key.to_string(), values));
+        }
+    }
+
+    /// Every combination (the first key varies slowest) as its values and validated parameters.
+    /// Nothing is meshed: an out-of-range value is reported with its key before any analysis.
+    pub fn designs(&self) -> Result<Vec<(Vec<f64>, TableSpec, SandwichParams)>> {
+        // Each value alone first, so that the message names the one bad key.
+        for (k, vals) in &self.sweep {
+            for &v in vals {
+                let mut t = self.table.clone();
+                t.set(k, v)?;
+                t.params().map_err(|e| invalid(format!("{k} = {v}: {}", strip(e))))?;
+            }
+        }
+        let n: usize = self.sweep.iter().map(|(_, v)| v.len()).product();
+        if n > 100_000 {
+            return Err(invalid(format!("the sweep has {n} combinations (at most 100 000)")));
+        }
+        let mut out = Vec::with_capacity(n);
+        for i in 0..n {
+            let mut rem = i;
+            let mut vals = vec![0.0; self.sweep.len()];
+            for (j, (_, v)) in self.sweep.iter().enumerate().rev() {
+                vals[j] = v[rem % v.len()];
+                rem /= v.len();
+            }
+            let mut t = self.table.clone();
+            for ((k, _), v) in self.sweep.iter().zip(&vals) {
+                t.set(k, *v)?;
+            }
+            let p = t.params().map_err(|e| {
+                let what: Vec<String> = self
+                    .sweep
+                    .iter()
+                    .zip(&vals)
+                    .map(|((k, _), v)| format!("{k} = {v}"))
+                    .collect();
+                invalid(format!("{}: {}", what.join(", "), strip(e)))
+            })?;
+            out.push((vals, t, p));
+        }
+        Ok(out)
+    }
+}
+
+fn strip(e: Error) -> String {
+    match e {
+        Error::InvalidInput(s) => s,
+        e => e.to_string(),
+    }
+}
+
+/// One analysed design.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SweepRow {
+    /// 1-based case number.
+    pub case: usize,
+    /// Values of the swept keys, in the study's order.
+    pub values: Vec<f64>,
+    /// Real steel mass, [`SandwichParams::mass`] (kg).
+    pub mass_kg: f64,
+    /// Mass the analysed model carries (kg).
+    pub model_mass_kg: f64,
+    /// First and second elastic frequencies (Hz).
+    pub f1_hz: f64,
+    /// Second elastic frequency (Hz).
+    pub f2_hz: f64,
+    /// Free DOFs.
+    pub dofs: usize,
+    /// Wall time (s).
+    pub time_s: f64,
+    /// Meets the constraints.
+    pub feasible: bool,
+    /// On the Pareto front (no design is both lighter-or-equal and stiffer-or-equal, one strictly).
+    pub pareto: bool,
+}
+
+/// Result of a modal run of one design.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+pub struct DesignResult {
+    /// Mass of the model (kg).
+    pub model_mass_kg: f64,
+    /// First elastic frequency (Hz).
+    pub f1_hz: f64,
+    /// Second elastic frequency (Hz).
+    pub f2_hz: f64,
+    /// Free DOFs.
+    pub dofs: usize,
+    /// Wall time (s).
+    pub time_s: f64,
+}
+
+/// Free–free modal analysis of one table: shells (`solid_size = None`) or hex20 solids of size h.
+pub fn analyse(p: &SandwichParams, material: Material, solid_size: Option<f64>) -> Result<DesignResult> {
+    let t = Instant::now();
+    let (mesh, spec) = match solid_size {
+        None => {
+            let mesh = sandwich_table(p)?;
+            let shells = p
+                .thicknesses()
+                .into_iter()
+                .map(|(g, t)| ShellPart {
+                    group: g,
+                    section: ShellSection::new(t),
+                    material: None,
+                })
+                .collect();
+            let spec = ModelSpec {
+                material,
+                shells,
+                ..Default::default()
+            };
+            (mesh, spec)
+        }
+        Some(h) => {
+            let mesh = sandwich_table_solid(p, h, CellKind::Hex20)?;
+            let spec = ModelSpec {
+                material,
+                ..Default::default()
+            };
+            (mesh, spec)
+        }
+    };
+    let run = run_modal(
+        &mesh,
+        "sandwich table",
+        &ModalOptions {
+            spec,
+            target: ModalTarget::Modes(10),
+            ..Default::default()
+        },
+        0.0,
+    )?;
+    if !run.report.complete {
+        return Err(Error::Verification(
+            "sandwich table modal analysis: a mode was missed".into(),
+        ));
+    }
+    let el: Vec<f64> = run.report.elastic_frequencies();
+    if el.is_empty() {
+        return Err(Error::Verification(
+            "sandwich table: no elastic mode among the lowest 10".into(),
+        ));
+    }
+    Ok(DesignResult {
+        model_mass_kg: run.report.mass_kg,
+        f1_hz: el[0],
+        f2_hz: el.get(1).copied().unwrap_or(f64::NAN),
+        dofs: run.report.dofs,
+        time_s: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// Mark the Pareto front (minimum mass, maximum f1) of `rows`.
+pub fn mark_pareto(rows: &mut [SweepRow]) {
+    let pts: Vec<(f64, f64)> = rows.iter().map(|r| (r.mass_kg, r.f1_hz)).collect();
+    for (i, r) in rows.iter_mut().enumerate() {
+        let (m, f) = pts[i];
+        r.pareto = !pts
+            .iter()
+            .enumerate()
+            .any(|(j, &(mj, fj))| j != i && mj <= m && fj >= f && (mj < m || fj > f));
+    }
+}
+
+/// A re-analysis of one of the best designs.
+#[derive(Clone, Debug, Serialize)]
+pub struct CheckRow {
+    /// Case number of the sweep.
+    pub case: usize,
+    /// Real mass (kg).
+    pub mass_kg: f64,
+    /// f1 of the sweep's model (Hz).
+    pub f1_sweep_hz: f64,
+    /// f1 of the refined shell model (Hz).
+    pub f1_shell_fine_hz: f64,
+    /// Shell element size of the check (m).
+    pub shell_size: f64,
+    /// f1 of the hex20 solid (Hz).
+    pub f1_solid_hz: f64,
+    /// Hex20 size (m).
+    pub solid_size: f64,
+    /// Feasible by the solid model.
+    pub feasible_solid: bool,
+}
+
+/// The outcome of a sweep.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepOutcome {
+    /// The study.
+    pub study: Study,
+    /// One row per design, in case order.
+    pub rows: Vec<SweepRow>,
+    /// Checks of the best designs.
+    pub checks: Vec<CheckRow>,
+}
+
+/// Options of [`run_sweep`].
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
+    /// Output folder (`sweep.csv`, `sweep.json`, `pareto.svg`).
+    pub out: Option<PathBuf>,
+    /// Concurrent designs.
+    pub jobs: usize,
+    /// Print one line per design on stderr.
+    pub progress: bool,
+}
+
+/// Run a study: validate every combination, analyse each, mark feasibility and the Pareto front,
+/// check the best designs (`[check] designs`), and write the outputs.
+pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
+    use rayon::prelude::*;
+    let designs = study.designs()?;
+    if let Some(h) = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size)
+        && (h.is_nan() || h <= 0.0)
+    {
+        return Err(invalid(format!("solid_size = {h} must be positive")));
+    }
+    let solid = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size);
+    let total = designs.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let one = |(i, (vals, _t, p)): (usize, &(Vec<f64>, TableSpec, SandwichParams))| -> Result<SweepRow> {
+        let r = analyse(p, study.material, solid)
+            .map_err(|e| invalid(format!("case {} ({}): {e}", i + 1, describe(study, vals))))?;
+        let mass = p.mass(study.material.density);
+        let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+        if opts.progress {
+            eprintln!(
+                "[{k}/{total}] {}: {mass:.1} kg, f1 {:.1} Hz ({:.2} s)",
+                describe(study, vals),
+                r.f1_hz,
+                r.time_s
+            );
+        }
+        Ok(SweepRow {
+            case: i + 1,
+            values: vals.clone(),
+            mass_kg: mass,
+            model_mass_kg: r.model_mass_kg,
+            f1_hz: r.f1_hz,
+            f2_hz: r.f2_hz,
+            dofs: r.dofs,
+            time_s: r.time_s,
+            feasible: r.f1_hz >= study.constraints.min_f1_hz && mass <= study.constraints.max_mass_kg,
+            pareto: false,
+        })
+    };
+    let jobs = opts.jobs.max(1);
+    let rows: Result<Vec<SweepRow>> = if jobs == 1 {
+        designs.iter().enumerate().map(one).collect()
+    } else {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(jobs)
+            .build()
+            .map_err(|e| invalid(format!("sweep: cannot start {jobs} workers: {e}")))?;
+        pool.install(|| designs.par_iter().enumerate().map(one).collect())
+    };
+    let mut rows = rows?;
+    mark_pareto(&mut rows);
+    let mut checks = Vec::new();
+    if study.check.designs > 0 {
+        for r in best(&rows, study.check.designs) {
+            let p = &designs[r.case - 1].2;
+            let mut fine = p.clone();
+            fine.elem_size = p.elem_size / study.check.shell_refine.max(1.0);
+            let s = analyse(&fine, study.material, None)?;
+            let so = analyse(p, study.material, Some(study.check.solid_size))?;
+            if opts.progress {
+                eprintln!(
+                    "check case {}: shell {} m {:.1} Hz, hex20 {} m {:.1} Hz",
+                    r.case, fine.elem_size, s.f1_hz, study.check.solid_size, so.f1_hz
+                );
+            }
+            checks.push(CheckRow {
+                case: r.case,
+                mass_kg: r.mass_kg,
+                f1_sweep_hz: r.f1_hz,
+                f1_shell_fine_hz: s.f1_hz,
+                shell_size: fine.elem_size,
+                f1_solid_hz: so.f1_hz,
+                solid_size: study.check.solid_size,
+                feasible_solid: so.f1_hz >= study.constraints.min_f1_hz && r.mass_kg <= study.constraints.max_mass_kg,
+            });
+        }
+    }
+    let outcome = SweepOutcome {
+        study: study.clone(),
+        rows,
+        checks,
+    };
+    if let Some(dir) = &opts.out {
+        write_outputs(&outcome, dir)?;
+    }
+    Ok(outcome)
+}
+
+/// The `n` best designs: feasible ones by descending f1 (then ascending mass), else the Pareto
+/// designs within the mass limit by descending f1, else the lightest Pareto designs.
+pub fn best(rows: &[SweepRow], n: usize) -> Vec<&SweepRow> {
+    let mut feas: Vec<&SweepRow> = rows.iter().filter(|r| r.feasible).collect();
+    if feas.is_empty() {
+        feas = rows.iter().filter(|r| r.pareto).collect();
+    }
+    feas.sort_by(|a, b| b.f1_hz.total_cmp(&a.f1_hz).then(a.mass_kg.total_cmp(&b.mass_kg)));
+    feas.truncate(n);
+    feas
+}
+
+fn describe(study: &Study, vals: &[f64]) -> String {
+    study
+        .sweep
+        .iter()
+        .zip(vals)
+        .map(|((k, _), v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The result table as text; feasible designs are marked `*`, Pareto designs `P`.
+pub fn table_text(o: &SweepOutcome) -> String {
+    let c = &o.study.constraints;
+    let mut s = format!(
+        "study {} ({} model); * = f1 ≥ {} Hz and mass ≤ {} kg, P = Pareto front\n",
+        o.study.name,
+        match o.study.formulation {
+            SweepFormulation::Shell => "MITC4 mid-surface shell",
+            SweepFormulation::Solid => "hex20 solid",
+        },
+        c.min_f1_hz,
+        c.max_mass_kg
+    );
+    s.push_str(&format!("{:>5} ", "case"));
+    for (k, _) in &o.study.sweep {
+        s.push_str(&format!("{:>w$} ", k, w = k.len().max(8)));
+    }
+    s.push_str(&format!(
+        "{:>9} {:>9} {:>9} {:>8} {:>7}  \n",
+        "mass kg", "f1 Hz", "f2 Hz", "dofs", "time s"
+    ));
+    for r in &o.rows {
+        s.push_str(&format!("{:>5} ", r.case));
+        for ((k, _), v) in o.study.sweep.iter().zip(&r.values) {
+            s.push_str(&format!("{:>w$} ", v, w = k.len().max(8)));
+        }
+        s.push_str(&format!(
+            "{:>9.2} {:>9.1} {:>9.1} {:>8} {:>7.2} {}{}\n",
+            r.mass_kg,
+            r.f1_hz,
+            r.f2_hz,
+            r.dofs,
+            r.time_s,
+            if r.feasible { "*" } else { " " },
+            if r.pareto { "P" } else { " " }
+        ));
+    }
+    let nf = o.rows.iter().filter(|r| r.feasible).count();
+    s.push_str(&format!("{nf} of {} designs meet the constraints\n", o.rows.len()));
+    if !o.checks.is_empty() {
+        s.push_str(
+            "check of the best designs:\n  case   mass kg   f1 sweep   f1 shell fine   f1 hex20   feasible (hex20)\n",
+        );
+        for c in &o.checks {
+            s.push_str(&format!(
+                "  {:>4} {:>9.2} {:>10.1} {:>10.1} ({:.4}) {:>8.1} ({:.4}) {}\n",
+                c.case,
+                c.mass_kg,
+                c.f1_sweep_hz,
+                c.f1_shell_fine_hz,
+                c.shell_size,
+                c.f1_solid_hz,
+                c.solid_size,
+                if c.feasible_solid { "yes" } else { "no" }
+            ));
+        }
+    }
+    s
+}
+
+/// The rows as CSV: `case,<keys…>,mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto`.
+pub fn sweep_csv(o: &SweepOutcome) -> String {
+    let mut s = String::from("case");
+    for (k, _) in &o.study.sweep {
+        s.push_str(&format!(",{k}"));
+    }
+    s.push_str(",mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto\n");
+    for r in &o.rows {
+        s.push_str(&r.case.to_string());
+        for v in &r.values {
+            s.push_str(&format!(",{v}"));
+        }
+        s.push_str(&format!(
+            ",{:.6},{:.6},{:.6},{:.6},{},{:.3},{},{}\n",
+            r.mass_kg, r.model_mass_kg, r.f1_hz, r.f2_hz, r.dofs, r.time_s, r.feasible, r.pareto
+        ));
+    }
+    s
+}
+
+/// Write `sweep.csv`, `sweep.json` and `pareto.svg` to `dir` (created).
+pub fn write_outputs(o: &SweepOutcome, dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let p = dir.join("sweep.csv");
+    std::fs::write(&p, sweep_csv(o)).map_err(|e| Error::io(&p, e))?;
+    let p = dir.join("sweep.json");
+    let text = serde_json::to_string_pretty(o).map_err(|e| Error::output("JSON", e))?;
+    std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
+    write_pareto_svg(o, &dir.join("pareto.svg"))
+}
+
+fn perr<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::io(path, std::io::Error::other(format!("plotting failed: {e}")))
+}
+
+fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for x in v.filter(|x| x.is_finite()) {
+        lo = lo.min(x);
+        hi = hi.max(x);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.08).max(hi.abs() * 0.02).max(1e-9);
+    (lo - pad, hi + pad)
+}
+
+/// SVG of mass against first elastic frequency: every design, the Pareto front as a line, the
+/// feasible region's limits dashed.
+pub fn write_pareto_svg(o: &SweepOutcome, path: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let c = o.study.constraints;
+    let (x0, x1) = range(o.rows.iter().map(|r| r.mass_kg).chain([c.max_mass_kg]));
+    let (y0, y1) = range(o.rows.iter().map(|r| r.f1_hz).chain([c.min_f1_hz]));
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(perr(path))?;
+    let mut ch = ChartBuilder::on(&root)
+        .caption(
+            format!("{}: mass against first elastic frequency", o.study.name),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(perr(path))?;
+    ch.configure_mesh()
+        .x_desc("mass, kg")
+        .y_desc("first elastic frequency, Hz")
+        .draw()
+        .map_err(perr(path))?;
+    let grey = RGBColor(150, 150, 150);
+    ch.draw_series(DashedLineSeries::new(
+        [(c.max_mass_kg, y0), (c.max_mass_kg, y1)],
+        6,
+        4,
+        grey.stroke_width(1),
+    ))
+    .map_err(perr(path))?;
+    ch.draw_series(DashedLineSeries::new(
+        [(x0, c.min_f1_hz), (x1, c.min_f1_hz)],
+        6,
+        4,
+        grey.stroke_width(1),
+    ))
+    .map_err(perr(path))?
+    .label("constraints")
+    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey.stroke_width(1)));
+    let blue = RGBColor(31, 119, 180);
+    let red = RGBColor(214, 39, 40);
+    let green = RGBColor(44, 160, 44);
+    ch.draw_series(
+        o.rows
+            .iter()
+            .filter(|r| !r.feasible)
+            .map(|r| Circle::new((r.mass_kg, r.f1_hz), 3, blue.filled())),
+    )
+    .map_err(perr(path))?
+    .label("design")
+    .legend(move |(x, y)| Circle::new((x + 10, y), 3, blue.filled()));
+    ch.draw_series(
+        o.rows
+            .iter()
+            .filter(|r| r.feasible)
+            .map(|r| Circle::new((r.mass_kg, r.f1_hz), 4, green.filled())),
+    )
+    .map_err(perr(path))?
+    .label("meets the constraints")
+    .legend(move |(x, y)| Circle::new((x + 10, y), 4, green.filled()));
+    let mut front: Vec<(f64, f64)> = o
+        .rows
+        .iter()
+        .filter(|r| r.pareto)
+        .map(|r| (r.mass_kg, r.f1_hz))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    ch.draw_series(LineSeries::new(front.clone(), red.stroke_width(2)))
+        .map_err(perr(path))?
+        .label("Pareto front")
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], red.stroke_width(2)));
+    ch.draw_series(front.iter().map(|&p| Circle::new(p, 5, red.stroke_width(2))))
+        .map_err(perr(path))?;
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerRight)
+        .draw()
+        .map_err(perr(path))?;
+    root.present().map_err(perr(path))?;
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Merge of batch shards.
+
+/// Rows equal as results (status `resumed` equals `ok`; wall time ignored).
+fn same_result(a: &BatchRow, b: &BatchRow) -> bool {
+    let st = |s: &str| {
+        if s == "resumed" {
+            "ok".to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    st(&a.status) == st(&b.status)
+        && a.error == b.error
+        && a.dofs == b.dofs
+        && a.mass_kg == b.mass_kg
+        && a.frequencies_hz == b.frequencies_hz
+        && a.first_elastic_hz == b.first_elastic_hz
+        && a.stiffness == b.stiffness
+        && a.max_displacement == b.max_displacement
+        && a.max_von_mises == b.max_von_mises
+}
+
+/// Join the `summary.json` of batch shard folders into one summary sorted by file; a case in
+/// several folders must have the same results there (else an error naming it). Writes
+/// `out/summary.csv` and `out/summary.json` when `out` is given.
+pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
+    if dirs.is_empty() {
+        return Err(invalid("merge: no input folder"));
+    }
+    let mut rows: Vec<(BatchRow, PathBuf)> = Vec::new();
+    let mut jobs = 1;
+    for d in dirs {
+        let p = d.join("summary.json");
+        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| invalid(format!("{}: {e}", p.display())))?;
+        let r: Vec<BatchRow> = v
+            .get("rows")
+            .cloned()
+            .ok_or_else(|| invalid(format!("{}: no 'rows' (not a batch summary)", p.display())))
+            .and_then(|r| serde_json::from_value(r).map_err(|e| invalid(format!("{}: {e}", p.display()))))?;
+        jobs = jobs.max(v.get("jobs").and_then(|j| j.as_u64()).unwrap_or(1) as usize);
+        rows.extend(r.into_iter().map(|r| (r, d.clone())));
+    }
+    rows.sort_by(|a, b| a.0.file.cmp(&b.0.file));
+    let mut merged: Vec<(BatchRow, PathBuf)> = Vec::new();
+    for (r, d) in rows {
+        if let Some((last, ld)) = merged.last()
+            && last.file == r.file
+        {
+            if !same_result(last, &r) {
+                return Err(invalid(format!(
+                    "merge: case '{}' is in {} and {} with different results",
+                    r.file,
+                    ld.display(),
+                    d.display()
+                )));
+            }
+            continue;
+        }
+        merged.push((r, d));
+    }
+    let rows: Vec<BatchRow> = merged.into_iter().map(|(r, _)| r).collect();
+    let summary = BatchSummary {
+        failed: rows.iter().filter(|r| r.is_failure()).count(),
+        resumed: rows.iter().filter(|r| r.status == "resumed").count(),
+        rows,
+        jobs,
+    };
+    if let Some(out) = out {
+        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        let csv = out.join("summary.csv");
+        std::fs::write(&csv, summary_csv(&summary.rows)).map_err(|e| Error::io(&csv, e))?;
+        let js = out.join("summary.json");
+        let text = serde_json::to_string_pretty(&summary).map_err(|e| Error::output("JSON", e))?;
+        std::fs::write(&js, text).map_err(|e| Error::io(&js, e))?;
+    }
+    Ok(summary)
+}

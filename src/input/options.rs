@@ -1,0 +1,407 @@
+//! The text grammar of model options and loads, shared by the command line, scene files and
+//! the bindings, so that `GROUP=t,offset` or `i:h,b,s,t@0,0,1` mean the same everywhere.
+//!
+//! Every parser returns an [`Error::InvalidInput`] that quotes the option (by its command-line
+//! name, which the scene and binding documentation also use) and the offending text.
+
+use crate::analysis::statics::Load;
+use crate::dof::parse_components;
+use crate::element::MassLumping;
+use crate::material::Material;
+use crate::model::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
+use crate::section::BeamSection;
+use crate::{Error, Result};
+
+/// Model options in the shared text grammar (the command line's `--material`, `--fix`, …;
+/// the bindings' keyword arguments). [`ModelOptions::spec`] parses them into a [`ModelSpec`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelOptions {
+    /// Material of all volume cells: `steel` or `E,NU,RHO` in Pa, -, kg/m³.
+    pub material: String,
+    /// Material of one group: `GROUP=steel` or `GROUP=E,NU,RHO` (repeatable).
+    pub group_material: Vec<String>,
+    /// Fix a group's nodes: `GROUP` (all translations) or `GROUP:ux,uy,uz` (repeatable).
+    pub fix: Vec<String>,
+    /// Couple a group rigidly to a reference node at its centroid: `GROUP`, or
+    /// `GROUP:guided=z` to let the reference node move only along z, without rotation.
+    pub couple: Vec<String>,
+    /// Point mass: `GROUP=m` or `GROUP=m,Ixx,Iyy,Izz,Ixy,Iyz,Ixz` (kg, kg·m²); on a coupled
+    /// group it sits at the reference node.
+    pub point_mass: Vec<String>,
+    /// Discrete spring: `A=kx,ky,kz,krx,kry,krz` to the ground or `A:B=...` between two points
+    /// (coupled groups or one-node groups); N/m and N·m/rad.
+    pub spring: Vec<String>,
+    /// Mass matrix: consistent (default) or lumped (HRZ).
+    pub mass: String,
+    /// Analyse only these volume groups as solids (default: every volume cell).
+    pub solid: Vec<String>,
+    /// Shell part: `GROUP=t` or `GROUP=t,offset` (m; the offset moves the mid-surface from the
+    /// nodes along the normal, e.g. −t/2 for a plate meshed on its bottom face).
+    pub shell: Vec<String>,
+    /// Beam part: `GROUP=SECTION@ORIENT`. SECTION: `rect:b,h`, `circle:d`, `tube:d,wall`,
+    /// `i:h,b,s,t`, `channel:h,b,s,t`, `gost8239-10`, `gost8240-10`,
+    /// `custom:A,Iy,Iz,J,ky,kz,Cw` (m, m², m⁴, m⁶), with `+warping` for a 7th (warping) DOF.
+    /// ORIENT: the local y axis `x,y,z`, or `radial:cx,cy,cz,ax,ay,az` (from an axis).
+    pub beam: Vec<String>,
+    /// Length unit of the mesh coordinates: m (default) or mm.
+    pub length_unit: String,
+}
+
+impl Default for ModelOptions {
+    fn default() -> Self {
+        ModelOptions {
+            material: "steel".into(),
+            group_material: vec![],
+            fix: vec![],
+            couple: vec![],
+            point_mass: vec![],
+            spring: vec![],
+            mass: "consistent".into(),
+            solid: vec![],
+            shell: vec![],
+            beam: vec![],
+            length_unit: "m".into(),
+        }
+    }
+}
+
+/// Numbers separated by commas.
+pub fn numbers(opt: &str, text: &str, s: &str) -> Result<Vec<f64>> {
+    s.split(',')
+        .map(|v| {
+            let x: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| Error::InvalidInput(format!("{opt} '{text}': '{}' is not a number", v.trim())))?;
+            if !x.is_finite() {
+                return Err(Error::InvalidInput(format!("{opt} '{text}': {x} is not finite")));
+            }
+            Ok(x)
+        })
+        .collect()
+}
+
+/// `GROUP=a,b,c` with exactly `n` numbers.
+pub fn group_values(opt: &str, text: &str, n: usize) -> Result<(String, Vec<f64>)> {
+    let (g, v) = text
+        .split_once('=')
+        .ok_or_else(|| Error::InvalidInput(format!("{opt} '{text}': expected GROUP=values")))?;
+    let v = numbers(opt, text, v)?;
+    if v.len() != n {
+        return Err(Error::InvalidInput(format!(
+            "{opt} '{text}': expected {n} numbers, got {}",
+            v.len()
+        )));
+    }
+    Ok((g.trim().to_string(), v))
+}
+
+/// Length unit name → factor to metres.
+pub fn length_scale(u: &str) -> Result<f64> {
+    match u {
+        "m" => Ok(1.0),
+        "mm" => Ok(1e-3),
+        "cm" => Ok(1e-2),
+        _ => Err(Error::InvalidInput(format!(
+            "--length-unit: unknown unit '{u}' (use m or mm)"
+        ))),
+    }
+}
+
+fn axis(opt: &str, text: &str, a: &str) -> Result<usize> {
+    match a.trim() {
+        "x" => Ok(0),
+        "y" => Ok(1),
+        "z" => Ok(2),
+        _ => Err(Error::InvalidInput(format!("{opt} '{text}': axis must be x, y or z"))),
+    }
+}
+
+impl ModelOptions {
+    /// Build the model specification.
+    pub fn spec(&self) -> Result<ModelSpec> {
+        let mut spec = ModelSpec {
+            material: Material::parse(&self.material)?,
+            ..Default::default()
+        };
+        for gm in &self.group_material {
+            let (g, m) = gm
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--group-material '{gm}': expected GROUP=MATERIAL")))?;
+            spec.group_materials.push((g.to_string(), Material::parse(m)?));
+        }
+        for f in &self.fix {
+            let (g, comps) = match f.split_once(':') {
+                Some((g, c)) => (g, c),
+                None => (f.as_str(), "ux,uy,uz"),
+            };
+            let mask = parse_components(comps).ok_or_else(|| {
+                Error::InvalidInput(format!(
+                    "--fix '{f}': unknown components '{comps}' (use ux,uy,uz,rx,ry,rz)"
+                ))
+            })?;
+            spec.fixes.push((g.to_string(), mask));
+        }
+        for c in &self.couple {
+            let (g, guided) = match c.split_once(':') {
+                None => (c.clone(), None),
+                Some((g, opt)) => {
+                    let a = opt.strip_prefix("guided=").ok_or_else(|| {
+                        Error::InvalidInput(format!("--couple '{c}': expected GROUP or GROUP:guided=AXIS"))
+                    })?;
+                    (g.to_string(), Some(axis("--couple", c, a)?))
+                }
+            };
+            spec.couplings.push(CouplingSpec { group: g, guided });
+        }
+        for p in &self.point_mass {
+            let (g, v) = p
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--point-mass '{p}': expected GROUP=m[,Ixx,...]")))?;
+            let v = numbers("--point-mass", p, v)?;
+            if v.len() != 1 && v.len() != 7 {
+                return Err(Error::InvalidInput(format!(
+                    "--point-mass '{p}': give the mass, or the mass and 6 inertias (Ixx,Iyy,Izz,Ixy,Iyz,Ixz)"
+                )));
+            }
+            let mut inertia = [0.0; 6];
+            if v.len() == 7 {
+                inertia.copy_from_slice(&v[1..]);
+            }
+            spec.point_masses.push(PointMassSpec {
+                group: g.to_string(),
+                mass: v[0],
+                inertia,
+            });
+        }
+        for s in &self.spring {
+            let (ends, v) = s
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--spring '{s}': expected A[:B]=kx,ky,kz,krx,kry,krz")))?;
+            let v = numbers("--spring", s, v)?;
+            if v.len() != 6 {
+                return Err(Error::InvalidInput(format!("--spring '{s}': expected 6 stiffnesses")));
+            }
+            let (a, b) = match ends.split_once(':') {
+                Some((a, b)) => (a.to_string(), Some(b.to_string())),
+                None => (ends.to_string(), None),
+            };
+            let mut k = [0.0; 6];
+            k.copy_from_slice(&v);
+            spec.springs.push(SpringSpec { a, b, k });
+        }
+        spec.lumping = MassLumping::parse(&self.mass)?;
+        if !self.solid.is_empty() {
+            spec.solid_groups = Some(self.solid.clone());
+        }
+        for sh in &self.shell {
+            let (g, v) = sh.split_once('=').ok_or_else(|| {
+                Error::InvalidInput(format!(
+                    "--shell '{sh}': expected GROUP=thickness[,offset] (a shell needs a thickness)"
+                ))
+            })?;
+            let v = numbers("--shell", sh, v)?;
+            if v.is_empty() || v.len() > 2 {
+                return Err(Error::InvalidInput(format!(
+                    "--shell '{sh}': expected thickness[,offset]"
+                )));
+            }
+            let mut sec = crate::section::ShellSection::new(v[0]);
+            if v.len() == 2 {
+                sec = sec.with_offset(v[1]);
+            }
+            spec.shells.push(ShellPart {
+                group: g.to_string(),
+                section: sec,
+                material: None,
+            });
+        }
+        for b in &self.beam {
+            spec.beams.push(parse_beam(b)?);
+        }
+        Ok(spec)
+    }
+}
+
+/// Parse a `--beam GROUP=SECTION@ORIENT` option.
+pub fn parse_beam(b: &str) -> Result<BeamPart> {
+    let (g, rest) = b.split_once('=').ok_or_else(|| {
+        Error::InvalidInput(format!(
+            "--beam '{b}': expected GROUP=SECTION@ORIENT (a beam needs a section)"
+        ))
+    })?;
+    let (sec, orient) = rest.split_once('@').ok_or_else(|| {
+        Error::InvalidInput(format!(
+            "--beam '{b}': missing orientation, e.g. '@0,0,1' (the local y axis)"
+        ))
+    })?;
+    let ctx = |e: Error| match e {
+        Error::InvalidInput(m) => Error::InvalidInput(format!("--beam '{b}': {m}")),
+        e => e,
+    };
+    Ok(BeamPart {
+        group: g.to_string(),
+        section: parse_section(sec).map_err(ctx)?,
+        orientation: parse_orientation(orient).map_err(ctx)?,
+        material: None,
+    })
+}
+
+/// Parse a beam section: `rect:b,h`, `circle:d`, `tube:d,wall`, `i:h,b,s,t`, `channel:h,b,s,t`,
+/// `gost8239-10`, `gost8240-10` or `custom:A,Iy,Iz,J,ky,kz,Cw` (m, m², m⁴, m⁶), with `+warping`
+/// for a seventh (warping) DOF per node.
+pub fn parse_section(sec: &str) -> Result<BeamSection> {
+    let (sec, warping) = match sec.strip_suffix("+warping") {
+        Some(s) => (s, true),
+        None => (sec, false),
+    };
+    let (name, vals) = sec.split_once(':').unwrap_or((sec, ""));
+    let v = if vals.is_empty() {
+        vec![]
+    } else {
+        numbers("section", sec, vals)?
+    };
+    let need = |n: usize| -> Result<()> {
+        if v.len() == n {
+            Ok(())
+        } else {
+            Err(Error::InvalidInput(format!(
+                "section '{name}' needs {n} numbers, got {}",
+                v.len()
+            )))
+        }
+    };
+    let section = match name {
+        "rect" => {
+            need(2)?;
+            BeamSection::rectangle(v[0], v[1])
+        }
+        "circle" => {
+            need(1)?;
+            BeamSection::circle(v[0])
+        }
+        "tube" => {
+            need(2)?;
+            BeamSection::tube(v[0], v[1])
+        }
+        "i" => {
+            need(4)?;
+            BeamSection::i_beam(v[0], v[1], v[2], v[3])
+        }
+        "channel" => {
+            need(4)?;
+            BeamSection::channel(v[0], v[1], v[2], v[3])
+        }
+        "gost8239-10" => {
+            need(0)?;
+            BeamSection::gost_8239_i10()
+        }
+        "gost8240-10" => {
+            need(0)?;
+            BeamSection::gost_8240_channel10()
+        }
+        "custom" => {
+            need(7)?;
+            BeamSection::custom(v[0], v[1], v[2], v[3], v[4], v[5], v[6])
+        }
+        _ => {
+            return Err(Error::InvalidInput(format!(
+                "unknown section '{name}' (rect, circle, tube, i, channel, gost8239-10, gost8240-10, custom)"
+            )));
+        }
+    };
+    Ok(section.with_warping(warping))
+}
+
+/// Parse a beam orientation: the local y axis `x,y,z`, or `radial:cx,cy,cz,ax,ay,az` (from an
+/// axis through the point c along a).
+pub fn parse_orientation(orient: &str) -> Result<Orientation> {
+    if let Some(r) = orient.strip_prefix("radial:") {
+        let v = numbers("orientation", orient, r)?;
+        if v.len() != 6 {
+            return Err(Error::InvalidInput(
+                "radial orientation needs cx,cy,cz,ax,ay,az".to_string(),
+            ));
+        }
+        Ok(Orientation::Radial {
+            centre: [v[0], v[1], v[2]],
+            axis: [v[3], v[4], v[5]],
+        })
+    } else {
+        let v = numbers("orientation", orient, orient)?;
+        if v.len() != 3 || v.iter().all(|x| *x == 0.0) {
+            return Err(Error::InvalidInput(
+                "orientation must be a non-zero vector x,y,z".to_string(),
+            ));
+        }
+        Ok(Orientation::Vector([v[0], v[1], v[2]]))
+    }
+}
+
+/// Loads and prescribed displacements in the shared text grammar (`vibrofem static`'s
+/// `--force`, `--pressure`, `--gravity`, `--displace`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Total force on a group: `GROUP=Fx,Fy,Fz` (N). A coupled group takes it at its reference
+    /// node; a surface group as a uniform traction; other groups split it between their nodes.
+    pub force: Vec<String>,
+    /// Pressure on a surface group: `GROUP=p` (Pa, positive into the solid).
+    pub pressure: Vec<String>,
+    /// Body acceleration `gx,gy,gz` (m/s²), e.g. `0,0,-9.81`.
+    pub gravity: Option<String>,
+    /// Prescribed displacement: `GROUP=ux,uy,uz` (m; `-` leaves a component free). On a coupled
+    /// group it moves the reference node.
+    pub displace: Vec<String>,
+}
+
+impl LoadOptions {
+    /// Add the prescribed displacements to `spec` and return the loads (one case).
+    pub fn apply(&self, spec: &mut ModelSpec) -> Result<Vec<Load>> {
+        let mut loads = Vec::new();
+        for f in &self.force {
+            let (g, v) = group_values("--force", f, 3)?;
+            loads.push(Load::Force {
+                group: g,
+                force: [v[0], v[1], v[2]],
+            });
+        }
+        for p in &self.pressure {
+            let (g, v) = group_values("--pressure", p, 1)?;
+            loads.push(Load::Pressure { group: g, p: v[0] });
+        }
+        if let Some(g) = &self.gravity {
+            let v = numbers("--gravity", g, g)?;
+            if v.len() != 3 {
+                return Err(Error::InvalidInput(format!("--gravity '{g}': expected gx,gy,gz")));
+            }
+            loads.push(Load::Acceleration([v[0], v[1], v[2]]));
+        }
+        for d in &self.displace {
+            let (g, v) = d
+                .split_once('=')
+                .ok_or_else(|| Error::InvalidInput(format!("--displace '{d}': expected GROUP=ux,uy,uz")))?;
+            let parts: Vec<&str> = v.split(',').collect();
+            if parts.len() != 3 && parts.len() != 6 {
+                return Err(Error::InvalidInput(format!(
+                    "--displace '{d}': expected 3 (or 6) values"
+                )));
+            }
+            let mut vals = [None; 6];
+            for (i, p) in parts.iter().enumerate() {
+                let p = p.trim();
+                if p == "-" || p.is_empty() {
+                    continue;
+                }
+                let x: f64 = p
+                    .parse()
+                    .map_err(|_| Error::InvalidInput(format!("--displace '{d}': '{p}' is not a number")))?;
+                if !x.is_finite() {
+                    return Err(Error::InvalidInput(format!("--displace '{d}': {x} is not finite")));
+                }
+                vals[i] = Some(x);
+            }
+            spec.prescribed.push((g.to_string(), vals));
+        }
+        Ok(loads)
+    }
+}

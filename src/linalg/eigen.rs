@@ -1,0 +1,950 @@
+//! Generalised symmetric eigenproblem K x = λ M x: shift-invert block Lanczos, verified.
+//!
+//! # Method
+//! One sparse LDLᵀ factorisation of A = K − σM. The operator Op = A⁻¹M is self-adjoint in the
+//! M inner product, and its eigenvalues θ = 1/(λ − σ) are largest in magnitude for the λ
+//! nearest σ. A block Krylov basis V (block size `b`, default 6) is kept M-orthonormal by full
+//! reorthogonalisation (classical Gram–Schmidt, twice), the projected matrix T = VᵀM·Op·V is
+//! built from the orthogonalisation coefficients, and Ritz pairs come from its dense
+//! eigen-decomposition. When the basis is full it is restarted thick: the best Ritz vectors
+//! are kept and the last block carries on. Block Lanczos finds every copy of an eigenvalue
+//! of multiplicity up to `b` (single-vector Lanczos misses copies in exact arithmetic).
+//!
+//! # Verification (every run)
+//! - relative residual ‖Kx − λMx‖ / ‖Kx‖ of every mode (rigid modes: ‖Kx − λMx‖ / (|σ|‖Mx‖));
+//! - M-orthonormality max |XᵀMX − I|;
+//! - Sturm-sequence counts: the number of negative pivots of an LDLᵀ of K − σ_c M is the
+//!   number of eigenvalues below σ_c. A count at a point just above the highest reported
+//!   eigenvalue (and, for a shift inside the spectrum, just below the lowest) must equal the
+//!   number of modes found in between. If it does not, iteration resumes for more modes; a
+//!   mismatch that persists is an error.
+//!
+//! # Shift
+//! The default shift is negative, σ = −10⁻⁷·median(K_ii/M_ii): A is then positive definite even
+//! for free–free models (six rigid-body modes, K singular), and the lowest modes are sought.
+//! A user shift finds the modes nearest to it.
+
+use super::factor::{Factor, SymbolicFactor};
+use crate::linalg::sparse::SymMatrix;
+use crate::{Error, Result};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Which modes to compute.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// The `n` eigenvalues nearest the shift (the lowest `n` with the default shift).
+    Nearest(usize),
+    /// All eigenvalues λ in `[lo, hi]`.
+    Band(f64, f64),
+}
+
+/// Knobs of the eigen solver.
+#[derive(Clone, Debug)]
+pub struct EigenParams {
+    /// What to compute.
+    pub target: Target,
+    /// Shift σ (λ units, rad²/s²); `None` for the default negative shift.
+    pub shift: Option<f64>,
+    /// Block size (≥ the largest multiplicity expected; 6 covers rigid-body modes).
+    pub block: usize,
+    /// Convergence tolerance on the Ritz residual, relative to |θ|.
+    pub tol: f64,
+    /// Maximum number of operator applications (vectors) before giving up.
+    pub max_applications: usize,
+    /// Seed of the start block.
+    pub seed: u64,
+    /// Relative residual above which a mode fails verification.
+    pub verify_tol: f64,
+    /// Models with at most this many free DOFs are solved densely (all modes, exact).
+    pub dense_below: usize,
+}
+
+impl Default for EigenParams {
+    fn default() -> Self {
+        EigenParams {
+            target: Target::Nearest(12),
+            shift: None,
+            block: 6,
+            tol: 1e-10,
+            max_applications: 20_000,
+            seed: 0x5eed_cafe_f00d_0001,
+            verify_tol: 1e-6,
+            dense_below: 300,
+        }
+    }
+}
+
+/// The result of the Sturm-sequence check.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SturmCheck {
+    /// Lower check point (λ units) and the count of eigenvalues below it.
+    pub lower: (f64, usize),
+    /// Upper check point and the count of eigenvalues below it.
+    pub upper: (f64, usize),
+    /// Modes expected between the points (`upper.1 − lower.1`).
+    pub expected: usize,
+    /// Modes found between them.
+    pub found: usize,
+    /// `expected == found`.
+    pub complete: bool,
+}
+
+/// Eigen solution with its verification.
+pub struct EigenSolution {
+    /// Eigenvalues λ = ω², ascending.
+    pub lambda: Vec<f64>,
+    /// Eigenvectors (columns), M-orthonormal: XᵀMX = I.
+    pub vectors: Mat<f64>,
+    /// Relative residual of each mode.
+    pub rel_residual: Vec<f64>,
+    /// max |XᵀMX − I|.
+    pub m_orthonormality: f64,
+    /// The completeness check.
+    pub sturm: SturmCheck,
+    /// The shift used.
+    pub shift: f64,
+    /// Operator applications (vectors solved for).
+    pub applications: usize,
+    /// Factorisations done (shift and Sturm points).
+    pub factorizations: usize,
+    /// Seconds spent factorising, iterating and verifying.
+    pub time_factor: f64,
+    /// Seconds in the Lanczos iteration.
+    pub time_iterate: f64,
+    /// Seconds in verification (residuals, orthonormality, Sturm factorisations).
+    pub time_verify: f64,
+    /// Worst probe backward error of the factorisations used (see [`Factor::probe_residual`]).
+    pub factor_backward_error: f64,
+}
+
+/// Default shift: a small negative fraction of the typical diagonal ratio K_ii/M_ii (which
+/// is of the order of the largest eigenvalue), so that A = K − σM is positive definite and
+/// well enough conditioned even when K is singular.
+pub fn default_shift(k: &SymMatrix, m: &SymMatrix) -> f64 {
+    let dk = k.diagonal();
+    let dm = m.diagonal();
+    let mut r: Vec<f64> = dk
+        .iter()
+        .zip(&dm)
+        .filter(|(a, b)| **b > 0.0 && **a > 0.0)
+        .map(|(a, b)| a / b)
+        .collect();
+    if r.is_empty() {
+        return -1.0;
+    }
+    let mid = r.len() / 2;
+    let (_, med, _) = r.select_nth_unstable_by(mid, f64::total_cmp);
+    -1e-7 * *med
+}
+
+/// Small deterministic generator for start vectors (xorshift64*).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let v = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+        (v >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+/// Solve K x = λ M x for the requested modes, verified. `sym` is the symbolic factorisation of
+/// the shared pattern (ordering included), reused for every numeric factorisation.
+pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenParams) -> Result<EigenSolution> {
+    let n = k.n();
+    if n == 0 {
+        return Err(Error::InvalidInput("the model has no free degree of freedom".into()));
+    }
+    let t0 = Instant::now();
+    let (sigma, band) = match p.target {
+        Target::Band(lo, hi) => {
+            if !(lo < hi) || !lo.is_finite() || !hi.is_finite() {
+                return Err(Error::InvalidInput(format!("empty band [{lo}, {hi}]")));
+            }
+            // Factor just below the band's lower end; its inertia is the lower Sturm count.
+            let s = p.shift.unwrap_or(if lo <= 0.0 {
+                default_shift(k, m).min(lo - lo.abs() * 1e-9 - 1e-9)
+            } else {
+                lo * (1.0 - 1e-9)
+            });
+            (s, Some((lo, hi)))
+        }
+        Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
+    };
+    let mut factorizations = 0;
+    let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
+    let mut backward = fa.probe_residual;
+    if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
+        if n > p.dense_below {
+            // The diagonal heuristic can put the default shift far below the wanted modes
+            // (thin shells: rotational stiffness ∝ 1/t²; huge stiffness contrasts). Then every
+            // θ = 1/(λ − σ) is nearly the same and Lanczos crawls. Estimate the low spectrum by a
+            // few block inverse iterations and move the shift closer while it is too far.
+            for _ in 0..6 {
+                let est = probe_low_spectrum(k, m, &fa, (nm + 6).min(12).min(n), p.seed);
+                let Some(&last) = est.last() else { break };
+                let mut lam_est = est[nm.min(est.len()) - 1];
+                if lam_est < 1e-6 * last {
+                    lam_est = last; // the wanted ones are rigid-body modes: use the first elastic scale
+                }
+                if !(lam_est > 0.0) || sigma.abs() <= 10.0 * lam_est {
+                    break;
+                }
+                // Near the wanted modes but not closer than their scale: the θ spread is then
+                // about 2, and K − σM stays as well conditioned as the problem allows.
+                let s_new = -lam_est;
+                log::info!(
+                    "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e}"
+                );
+                (fa, sigma) = factor_at(k, m, sym, s_new, &mut factorizations)?;
+                backward = fa.probe_residual;
+            }
+        }
+    }
+    let time_factor_main = t0.elapsed().as_secs_f64();
+    let mut time_verify = 0.0;
+
+    // How many modes we need.
+    let mut want = match p.target {
+        Target::Nearest(nm) => nm.min(n),
+        Target::Band(_, hi) => {
+            let tv = Instant::now();
+            let (fh, _) = factor_at(k, m, sym, hi, &mut factorizations)?;
+            backward = backward.max(fh.probe_residual);
+            time_verify += tv.elapsed().as_secs_f64();
+            fh.negative_pivots.saturating_sub(fa.negative_pivots)
+        }
+    };
+    if want == 0 {
+        return Ok(EigenSolution {
+            lambda: vec![],
+            vectors: Mat::zeros(n, 0),
+            rel_residual: vec![],
+            m_orthonormality: 0.0,
+            sturm: SturmCheck {
+                lower: (sigma, fa.negative_pivots),
+                upper: (sigma, fa.negative_pivots),
+                expected: 0,
+                found: 0,
+                complete: true,
+            },
+            shift: sigma,
+            applications: 0,
+            factorizations,
+            time_factor: time_factor_main,
+            time_iterate: 0.0,
+            time_verify,
+            factor_backward_error: backward,
+        });
+    }
+
+    let ti = Instant::now();
+    let mut applications = 0usize;
+    let mut attempt = 0;
+    let mut time_iterate = 0.0;
+    let lower_count_at_shift = fa.negative_pivots;
+    let mut lz = Lanczos::new(n, want, p, &fa, m, band.is_some());
+    // The shift factor is dropped before each Sturm factorisation, so that two factors never
+    // coexist in memory; it is rebuilt only if the check asks for more iteration.
+    let mut fa = Some(fa);
+    loop {
+        attempt += 1;
+        let ti_round = Instant::now();
+        if fa.is_none() {
+            fa = Some(factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?.0);
+        }
+        let f = fa
+            .as_ref()
+            .ok_or_else(|| Error::Factorization("lost the shift factor".into()))?;
+        lz.set_want(want);
+        let (lambda, x) = if n <= p.dense_below {
+            let (l, x) = super::dense::eigen_all(k, m, sigma)?;
+            lz.last_theta = l.iter().map(|l| 1.0 / (l - sigma)).collect();
+            (l, x)
+        } else {
+            let (l, x) = lz.run(p, f, m, sigma, &mut applications)?;
+            log::info!(
+                "Lanczos: {} pairs converged after {applications} operator applications",
+                l.len()
+            );
+            // One step of inverse iteration and a Rayleigh–Ritz on the result: damps the
+            // high-frequency rounding the Krylov vectors carry (which K amplifies in the
+            // residual) at the cost of one block solve.
+            applications += x.ncols();
+            refine(k, m, f, &x)?
+        };
+        time_iterate += if attempt == 1 {
+            ti.elapsed().as_secs_f64()
+        } else {
+            ti_round.elapsed().as_secs_f64()
+        };
+        // Verify: Sturm counts around the modes found.
+        let tv = Instant::now();
+        fa = None;
+        let mut found: Vec<(f64, usize)> = lambda.iter().copied().enumerate().map(|(i, l)| (l, i)).collect();
+        found.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((lo, hi)) = band {
+            found.retain(|(l, _)| *l >= lo && *l <= hi);
+        }
+        let lam_min = found.first().map_or(sigma, |f| f.0);
+        let lam_max = found.last().map_or(sigma, |f| f.0);
+        let upper_pt = match band {
+            Some((_, hi)) => hi,
+            None => {
+                // Just above the highest mode found: a small relative step, or half the way to
+                // the next Ritz estimate if that is closer. (Ritz estimates of unconverged
+                // values lie above the true ones, so a far point could pass an eigenvalue that
+                // is simply the next one, costing an extra round of iteration.)
+                let scale = lam_max.abs().max(sigma.abs());
+                let mut step = 1e-4 * scale;
+                if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
+                    step = step.min(0.5 * (nx - lam_max));
+                }
+                lam_max + step.max(1e-9 * scale)
+            }
+        };
+        let lower_pt = if lam_min >= sigma {
+            sigma
+        } else {
+            lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6)
+        };
+        let lower_count = if lower_pt == sigma {
+            lower_count_at_shift
+        } else {
+            let (fl, _) = factor_at(k, m, sym, lower_pt, &mut factorizations)?;
+            backward = backward.max(fl.probe_residual);
+            fl.negative_pivots
+        };
+        let (fu, upper_pt) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
+        let upper_count = fu.negative_pivots;
+        backward = backward.max(fu.probe_residual);
+        drop(fu);
+        let n_between = found.iter().filter(|(l, _)| *l > lower_pt && *l < upper_pt).count();
+        let expected = upper_count.saturating_sub(lower_count);
+        log::info!(
+            "Sturm check: {expected} eigenvalues in ({lower_pt:.6e}, {upper_pt:.6e}) rad²/s², {n_between} found"
+        );
+        time_verify += tv.elapsed().as_secs_f64();
+        if expected > n_between && attempt < 4 && band.is_none() && n > p.dense_below {
+            // A mode was missed (or sits just above the last one found): continue the same
+            // iteration for more modes.
+            want = (want + (expected - n_between) + p.block.min(4)).min(n);
+            log::info!("iterating for {want} modes");
+            continue;
+        }
+        let sturm = SturmCheck {
+            lower: (lower_pt, lower_count),
+            upper: (upper_pt, upper_count),
+            expected,
+            found: n_between,
+            complete: expected == n_between,
+        };
+        // Keep the requested count (lowest / nearest) in ascending order.
+        let keep: Vec<usize> = match p.target {
+            Target::Nearest(nm) => {
+                let mut by_dist: Vec<(f64, usize)> = found.iter().map(|&(l, i)| ((l - sigma).abs(), i)).collect();
+                by_dist.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let mut idx: Vec<usize> = by_dist.iter().take(nm).map(|x| x.1).collect();
+                idx.sort_by(|&a, &b| lambda[a].total_cmp(&lambda[b]));
+                idx
+            }
+            Target::Band(..) => found.iter().map(|x| x.1).collect(),
+        };
+        let tv = Instant::now();
+        let mut vectors = Mat::zeros(n, keep.len());
+        let mut lam = Vec::with_capacity(keep.len());
+        for (c, &i) in keep.iter().enumerate() {
+            vectors.col_mut(c).copy_from(x.col(i));
+            lam.push(lambda[i]);
+        }
+        let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), sigma);
+        time_verify += tv.elapsed().as_secs_f64();
+        let sol = EigenSolution {
+            lambda: lam,
+            vectors,
+            rel_residual,
+            m_orthonormality: m_orth,
+            sturm,
+            shift: sigma,
+            applications,
+            factorizations,
+            time_factor: time_factor_main,
+            time_iterate,
+            time_verify,
+            factor_backward_error: backward,
+        };
+        return Ok(sol);
+    }
+}
+
+/// Rayleigh–Ritz estimates (ascending) of the lowest eigenvalues from a few block inverse
+/// iterations with the factor of K − σM (upper bounds of the lowest `nb` eigenvalues).
+fn probe_low_spectrum(k: &SymMatrix, m: &SymMatrix, fa: &Factor, nb: usize, seed: u64) -> Vec<f64> {
+    let n = k.n();
+    let mut rng = Rng(seed.rotate_left(17) | 1);
+    let mut x = Mat::from_fn(n, nb, |_, _| rng.next());
+    let mut y = Mat::zeros(n, nb);
+    for _ in 0..4 {
+        m.mul_block(x.as_ref(), y.as_mut());
+        fa.solve_in_place(y.as_mut());
+        for c in 0..nb {
+            let nrm = (0..n).map(|i| y[(i, c)] * y[(i, c)]).sum::<f64>().sqrt();
+            if !(nrm > 0.0 && nrm.is_finite()) {
+                return vec![];
+            }
+            for i in 0..n {
+                x[(i, c)] = y[(i, c)] / nrm;
+            }
+        }
+    }
+    let mut kx = Mat::zeros(n, nb);
+    let mut mx = Mat::zeros(n, nb);
+    k.mul_block(x.as_ref(), kx.as_mut());
+    m.mul_block(x.as_ref(), mx.as_mut());
+    let mut kh = Mat::zeros(nb, nb);
+    let mut mh = Mat::zeros(nb, nb);
+    matmul(kh.as_mut(), Accum::Replace, x.transpose(), kx.as_ref(), 1.0, Par::Seq);
+    matmul(mh.as_mut(), Accum::Replace, x.transpose(), mx.as_ref(), 1.0, Par::Seq);
+    let kd = nalgebra::DMatrix::from_fn(nb, nb, |i, j| 0.5 * (kh[(i, j)] + kh[(j, i)]));
+    let md = nalgebra::DMatrix::from_fn(nb, nb, |i, j| 0.5 * (mh[(i, j)] + mh[(j, i)]));
+    let Some(ch) = md.cholesky() else { return vec![] };
+    let Some(linv) = ch.l().try_inverse() else {
+        return vec![];
+    };
+    let c = &linv * kd * linv.transpose();
+    let c = (&c + c.transpose()) * 0.5;
+    let mut ev: Vec<f64> = c.symmetric_eigen().eigenvalues.iter().copied().collect();
+    ev.sort_by(f64::total_cmp);
+    ev
+}
+
+/// Factor K − σM; if σ sits exactly on an eigenvalue (zero pivot), nudge it.
+fn factor_at(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    sigma: f64,
+    count: &mut usize,
+) -> Result<(Factor, f64)> {
+    factor_at_checked(k, m, sym, sigma, count, false)
+}
+
+/// [`factor_at`]; with `strict`, a pivot below 1e-8 of its own diagonal entry
+/// (σ on an eigenvalue) also moves the shift. Only a user's operator shift is checked so: Sturm
+/// points need only the count, and small shifts next to rigid-body modes are legitimately
+/// ill-conditioned (their pivots are small without being wrong).
+fn factor_at_checked(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    sigma: f64,
+    count: &mut usize,
+    strict: bool,
+) -> Result<(Factor, f64)> {
+    let mut s = sigma;
+    let mut last_err = None;
+    for i in 0..4 {
+        *count += 1;
+        let a = k.sub_scaled(s, m);
+        match Factor::new(sym.clone(), &a) {
+            Ok(mut f) if !strict || f.min_rel_pivot > 1e-8 => {
+                f.probe(&a);
+                if f.probe_residual > 1e-8 {
+                    log::warn!(
+                        "factorisation of K − σM at σ = {s:.6e}: probe backward error {:.1e}",
+                        f.probe_residual
+                    );
+                }
+                return Ok((f, s));
+            }
+            Ok(_) => {
+                last_err = Some(Error::Factorization(format!(
+                    "K − σM numerically singular at σ = {s:.6e}"
+                )))
+            }
+            Err(e) => last_err = Some(e),
+        }
+        // Move off the eigenvalue by a relative amount that grows each try.
+        let scale = s.abs().max(1e-300);
+        s += scale * 1e-7 * 10f64.powi(i) * if s >= 0.0 { 1.0 } else { -1.0 };
+    }
+    Err(last_err.unwrap_or_else(|| Error::Factorization("factorisation failed".into())))
+}
+
+/// Rayleigh–Ritz refinement of approximate eigenvectors X: Y = A⁻¹MX, then the k×k pencil
+/// (YᵀKY, YᵀMY) gives eigenvalues and M-orthonormal vectors in span(Y), ascending.
+fn refine(k: &SymMatrix, m: &SymMatrix, fa: &Factor, x: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
+    let (n, c) = (x.nrows(), x.ncols());
+    let mut y = Mat::zeros(n, c);
+    m.mul_block(x.as_ref(), y.as_mut());
+    fa.solve_in_place(y.as_mut());
+    let mut ky = Mat::zeros(n, c);
+    let mut my = Mat::zeros(n, c);
+    k.mul_block(y.as_ref(), ky.as_mut());
+    m.mul_block(y.as_ref(), my.as_mut());
+    let mut kh = Mat::zeros(c, c);
+    let mut mh = Mat::zeros(c, c);
+    matmul(kh.as_mut(), Accum::Replace, y.transpose(), ky.as_ref(), 1.0, Par::Seq);
+    matmul(mh.as_mut(), Accum::Replace, y.transpose(), my.as_ref(), 1.0, Par::Seq);
+    // Columns scaled to unit M-norm first (they differ by the ratios of θ).
+    let sc: Vec<f64> = (0..c)
+        .map(|i| 1.0 / mh[(i, i)].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    let kd = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (kh[(i, j)] + kh[(j, i)]) * sc[i] * sc[j]);
+    let md = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (mh[(i, j)] + mh[(j, i)]) * sc[i] * sc[j]);
+    // M-orthonormal basis of span(Y) from the eigen-decomposition of its Gram matrix, dropping
+    // directions that are numerically dependent (two Ritz vectors of one eigenvector would
+    // otherwise give a spurious extra eigenvalue).
+    let ge = md.symmetric_eigen();
+    let gmax = ge.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+    let keep: Vec<usize> = (0..c).filter(|&i| ge.eigenvalues[i] > 1e-10 * gmax).collect();
+    if keep.is_empty() {
+        return Err(Error::Verification("refined Ritz vectors are not M-independent".into()));
+    }
+    let q = nalgebra::DMatrix::from_fn(c, keep.len(), |i, j| {
+        ge.eigenvectors[(i, keep[j])] / ge.eigenvalues[keep[j]].sqrt()
+    });
+    let cmat = q.transpose() * &kd * &q;
+    let cmat = (&cmat + cmat.transpose()) * 0.5;
+    let eig = cmat.symmetric_eigen();
+    let r = keep.len();
+    let mut order: Vec<usize> = (0..r).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    // Z = Q U, columns in ascending order; then X = Y Z is M-orthonormal.
+    let z = &q * &eig.eigenvectors;
+    let zf = Mat::from_fn(c, r, |i, j| z[(i, order[j])] * sc[i]);
+    let mut xn = Mat::zeros(n, r);
+    matmul(xn.as_mut(), Accum::Replace, y.as_ref(), zf.as_ref(), 1.0, Par::Seq);
+    Ok((order.iter().map(|&j| eig.eigenvalues[j]).collect(), xn))
+}
+
+/// Residuals and M-orthonormality of computed modes.
+pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, sigma: f64) -> (Vec<f64>, f64) {
+    let n = x.nrows();
+    let nc = x.ncols();
+    let mut kx = Mat::zeros(n, nc);
+    let mut mx = Mat::zeros(n, nc);
+    k.mul_block(x, kx.as_mut());
+    m.mul_block(x, mx.as_mut());
+    // Scale of the spectrum found (a far shift must not make elastic modes look rigid).
+    let lam_ref = lambda.iter().fold(1e-3 * sigma.abs(), |a, l| a.max(l.abs()));
+    let mut res = Vec::with_capacity(nc);
+    for c in 0..nc {
+        let (mut r2, mut k2, mut m2) = (0.0, 0.0, 0.0);
+        for i in 0..n {
+            let r = kx[(i, c)] - lambda[c] * mx[(i, c)];
+            r2 += r * r;
+            k2 += kx[(i, c)] * kx[(i, c)];
+            m2 += mx[(i, c)] * mx[(i, c)];
+        }
+        // Rigid-body modes (λ ≈ 0) have Kx ≈ 0: normalise by a representative stiffness
+        // scale instead, so the number still measures accuracy.
+        let denom = if lambda[c].abs() < 1e-6 * lam_ref {
+            lam_ref * m2.sqrt()
+        } else {
+            k2.sqrt().max(lambda[c].abs() * m2.sqrt())
+        };
+        res.push(if denom > 0.0 { r2.sqrt() / denom } else { r2.sqrt() });
+    }
+    let mut g = Mat::zeros(nc, nc);
+    matmul(g.as_mut(), Accum::Replace, x.transpose(), mx.as_ref(), 1.0, Par::Seq);
+    let mut err = 0.0f64;
+    for i in 0..nc {
+        for j in 0..nc {
+            let e = g[(i, j)] - if i == j { 1.0 } else { 0.0 };
+            err = err.max(e.abs());
+        }
+    }
+    (res, err)
+}
+
+/// Block Lanczos state.
+struct Lanczos {
+    n: usize,
+    b: usize,
+    /// Number of wanted eigenpairs.
+    want: usize,
+    /// Maximum basis size before a restart.
+    m_max: usize,
+    /// Basis and M times basis (columns `0..cur` in use, plus the next block).
+    v: Mat<f64>,
+    mv: Mat<f64>,
+    /// Projected matrix (full storage, symmetrised at use).
+    t: Mat<f64>,
+    /// Columns whose operator image is in `t`.
+    cur: usize,
+    rng: Rng,
+    /// Only positive θ (eigenvalues above σ) are wanted (band searches).
+    positive_only: bool,
+    /// Last Ritz values θ, for estimates of the next eigenvalue.
+    last_theta: Vec<f64>,
+    /// The start block has been built.
+    started: bool,
+}
+
+impl Lanczos {
+    fn new(n: usize, want: usize, p: &EigenParams, _fa: &Factor, _m: &SymMatrix, positive_only: bool) -> Self {
+        let b = p.block.max(1).min(n);
+        let m_max = (want * 2 + 4 * b).max(want + 6 * b).min(n);
+        let m_max = m_max.max(b.min(n));
+        Lanczos {
+            n,
+            b,
+            want,
+            m_max,
+            v: Mat::zeros(n, m_max + b),
+            mv: Mat::zeros(n, m_max + b),
+            t: Mat::zeros(m_max + b, m_max + b),
+            cur: 0,
+            rng: Rng(p.seed | 1),
+            positive_only,
+            last_theta: Vec::new(),
+            started: false,
+        }
+    }
+
+    /// Apply Op = A⁻¹M to a block: W = A⁻¹ (M X).
+    fn apply(fa: &Factor, m: &SymMatrix, x: MatRef<'_, f64>, apps: &mut usize) -> Mat<f64> {
+        let mut w = Mat::zeros(x.nrows(), x.ncols());
+        m.mul_block(x, w.as_mut());
+        fa.solve_in_place(w.as_mut());
+        *apps += x.ncols();
+        w
+    }
+
+    /// Orthogonalise `w` (and its M-image `mw`) against basis columns `0..upto`, twice;
+    /// returns the summed coefficients.
+    fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, upto: usize) -> Mat<f64> {
+        let bw = w.ncols();
+        let mut coef = Mat::zeros(upto, bw);
+        if upto == 0 {
+            return coef;
+        }
+        for _ in 0..2 {
+            let mut c = Mat::zeros(upto, bw);
+            matmul(
+                c.as_mut(),
+                Accum::Replace,
+                self.mv.get(.., 0..upto).transpose(),
+                w.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            matmul(
+                w.as_mut(),
+                Accum::Add,
+                self.v.get(.., 0..upto),
+                c.as_ref(),
+                -1.0,
+                Par::Seq,
+            );
+            matmul(
+                mw.as_mut(),
+                Accum::Add,
+                self.mv.get(.., 0..upto),
+                c.as_ref(),
+                -1.0,
+                Par::Seq,
+            );
+            coef += &c;
+        }
+        coef
+    }
+
+    /// M-orthonormalise `w` (already orthogonal to the basis columns `0..upto`; `mw` is its
+    /// M-image) in place. Returns R with W_old = W_new·R; `mw` is recomputed fresh at the end.
+    /// Directions whose M-norm² fell below 1e-20 of `scale2` (the largest M-norm² before
+    /// orthogonalisation) carry no new information: they are replaced by random vectors
+    /// orthogonal to everything, and their rows of R are zero.
+    fn normalise(&mut self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize, scale2: f64) -> Mat<f64> {
+        let bw = w.ncols();
+        let mut r_total = Mat::<f64>::identity(bw, bw);
+        for pass in 0..3 {
+            let mut g = Mat::zeros(bw, bw);
+            matmul(g.as_mut(), Accum::Replace, w.transpose(), mw.as_ref(), 1.0, Par::Seq);
+            let gs = nalgebra::DMatrix::from_fn(bw, bw, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
+            let eig = nalgebra::SymmetricEigen::new(gs);
+            let smax = eig.eigenvalues.iter().fold(0.0f64, |a, &s| a.max(s));
+            let floor = if pass == 0 && scale2 > 0.0 {
+                scale2 * 1e-20
+            } else {
+                smax * 1e-20
+            };
+            let mut deficient = Vec::new();
+            let mut u = Mat::zeros(bw, bw);
+            let mut r = Mat::zeros(bw, bw);
+            for k in 0..bw {
+                let s = eig.eigenvalues[k];
+                if s > floor && s > 0.0 {
+                    let sq = s.sqrt();
+                    for i in 0..bw {
+                        u[(i, k)] = eig.eigenvectors[(i, k)] / sq;
+                        r[(k, i)] = eig.eigenvectors[(i, k)] * sq;
+                    }
+                } else {
+                    deficient.push(k);
+                }
+            }
+            let mut wn = Mat::zeros(self.n, bw);
+            matmul(wn.as_mut(), Accum::Replace, w.as_ref(), u.as_ref(), 1.0, Par::Seq);
+            let mut mwn = Mat::zeros(self.n, bw);
+            matmul(mwn.as_mut(), Accum::Replace, mw.as_ref(), u.as_ref(), 1.0, Par::Seq);
+            *w = wn;
+            *mw = mwn;
+            r_total = &r * &r_total;
+            if !deficient.is_empty() {
+                for &k in &deficient {
+                    for i in 0..self.n {
+                        w[(i, k)] = self.rng.next();
+                    }
+                }
+                m.mul_block(w.as_ref(), mw.as_mut());
+            } else if pass >= 1 {
+                break;
+            }
+            // Second pass: clean rounding (and orthogonalise random replacements).
+            let _ = self.orthogonalise(w, mw, upto);
+        }
+        // A fresh M-image: the algebraic updates above lose accuracy when a block is nearly
+        // in the span of the basis (its scaling amplifies their rounding).
+        m.mul_block(w.as_ref(), mw.as_mut());
+        r_total
+    }
+
+    /// Ritz values θ and vectors Y of the current projected matrix (size `cur`), sorted by
+    /// decreasing "wantedness" (|θ|, or θ for positive-only targets).
+    fn ritz(&self) -> (Vec<f64>, Mat<f64>) {
+        let c = self.cur;
+        let ts = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (self.t[(i, j)] + self.t[(j, i)]));
+        let eig = nalgebra::SymmetricEigen::new(ts);
+        let mut order: Vec<usize> = (0..c).collect();
+        let key = |th: f64| if self.positive_only { th } else { th.abs() };
+        order.sort_by(|&a, &b| key(eig.eigenvalues[b]).total_cmp(&key(eig.eigenvalues[a])));
+        let theta: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k]).collect();
+        let y = Mat::from_fn(c, c, |i, j| eig.eigenvectors[(i, order[j])]);
+        (theta, y)
+    }
+
+    /// Run until the wanted Ritz pairs converge. Returns (λ, X) of the converged pairs.
+    fn run(
+        &mut self,
+        p: &EigenParams,
+        fa: &Factor,
+        m: &SymMatrix,
+        sigma: f64,
+        apps: &mut usize,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
+        let n = self.n;
+        let b = self.b;
+        if self.started {
+            return self.iterate(p, fa, m, sigma, apps);
+        }
+        self.started = true;
+        // Start block: Op applied to random vectors (removes components in the null space
+        // of M, which matters for massless DOFs), then M-orthonormalised.
+        let mut x0 = Mat::zeros(n, b);
+        for j in 0..b {
+            for i in 0..n {
+                x0[(i, j)] = self.rng.next();
+            }
+        }
+        let mut w = Self::apply(fa, m, x0.as_ref(), apps);
+        let mut mw = Mat::zeros(n, b);
+        m.mul_block(w.as_ref(), mw.as_mut());
+        let _ = self.normalise(&mut w, &mut mw, m, 0, 0.0);
+        self.v.get_mut(.., 0..b).copy_from(&w);
+        self.mv.get_mut(.., 0..b).copy_from(&mw);
+        // `cur` columns have images in T; the block at cur..cur+b is the next to apply.
+        self.cur = 0;
+        self.iterate(p, fa, m, sigma, apps)
+    }
+
+    /// Grow the wanted count (and the basis capacity), keeping the current state.
+    fn set_want(&mut self, want: usize) {
+        if want <= self.want && self.started {
+            return;
+        }
+        self.want = want.max(self.want);
+        let b = self.b;
+        // The basis must also hold the current columns plus the next block (a resumed run may
+        // end with a full basis).
+        let m_max = (self.want * 2 + 4 * b)
+            .max(self.want + 6 * b)
+            .max(self.cur + b)
+            .min(self.n)
+            .max(b.min(self.n));
+        if m_max > self.m_max {
+            let cols = m_max + b;
+            let mut v = Mat::zeros(self.n, cols);
+            let mut mv = Mat::zeros(self.n, cols);
+            let mut t = Mat::zeros(cols, cols);
+            let old = self.v.ncols();
+            v.get_mut(.., 0..old).copy_from(&self.v);
+            mv.get_mut(.., 0..old).copy_from(&self.mv);
+            t.get_mut(0..old, 0..old).copy_from(&self.t);
+            self.v = v;
+            self.mv = mv;
+            self.t = t;
+            self.m_max = m_max;
+        }
+    }
+
+    /// The iteration proper, from the current state.
+    fn iterate(
+        &mut self,
+        p: &EigenParams,
+        fa: &Factor,
+        m: &SymMatrix,
+        sigma: f64,
+        apps: &mut usize,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
+        let n = self.n;
+        let b = self.b;
+        loop {
+            let blk = self.cur;
+            // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
+            let mut w = self.mv.get(.., blk..blk + b).to_owned();
+            fa.solve_in_place(w.as_mut());
+            *apps += b;
+            let mut mw = Mat::zeros(n, b);
+            m.mul_block(w.as_ref(), mw.as_mut());
+            let scale2 = (0..b)
+                .map(|c| (0..n).map(|i| w[(i, c)] * mw[(i, c)]).sum::<f64>())
+                .fold(0.0, f64::max);
+            let coef = self.orthogonalise(&mut w, &mut mw, blk + b);
+            // Column block `blk` of T: rows 0..blk+b.
+            self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
+            let r = self.normalise(&mut w, &mut mw, m, blk + b, scale2);
+            self.cur = blk + b;
+            // The new block goes after the basis; R is T's subdiagonal block.
+            let nb = self.cur;
+            if nb + b > self.v.ncols() {
+                return Err(Error::EigenNotConverged("internal basis overflow".into()));
+            }
+            self.v.get_mut(.., nb..nb + b).copy_from(&w);
+            self.mv.get_mut(.., nb..nb + b).copy_from(&mw);
+            self.t.get_mut(nb..nb + b, blk..blk + b).copy_from(&r);
+            self.t.get_mut(blk..blk + b, nb..nb + b).copy_from(r.transpose());
+
+            // Rayleigh–Ritz and residual estimates ‖R·E_lastᵀ·y‖.
+            let (theta, y) = self.ritz();
+            self.last_theta = theta.clone();
+            let c = self.cur;
+            let nw = self.want.min(c);
+            let mut resid = vec![0.0; c];
+            for k in 0..c {
+                let mut s2 = 0.0;
+                for i in 0..b {
+                    let mut s = 0.0;
+                    for j in 0..b {
+                        s += r[(i, j)] * y[(blk + j, k)];
+                    }
+                    s2 += s * s;
+                }
+                resid[k] = s2.sqrt();
+            }
+            let converged = |k: usize| resid[k] <= p.tol * theta[k].abs().max(f64::MIN_POSITIVE);
+            let all_wanted = c >= self.want && (0..nw).all(|k| converged(k) && (!self.positive_only || theta[k] > 0.0));
+            // Everything there is to find has been found (tiny problems).
+            let exhausted = c >= n;
+            if all_wanted || exhausted {
+                // Take every converged pair (wanted ones first) so that clusters straddling
+                // the cut are complete.
+                let mut take: Vec<usize> = (0..c).filter(|&k| converged(k) || (exhausted && k < nw)).collect();
+                if self.positive_only {
+                    take.retain(|&k| theta[k] > 0.0);
+                }
+                let mut x = Mat::zeros(n, take.len());
+                let mut lam = Vec::with_capacity(take.len());
+                let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
+                matmul(
+                    x.as_mut(),
+                    Accum::Replace,
+                    self.v.get(.., 0..c),
+                    yk.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                for &k in &take {
+                    lam.push(sigma + 1.0 / theta[k]);
+                }
+                return Ok((lam, x));
+            }
+            if *apps > p.max_applications {
+                let nconv = (0..nw).filter(|&k| converged(k)).count();
+                return Err(Error::EigenNotConverged(format!(
+                    "{nconv} of {} wanted modes converged after {} operator applications (tolerance {:.1e})",
+                    self.want, *apps, p.tol
+                )));
+            }
+            if self.cur + b > self.m_max {
+                // Thick restart: keep the best Ritz vectors, continue from the last block.
+                let keep = (self.want + b).min(c.saturating_sub(b)).max(1);
+                let yk = y.get(.., 0..keep).to_owned();
+                let mut xk = Mat::zeros(n, keep);
+                let mut mxk = Mat::zeros(n, keep);
+                matmul(
+                    xk.as_mut(),
+                    Accum::Replace,
+                    self.v.get(.., 0..c),
+                    yk.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                matmul(
+                    mxk.as_mut(),
+                    Accum::Replace,
+                    self.mv.get(.., 0..c),
+                    yk.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                // R·E_lastᵀ·Y: coupling of the kept Ritz vectors to the next block.
+                let mut coup = Mat::zeros(b, keep);
+                matmul(
+                    coup.as_mut(),
+                    Accum::Replace,
+                    r.as_ref(),
+                    yk.get(blk..blk + b, ..),
+                    1.0,
+                    Par::Seq,
+                );
+                let nextv = self.v.get(.., nb..nb + b).to_owned();
+                let nextmv = self.mv.get(.., nb..nb + b).to_owned();
+                self.v.get_mut(.., 0..keep).copy_from(&xk);
+                self.mv.get_mut(.., 0..keep).copy_from(&mxk);
+                self.v.get_mut(.., keep..keep + b).copy_from(&nextv);
+                self.mv.get_mut(.., keep..keep + b).copy_from(&nextmv);
+                self.t.fill(0.0);
+                for k in 0..keep {
+                    self.t[(k, k)] = theta[k];
+                }
+                self.t.get_mut(keep..keep + b, 0..keep).copy_from(&coup);
+                self.t.get_mut(0..keep, keep..keep + b).copy_from(coup.transpose());
+                self.cur = keep;
+            }
+        }
+    }
+
+    /// Smallest eigenvalue estimate above `lam` among the last Ritz values.
+    fn next_estimate_above(&self, lam: f64, sigma: f64) -> Option<f64> {
+        self.last_theta
+            .iter()
+            .filter(|t| t.abs() > 0.0)
+            .map(|t| sigma + 1.0 / t)
+            .filter(|&l| l > lam * (1.0 + 1e-9) + 1e-300)
+            .min_by(f64::total_cmp)
+    }
+}
+
+/// Convenience for tests: a view of column `j` as a slice-backed vector.
+pub fn column(x: &Mat<f64>, j: usize) -> Vec<f64> {
+    (0..x.nrows()).map(|i| x[(i, j)]).collect()
+}
+
+#[allow(dead_code)]
+fn _assert_send(_: MatMut<'_, f64>) {}

@@ -1,0 +1,9 @@
+//! Sparse linear algebra: symmetric storage ([`sparse`]), fill-reducing orderings
+//! ([`ordering`]), the LDLᵀ factorisation with inertia ([`factor`]), a dense oracle ([`dense`])
+//! and the verified shift-invert block Lanczos eigen solver ([`eigen`]). Nothing here knows a
+//! mesh: indices are equations, mapped to nodes and components by [`crate::dof::DofMap`].
+pub mod dense;
+pub mod eigen;
+pub mod factor;
+pub mod ordering;
+pub mod sparse;

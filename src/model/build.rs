@@ -1,0 +1,642 @@
+//! [`Model::build`] in named steps. Each step reads the mesh and the spec and produces one
+//! piece of the model; the order is the data dependency:
+//!
+//! 1. [`materials`]: validate the default and per-group materials;
+//! 2. [`solid_parts`], [`shell_parts`], [`beam_parts`]: element sets per formulation;
+//! 3. [`reference_nodes`]: one node per coupled group, appended after the mesh nodes;
+//! 4. [`point_masses`], [`springs`]: discrete elements on points;
+//! 5. [`active_components`]: which components each node carries;
+//! 6. [`fixes`], [`couplings`], [`prescribed`]: the constraints;
+//! 7. [`lints`]: notes for the user (locking, unused nodes).
+
+use super::Model;
+use super::sets::{BeamSet, DiscreteSet, ReferenceNode, ShellSet, SolidSet};
+use super::spec::{ModelSpec, Orientation};
+use crate::dof::{ALL6, Constraints, DofMap, DofMask, NCOMP, TRANSLATIONS, WARPING};
+use crate::material::Material;
+use crate::mesh::{CellKind, Group, Mesh};
+use crate::{Error, Result};
+use std::sync::Arc;
+
+type Nodes = Arc<Vec<[f64; 3]>>;
+
+impl Model {
+    /// Bind `spec` to `mesh`: element sets per formulation, reference nodes of couplings,
+    /// discrete elements, the constraints and the DOF numbering. `source` names the mesh in
+    /// messages.
+    pub fn build(mesh: &Mesh, spec: &ModelSpec, source: &str) -> Result<Model> {
+        let (materials, group_materials) = materials(mesh, spec)?;
+        let mesh_nodes: Nodes = Arc::new(mesh.nodes.clone());
+        let mut solids = solid_parts(mesh, spec, &materials, &group_materials, &mesh_nodes)?;
+        let mut shells = shell_parts(mesh, spec, &mesh_nodes)?;
+        let mut beams = beam_parts(mesh, spec, &mesh_nodes)?;
+        if solids.is_empty() && shells.is_empty() && beams.is_empty() {
+            return Err(no_elements(mesh, source));
+        }
+        let mut notes = Vec::new();
+        let (references, coupled) = reference_nodes(mesh, spec)?;
+        let mut all_nodes = mesh.nodes.clone();
+        all_nodes.extend(references.iter().map(|r| r.position));
+        let nodes: Nodes = Arc::new(all_nodes);
+        solids.iter_mut().for_each(|s| s.nodes = nodes.clone());
+        shells.iter_mut().for_each(|s| s.nodes = nodes.clone());
+        beams.iter_mut().for_each(|s| s.nodes = nodes.clone());
+
+        let mut discrete = point_masses(mesh, spec, &references, &mut notes)?;
+        discrete.extend(springs(mesh, spec, &references)?);
+        let active = active_components(nodes.len(), &solids, &shells, &beams, &discrete, &references);
+        let n_mesh = mesh.n_nodes();
+        let orphan_nodes = active[..n_mesh].iter().filter(|&&m| m == 0).count();
+
+        let mut cons = Constraints::new(nodes.len());
+        let fixed_by = fixes(mesh, spec, &active, &mut cons)?;
+        couplings(mesh, spec, &active, &references, &coupled, &fixed_by, &nodes, &mut cons)?;
+        prescribed(mesh, spec, &active, &references, &mut cons)?;
+        notes.extend(lints(&solids, orphan_nodes));
+        let dofs = DofMap::with_constraints(active, cons)?;
+        Ok(Model {
+            solids,
+            discrete,
+            shells,
+            beams,
+            nodes,
+            n_mesh_nodes: n_mesh,
+            node_tags: mesh.node_tags.clone(),
+            spec: spec.clone(),
+            references,
+            dofs,
+            materials,
+            orphan_nodes,
+            notes,
+        })
+    }
+}
+
+/// Step 1: the materials table (index 0 the default) and the group → material index pairs.
+pub(crate) fn materials<'m>(mesh: &'m Mesh, spec: &ModelSpec) -> Result<(Vec<Material>, Vec<(&'m Group, u16)>)> {
+    spec.material.validate("(default)")?;
+    let mut materials = vec![spec.material];
+    let mut group_mat_idx = Vec::new();
+    for (g, m) in &spec.group_materials {
+        m.validate(&format!("for group '{g}'"))?;
+        let grp = mesh.group(g)?;
+        materials.push(*m);
+        group_mat_idx.push((grp, (materials.len() - 1) as u16));
+    }
+    if materials.len() > u16::MAX as usize {
+        return Err(Error::InvalidInput("too many materials".into()));
+    }
+    Ok((materials, group_mat_idx))
+}
+
+/// Which volume cells are solids: every one when the model names no shell or beam part (a
+/// model contains what it names), or those of `spec.solid_groups`.
+fn selected_solid_cells(mesh: &Mesh, spec: &ModelSpec) -> Result<Vec<Vec<bool>>> {
+    let all_solids = spec.shells.is_empty() && spec.beams.is_empty() && spec.solid_groups.is_none();
+    let mut selected: Vec<Vec<bool>> = mesh
+        .blocks
+        .iter()
+        .map(|b| vec![all_solids && b.kind.dim() == 3; b.len()])
+        .collect();
+    for g in spec.solid_groups.iter().flatten() {
+        let grp = mesh.group(g)?;
+        let mut any = false;
+        for c in &grp.cells {
+            if mesh.blocks[c.block as usize].kind.dim() == 3 {
+                selected[c.block as usize][c.index as usize] = true;
+                any = true;
+            }
+        }
+        if !any {
+            return Err(Error::InvalidInput(format!(
+                "group '{g}' has no volume cells: a solid formulation needs tet, hex or wedge cells"
+            )));
+        }
+    }
+    Ok(selected)
+}
+
+/// Step 2a: one solid set per volume cell kind, with a material index per cell.
+pub(crate) fn solid_parts(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    materials: &[Material],
+    group_materials: &[(&Group, u16)],
+    nodes: &Nodes,
+) -> Result<Vec<SolidSet>> {
+    let selected = selected_solid_cells(mesh, spec)?;
+    let mut solids = Vec::new();
+    for (bi, block) in mesh.blocks.iter().enumerate() {
+        if block.kind.dim() != 3 || block.is_empty() {
+            continue;
+        }
+        let mut matb = vec![0u16; block.len()];
+        for (grp, mi) in group_materials {
+            for c in grp.cells.iter().filter(|c| c.block as usize == bi) {
+                matb[c.index as usize] = *mi;
+            }
+        }
+        let keep: Vec<usize> = (0..block.len()).filter(|&i| selected[bi][i]).collect();
+        if keep.is_empty() {
+            continue;
+        }
+        let mut conn = Vec::with_capacity(keep.len() * block.kind.n_nodes());
+        for &i in &keep {
+            conn.extend_from_slice(block.cell(i));
+        }
+        solids.push(SolidSet {
+            kind: block.kind,
+            conn,
+            tags: keep.iter().map(|&i| block.tags[i]).collect(),
+            mat: keep.iter().map(|&i| matb[i]).collect(),
+            materials: materials.to_vec(),
+            lumping: spec.lumping,
+            nodes: nodes.clone(),
+        });
+    }
+    Ok(solids)
+}
+
+/// Step 2b: one shell set per shell part (tri3/quad4 cells of its group).
+pub(crate) fn shell_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result<Vec<ShellSet>> {
+    let mut shells = Vec::new();
+    for sp in &spec.shells {
+        sp.section.validate(&format!("shell '{}'", sp.group))?;
+        let mat = sp.material.unwrap_or(spec.material);
+        mat.validate(&format!("for shell '{}'", sp.group))?;
+        let grp = mesh.group(&sp.group)?;
+        let mut set = ShellSet {
+            group: sp.group.clone(),
+            kinds: vec![],
+            conn: vec![],
+            ptr: vec![0],
+            tags: vec![],
+            section: sp.section,
+            material: mat,
+            lumping: spec.lumping,
+            nodes: nodes.clone(),
+        };
+        for c in &grp.cells {
+            let b = &mesh.blocks[c.block as usize];
+            if !crate::element::shell::supports(b.kind) {
+                return Err(Error::InvalidInput(format!(
+                    "group '{}' has {} cells (element {}): a shell needs tri3 or quad4 surface cells",
+                    sp.group, b.kind, b.tags[c.index as usize]
+                )));
+            }
+            set.kinds.push(b.kind);
+            set.conn.extend_from_slice(b.cell(c.index as usize));
+            set.ptr.push(set.conn.len());
+            set.tags.push(b.tags[c.index as usize]);
+        }
+        if set.tags.is_empty() {
+            return Err(Error::InvalidInput(format!("shell group '{}' is empty", sp.group)));
+        }
+        shells.push(set);
+    }
+    Ok(shells)
+}
+
+/// The local y axis of a beam element whose midpoint is `xm`.
+pub(crate) fn beam_orientation(orientation: Orientation, xm: [f64; 3]) -> [f64; 3] {
+    match orientation {
+        Orientation::Vector(v) => v,
+        Orientation::Radial { centre, axis } => {
+            let r = [xm[0] - centre[0], xm[1] - centre[1], xm[2] - centre[2]];
+            let an = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2])
+                .sqrt()
+                .max(1e-300);
+            let u = [axis[0] / an, axis[1] / an, axis[2] / an];
+            let t = r[0] * u[0] + r[1] * u[1] + r[2] * u[2];
+            [r[0] - t * u[0], r[1] - t * u[1], r[2] - t * u[2]]
+        }
+    }
+}
+
+/// Step 2c: one beam set per beam part (line2/line3 cells of its group; point cells skipped).
+pub(crate) fn beam_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result<Vec<BeamSet>> {
+    let mut beams = Vec::new();
+    for bp in &spec.beams {
+        bp.section.validate(&format!("beam '{}'", bp.group))?;
+        let mat = bp.material.unwrap_or(spec.material);
+        mat.validate(&format!("for beam '{}'", bp.group))?;
+        let grp = mesh.group(&bp.group)?;
+        let mut set = BeamSet {
+            group: bp.group.clone(),
+            kinds: vec![],
+            conn: vec![],
+            ptr: vec![0],
+            tags: vec![],
+            orient: vec![],
+            section: bp.section,
+            material: mat,
+            lumping: spec.lumping,
+            nodes: nodes.clone(),
+        };
+        for c in &grp.cells {
+            let b = &mesh.blocks[c.block as usize];
+            if !crate::element::beam::supports(b.kind) {
+                if b.kind.dim() == 0 {
+                    continue;
+                }
+                return Err(Error::InvalidInput(format!(
+                    "group '{}' has {} cells (element {}): a beam needs line2 or line3 cells",
+                    bp.group, b.kind, b.tags[c.index as usize]
+                )));
+            }
+            let cell = b.cell(c.index as usize);
+            let mut xm = [0.0; 3];
+            for &a in cell {
+                for d in 0..3 {
+                    xm[d] += mesh.nodes[a as usize][d] / cell.len() as f64;
+                }
+            }
+            set.kinds.push(b.kind);
+            set.conn.extend_from_slice(cell);
+            set.ptr.push(set.conn.len());
+            set.tags.push(b.tags[c.index as usize]);
+            set.orient.push(beam_orientation(bp.orientation, xm));
+        }
+        if set.tags.is_empty() {
+            return Err(Error::InvalidInput(format!(
+                "beam group '{}' has no line cells",
+                bp.group
+            )));
+        }
+        beams.push(set);
+    }
+    Ok(beams)
+}
+
+/// The error for a model with no element to analyse, listing what the mesh has.
+fn no_elements(mesh: &Mesh, source: &str) -> Error {
+    let kinds: Vec<String> = mesh.blocks.iter().map(|b| format!("{} {}", b.len(), b.kind)).collect();
+    Error::EmptyModel {
+        what: format!(
+            "{source}: the mesh has no volume elements (it has {}); solid analysis needs tet, hex or wedge \
+             cells (surface and line groups need --shell or --beam)",
+            if kinds.is_empty() {
+                "no elements".to_string()
+            } else {
+                kinds.join(", ")
+            }
+        ),
+    }
+}
+
+/// Step 3: a reference node at the centroid of each coupled group (numbered after the mesh
+/// nodes), with the group's nodes.
+pub(crate) fn reference_nodes(mesh: &Mesh, spec: &ModelSpec) -> Result<(Vec<ReferenceNode>, Vec<Vec<u32>>)> {
+    let mut references: Vec<ReferenceNode> = Vec::new();
+    let mut coupled = Vec::new();
+    for c in &spec.couplings {
+        let grp = mesh.group(&c.group)?;
+        let gn = mesh.group_nodes(grp);
+        if gn.is_empty() {
+            return Err(Error::InvalidInput(format!("coupling: group '{}' is empty", c.group)));
+        }
+        if references.iter().any(|r| r.group == c.group) {
+            return Err(Error::InvalidInput(format!("group '{}' is coupled twice", c.group)));
+        }
+        if let Some(ax) = c.guided {
+            if ax > 2 {
+                return Err(Error::InvalidInput(format!(
+                    "coupling '{}': guided axis must be x, y or z",
+                    c.group
+                )));
+            }
+        }
+        let mut p = [0.0; 3];
+        for &a in &gn {
+            for d in 0..3 {
+                p[d] += mesh.nodes[a as usize][d] / gn.len() as f64;
+            }
+        }
+        references.push(ReferenceNode {
+            group: c.group.clone(),
+            node: mesh.n_nodes() + references.len(),
+            position: p,
+            slaves: gn.len(),
+            guided: c.guided,
+        });
+        coupled.push(gn);
+    }
+    Ok((references, coupled))
+}
+
+/// The node a point element sits on: a coupled group's reference node or a one-node group's
+/// node.
+fn point_of(mesh: &Mesh, references: &[ReferenceNode], g: &str) -> Result<usize> {
+    if let Some(r) = references.iter().find(|r| r.group == g) {
+        return Ok(r.node);
+    }
+    let gn = mesh.group_nodes(mesh.group(g)?);
+    match gn.as_slice() {
+        [a] => Ok(*a as usize),
+        _ => Err(Error::InvalidInput(format!(
+            "group '{g}' has {} nodes: a point mass with inertia or a spring needs a coupled group or a \
+             one-node group",
+            gn.len()
+        ))),
+    }
+}
+
+/// Step 4a: point masses: with inertia on a point (6 components), or shared equally by a
+/// group's nodes (translations only).
+pub(crate) fn point_masses(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    references: &[ReferenceNode],
+    notes: &mut Vec<String>,
+) -> Result<Vec<DiscreteSet>> {
+    let mut masses6 = DiscreteSet::new(1, 6);
+    let mut masses3 = DiscreteSet::new(1, 3);
+    for pm in &spec.point_masses {
+        if !(pm.mass.is_finite() && pm.mass >= 0.0) || pm.inertia.iter().any(|v| !v.is_finite()) {
+            return Err(Error::InvalidInput(format!(
+                "point mass on '{}': mass must be non-negative and finite, got {}",
+                pm.group, pm.mass
+            )));
+        }
+        let rotary = pm.inertia.iter().any(|&v| v != 0.0);
+        let single = references.iter().any(|r| r.group == pm.group)
+            || mesh.group(&pm.group).map(|g| mesh.group_nodes(g).len() == 1)?;
+        if single {
+            let a = point_of(mesh, references, &pm.group)?;
+            let mut me = vec![0.0; 36];
+            for d in 0..3 {
+                me[d * 6 + d] = pm.mass;
+            }
+            let [ixx, iyy, izz, ixy, iyz, ixz] = pm.inertia;
+            let it = [[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]];
+            for i in 0..3 {
+                for j in 0..3 {
+                    me[(3 + i) * 6 + 3 + j] = it[i][j];
+                }
+            }
+            masses6.push(
+                &[a as u32],
+                vec![0.0; 36],
+                me,
+                format!("point mass {} kg on '{}'", pm.mass, pm.group),
+            );
+        } else {
+            if rotary {
+                return Err(Error::InvalidInput(format!(
+                    "point mass on '{}': rotary inertia needs a coupled group (--couple {})",
+                    pm.group, pm.group
+                )));
+            }
+            let gn = mesh.group_nodes(mesh.group(&pm.group)?);
+            let share = pm.mass / gn.len() as f64;
+            for a in gn {
+                let mut me = vec![0.0; 9];
+                for d in 0..3 {
+                    me[d * 3 + d] = share;
+                }
+                masses3.push(&[a], vec![0.0; 9], me, format!("share of point mass on '{}'", pm.group));
+            }
+            notes.push(format!(
+                "point mass {} kg on '{}' spread equally over its nodes",
+                pm.mass, pm.group
+            ));
+        }
+    }
+    Ok([masses6, masses3]
+        .into_iter()
+        .filter(|d| !d.labels.is_empty())
+        .collect())
+}
+
+/// Step 4b: springs with a diagonal 6×6 stiffness, to the ground or between two points.
+pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode]) -> Result<Vec<DiscreteSet>> {
+    let mut springs1 = DiscreteSet::new(1, 6);
+    let mut springs2 = DiscreteSet::new(2, 6);
+    for sp in &spec.springs {
+        if sp.k.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+            return Err(Error::InvalidInput(format!(
+                "spring on '{}': stiffnesses must be non-negative",
+                sp.a
+            )));
+        }
+        let a = point_of(mesh, references, &sp.a)?;
+        match &sp.b {
+            None => {
+                let mut ke = vec![0.0; 36];
+                for d in 0..6 {
+                    ke[d * 6 + d] = sp.k[d];
+                }
+                springs1.push(&[a as u32], ke, vec![0.0; 36], format!("spring '{}' to ground", sp.a));
+            }
+            Some(bg) => {
+                let b = point_of(mesh, references, bg)?;
+                let mut ke = vec![0.0; 144];
+                for d in 0..6 {
+                    ke[d * 12 + d] = sp.k[d];
+                    ke[(d + 6) * 12 + d + 6] = sp.k[d];
+                    ke[d * 12 + d + 6] = -sp.k[d];
+                    ke[(d + 6) * 12 + d] = -sp.k[d];
+                }
+                springs2.push(
+                    &[a as u32, b as u32],
+                    ke,
+                    vec![0.0; 144],
+                    format!("spring '{}'–'{bg}'", sp.a),
+                );
+            }
+        }
+    }
+    Ok([springs1, springs2]
+        .into_iter()
+        .filter(|d| !d.labels.is_empty())
+        .collect())
+}
+
+/// Step 5: the components each node carries: what its elements use; reference nodes all six.
+pub(crate) fn active_components(
+    n: usize,
+    solids: &[SolidSet],
+    shells: &[ShellSet],
+    beams: &[BeamSet],
+    discrete: &[DiscreteSet],
+    references: &[ReferenceNode],
+) -> Vec<DofMask> {
+    let mut active = vec![0 as DofMask; n];
+    let mut mark = |conn: &[u32], mask: DofMask| {
+        for &a in conn {
+            active[a as usize] |= mask;
+        }
+    };
+    for s in solids {
+        mark(&s.conn, TRANSLATIONS);
+    }
+    for s in shells {
+        mark(&s.conn, ALL6);
+    }
+    for s in beams {
+        mark(&s.conn, if s.section.warping { ALL6 | WARPING } else { ALL6 });
+    }
+    for d in discrete {
+        mark(&d.nodes, if d.ndpn == 6 { ALL6 } else { TRANSLATIONS });
+    }
+    for r in references {
+        active[r.node] |= ALL6;
+    }
+    active
+}
+
+/// Step 6a: fixed components per group. Returns, per node, the index of the fix that holds it.
+pub(crate) fn fixes(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    active: &[DofMask],
+    cons: &mut Constraints,
+) -> Result<Vec<Option<usize>>> {
+    let mut fixed_by: Vec<Option<usize>> = vec![None; active.len()];
+    for (gi, (g, mask)) in spec.fixes.iter().enumerate() {
+        let grp = mesh.group(g)?;
+        let gn = mesh.group_nodes(grp);
+        if gn.is_empty() {
+            return Err(Error::InvalidInput(format!("group '{g}' has no nodes to fix")));
+        }
+        let mut count = 0;
+        for a in gn {
+            let m = *mask & active[a as usize];
+            if m != 0 {
+                count += 1;
+                fixed_by[a as usize] = Some(gi);
+            }
+            cons.fixed[a as usize] |= m;
+        }
+        if count == 0 {
+            return Err(Error::InvalidInput(format!(
+                "group '{g}' shares no node with the volume elements: nothing to fix"
+            )));
+        }
+    }
+    Ok(fixed_by)
+}
+
+/// Step 6b: rigid couplings, u_s = u_R + θ_R × (x_s − x_R) and θ_s = θ_R, by elimination of
+/// the coupled nodes' components; a guided reference node keeps only its axis.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn couplings(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    active: &[DofMask],
+    references: &[ReferenceNode],
+    coupled: &[Vec<u32>],
+    fixed_by: &[Option<usize>],
+    nodes: &[[f64; 3]],
+    cons: &mut Constraints,
+) -> Result<()> {
+    for (ri, (r, gn)) in references.iter().zip(coupled).enumerate() {
+        let rnode = r.node;
+        let xr = r.position;
+        for &s in gn {
+            let s = s as usize;
+            if let Some(gi) = fixed_by[s] {
+                return Err(Error::InvalidInput(format!(
+                    "conflicting constraints: group '{}' is coupled, but its node {} is also fixed by '{}'",
+                    r.group, mesh.node_tags[s], spec.fixes[gi].0
+                )));
+            }
+            if coupled[..ri].iter().any(|g| g.contains(&(s as u32))) {
+                return Err(Error::InvalidInput(format!(
+                    "conflicting constraints: node {} belongs to two coupled groups",
+                    mesh.node_tags[s]
+                )));
+            }
+            let d = [nodes[s][0] - xr[0], nodes[s][1] - xr[1], nodes[s][2] - xr[2]];
+            let rr = |c: usize| NCOMP * rnode + c;
+            // u_s = u_R + θ_R × d
+            let rows: [Vec<(usize, f64)>; 3] = [
+                vec![(rr(0), 1.0), (rr(4), d[2]), (rr(5), -d[1])],
+                vec![(rr(1), 1.0), (rr(5), d[0]), (rr(3), -d[2])],
+                vec![(rr(2), 1.0), (rr(3), d[1]), (rr(4), -d[0])],
+            ];
+            for (c, row) in rows.into_iter().enumerate() {
+                if active[s] & (1 << c) != 0 {
+                    cons.mpc
+                        .insert(NCOMP * s + c, row.into_iter().filter(|(_, k)| *k != 0.0).collect());
+                }
+            }
+            for c in 3..6 {
+                if active[s] & (1 << c) != 0 {
+                    cons.mpc.insert(NCOMP * s + c, vec![(rr(c), 1.0)]);
+                }
+            }
+        }
+        if let Some(ax) = r.guided {
+            cons.fixed[rnode] |= ALL6 & !(1 << ax);
+        }
+    }
+    Ok(())
+}
+
+/// Step 6c: prescribed displacement values (on a coupled group: its reference node).
+pub(crate) fn prescribed(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    active: &[DofMask],
+    references: &[ReferenceNode],
+    cons: &mut Constraints,
+) -> Result<()> {
+    for (g, vals) in &spec.prescribed {
+        let targets: Vec<usize> = match references.iter().find(|r| &r.group == g) {
+            Some(r) => vec![r.node],
+            None => mesh
+                .group_nodes(mesh.group(g)?)
+                .into_iter()
+                .map(|a| a as usize)
+                .collect(),
+        };
+        for a in targets {
+            for (c, v) in vals.iter().enumerate() {
+                let Some(v) = v else { continue };
+                if !v.is_finite() {
+                    return Err(Error::InvalidInput(format!(
+                        "prescribed displacement on '{g}' is not finite"
+                    )));
+                }
+                if active[a] & (1 << c) == 0 {
+                    continue;
+                }
+                if cons.mpc.contains_key(&(NCOMP * a + c)) {
+                    return Err(Error::InvalidInput(format!(
+                        "conflicting constraints: '{g}' prescribes a coupled node; prescribe the coupled group instead"
+                    )));
+                }
+                cons.fixed[a] |= 1 << c;
+                cons.value.insert(NCOMP * a + c, *v);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Step 7: notes a user should read: linear solids that lock at near incompressibility, nodes
+/// that belong to no element.
+pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
+    let mut notes = Vec::new();
+    for set in solids {
+        if matches!(set.kind, CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6) {
+            if let Some(m) = set
+                .mat
+                .iter()
+                .map(|&i| set.materials[i as usize])
+                .find(|m| m.poisson > 0.49)
+            {
+                notes.push(format!(
+                    "material ν = {} is nearly incompressible: linear {} elements lock (frequencies and \
+                     stiffness too high); use tet10 or hex20",
+                    m.poisson, set.kind
+                ));
+            }
+        }
+    }
+    if orphan_nodes > 0 {
+        notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
+    }
+    notes
+}

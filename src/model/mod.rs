@@ -1,0 +1,94 @@
+//! A model: a mesh bound to formulations, materials and supports.
+//!
+//! [`Model::build`] checks the user's choices ([`ModelSpec`]) against the mesh (groups exist,
+//! materials are valid, there are elements to analyse), builds the element sets ([`sets`]) and
+//! the DOF map, in the named steps of [`build`].
+
+mod build;
+pub mod sets;
+pub mod spec;
+
+pub use sets::{BeamSet, DiscreteSet, ReferenceNode, ShellSet, SolidSet};
+pub use spec::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
+
+use crate::Result;
+use crate::dof::DofMap;
+use crate::element::ElementSet;
+use crate::material::Material;
+use crate::mesh::CellKind;
+
+/// A mesh bound to elements, materials and supports.
+pub struct Model {
+    /// Solid element sets, one per cell kind present.
+    pub solids: Vec<SolidSet>,
+    /// Point masses and springs (each set has one node count and DOFs per node).
+    pub discrete: Vec<DiscreteSet>,
+    /// Shell parts.
+    pub shells: Vec<ShellSet>,
+    /// Beam parts.
+    pub beams: Vec<BeamSet>,
+    /// All node coordinates: the mesh's, then the reference nodes.
+    pub nodes: std::sync::Arc<Vec<[f64; 3]>>,
+    /// Number of mesh nodes (reference nodes follow).
+    pub n_mesh_nodes: usize,
+    /// gmsh tags of the mesh nodes (for messages naming a node).
+    pub node_tags: Vec<u64>,
+    /// What the model was built from.
+    pub spec: ModelSpec,
+    /// Reference nodes of couplings.
+    pub references: Vec<ReferenceNode>,
+    /// The DOF numbering.
+    pub dofs: DofMap,
+    /// Materials table (index 0 is the default material).
+    pub materials: Vec<Material>,
+    /// Nodes carrying no element (ignored, reported).
+    pub orphan_nodes: usize,
+    /// Notes for the user (groups ignored, nodes unused, ...).
+    pub notes: Vec<String>,
+}
+
+impl Model {
+    /// Element sets for assembly.
+    pub fn element_sets(&self) -> Vec<&dyn ElementSet> {
+        self.solids
+            .iter()
+            .map(|s| s as &dyn ElementSet)
+            .chain(self.shells.iter().map(|d| d as &dyn ElementSet))
+            .chain(self.beams.iter().map(|d| d as &dyn ElementSet))
+            .chain(self.discrete.iter().map(|d| d as &dyn ElementSet))
+            .collect()
+    }
+
+    /// Total volume (m³) and mass (kg) of the continuum elements (solids, shells, beams): the
+    /// sums of [`ElementSet::measure`] and `measure × density` (discrete elements have measure
+    /// 0 and their mass is [`Model::discrete_mass`]). Summed shells first, then beams, then
+    /// solids.
+    pub fn volume_and_mass(&self) -> Result<(f64, f64)> {
+        let sets = (self.shells.iter().map(|s| s as &dyn ElementSet))
+            .chain(self.beams.iter().map(|s| s as &dyn ElementSet))
+            .chain(self.solids.iter().map(|s| s as &dyn ElementSet));
+        let (mut v, mut m) = (0.0, 0.0);
+        for s in sets {
+            for e in 0..s.len() {
+                let ve = s.measure(e)?;
+                v += ve;
+                m += ve * s.density(e);
+            }
+        }
+        Ok((v, m))
+    }
+
+    /// Total translational mass of the point masses, kg ([`ElementSet::mass`] of the discrete
+    /// elements).
+    pub fn discrete_mass(&self) -> f64 {
+        self.discrete
+            .iter()
+            .flat_map(|d| (0..d.len()).map(move |e| d.point_mass(e)))
+            .sum()
+    }
+
+    /// Number of solid cells per kind.
+    pub fn cell_counts(&self) -> Vec<(CellKind, usize)> {
+        self.solids.iter().map(|s| (s.kind, s.len())).collect()
+    }
+}

@@ -1,0 +1,13 @@
+//! Tests of the application above the FE core: the two-mass dynamics, the design chain,
+//! sweeps and convergence studies, scene files and batch runs, and the command line (its
+//! outputs, messages and exit codes).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cli;
+mod design;
+mod dynamics;
+mod machines;
+mod scenes;
+mod sweep;

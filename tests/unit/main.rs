@@ -1,0 +1,21 @@
+//! Unit tests of the FE core, one module per layer or subject: element kernels and property
+//! sweeps, shells and beams, mesh input and output, generators, the solver, statics, stress
+//! recovery, numerical extremes, determinism, the error audit and fuzz regressions.
+//!
+//! One test binary (rather than one per file) because each binary links the whole crate, which
+//! costs more than running the tests on 2 cores.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod determinism;
+mod elements;
+mod errors_audit;
+mod extremes;
+mod fuzz_regressions;
+mod mesh_io;
+mod parametric;
+mod solver;
+mod statics;
+mod stress;
+mod structural_elements;

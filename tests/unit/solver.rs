@@ -1,0 +1,131 @@
+//! Sparse factorisation and eigen solver on problems with known spectra.
+//!
+//! Reference: a free–free chain of n equal masses m joined by springs k has
+//! λ_j = (4k/m)·sin²(jπ/(2n)), j = 0..n−1 (the discrete Laplacian with Neumann ends),
+//! exact to rounding; copies of the chain give eigenvalues of exact multiplicity.
+
+use std::sync::Arc;
+use vibrofem::linalg::eigen::{EigenParams, Target, solve};
+use vibrofem::linalg::factor::{Factor, SymbolicFactor};
+use vibrofem::linalg::sparse::SymMatrix;
+
+/// `copies` uncoupled free–free chains of `n` masses, interleaved so that copies share no
+/// block structure the ordering could exploit trivially.
+fn chains(n: usize, copies: usize, k: f64, m: f64) -> (SymMatrix, SymMatrix) {
+    let idx = |c: usize, i: usize| i * copies + c;
+    let mut kt = Vec::new();
+    let mut mt = Vec::new();
+    for c in 0..copies {
+        for i in 0..n {
+            mt.push((idx(c, i), idx(c, i), m));
+            if i + 1 < n {
+                kt.push((idx(c, i), idx(c, i), k));
+                kt.push((idx(c, i + 1), idx(c, i + 1), k));
+                kt.push((idx(c, i), idx(c, i + 1), -k));
+            }
+        }
+    }
+    let ks = SymMatrix::from_triplets(n * copies, &kt);
+    let ms = SymMatrix::from_triplets(n * copies, &mt).on_pattern(ks.pattern.clone());
+    (ks, ms)
+}
+
+fn exact(n: usize, copies: usize, k: f64, m: f64) -> Vec<f64> {
+    let mut v: Vec<f64> = (0..n)
+        .flat_map(|j| {
+            let s = (j as f64 * std::f64::consts::PI / (2.0 * n as f64)).sin();
+            std::iter::repeat_n(4.0 * k / m * s * s, copies)
+        })
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+#[test]
+fn inertia_counts_eigenvalues_below_shift() {
+    let (k, m) = chains(50, 1, 1.0, 1.0);
+    let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+    let ex = exact(50, 1, 1.0, 1.0);
+    // Shifts avoid 1.0, where the chain's end diagonal k − σm is exactly zero (an unpivoted
+    // LDLᵀ then meets a zero pivot; the eigen solver nudges such shifts itself).
+    for &s in &[-0.5, 0.1, 1.3, 2.5, 3.9] {
+        let f = Factor::new(sym.clone(), &k.sub_scaled(s, &m)).unwrap();
+        let below = ex.iter().filter(|&&l| l < s).count();
+        assert_eq!(f.negative_pivots, below, "shift {s}");
+    }
+}
+
+#[test]
+fn lanczos_finds_triple_roots_of_three_identical_chains() {
+    // Free–free: 3 zero eigenvalues (one per chain), then triples.
+    let (k, m) = chains(400, 3, 1.0e6, 2.0);
+    let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+    let p = EigenParams {
+        target: Target::Nearest(30),
+        dense_below: 0,
+        ..Default::default()
+    };
+    let sol = solve(&k, &m, &sym, &p).unwrap();
+    let ex = exact(400, 3, 1.0e6, 2.0);
+    assert_eq!(sol.lambda.len(), 30);
+    for (i, (&got, &want)) in sol.lambda.iter().zip(&ex).enumerate() {
+        // Rigid (zero) modes: absolute to the scale of the first elastic root; others 1e-9
+        // relative (the solver's Ritz tolerance is 1e-10 on θ; eigenvalue error is ~tol²).
+        let tol = if want == 0.0 { 1e-9 * ex[3] } else { 1e-9 * want };
+        assert!((got - want).abs() <= tol, "mode {i}: {got} vs {want}");
+    }
+    assert!(sol.sturm.complete, "{:?}", sol.sturm);
+    assert!(sol.m_orthonormality < 1e-10);
+    assert!(sol.rel_residual.iter().all(|&r| r < 1e-8), "{:?}", sol.rel_residual);
+}
+
+#[test]
+fn band_search_returns_every_mode_in_the_band() {
+    let (k, m) = chains(300, 2, 1.0, 1.0);
+    let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+    let ex = exact(300, 2, 1.0, 1.0);
+    let (lo, hi) = (0.05, 0.09);
+    let p = EigenParams {
+        target: Target::Band(lo, hi),
+        dense_below: 0,
+        ..Default::default()
+    };
+    let sol = solve(&k, &m, &sym, &p).unwrap();
+    let want: Vec<f64> = ex.iter().copied().filter(|&l| l >= lo && l <= hi).collect();
+    assert_eq!(sol.lambda.len(), want.len());
+    for (g, w) in sol.lambda.iter().zip(&want) {
+        assert!((g - w).abs() < 1e-9 * w);
+    }
+    assert!(sol.sturm.complete);
+}
+
+#[test]
+fn dense_path_agrees_with_lanczos() {
+    let (k, m) = chains(200, 2, 3.0, 0.5);
+    let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+    let a = solve(
+        &k,
+        &m,
+        &sym,
+        &EigenParams {
+            target: Target::Nearest(10),
+            dense_below: 0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let b = solve(
+        &k,
+        &m,
+        &sym,
+        &EigenParams {
+            target: Target::Nearest(10),
+            dense_below: 1000,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    for (x, y) in a.lambda.iter().zip(&b.lambda) {
+        assert!((x - y).abs() <= 1e-9 * y.abs().max(a.lambda[2]));
+    }
+}
