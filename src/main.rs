@@ -51,6 +51,15 @@ enum Cmd {
     Converge(ConvergeArgs),
     /// Join the summaries of batch shard folders into one.
     Merge(MergeArgs),
+    /// Crank–slider drives (roller-forming machine): reduced inertia, Kloss motor, motion
+    /// non-uniformity; built-in paper drive when no file is given.
+    CrankDrive(vibrofem::app::machines_cli::CrankDriveArgs),
+    /// Ball autobalancer of a grinder on a rocker: criterion, speed sweep, run-up; built-in grinder
+    /// when no file is given.
+    Autobalancer(vibrofem::app::machines_cli::AutobalancerArgs),
+    /// Autobalancer test-stand data reduction (correction cut, imbalance scatter, sensitivity,
+    /// efficiency) from a CSV file; built-in example when no file is given.
+    BalancerData(vibrofem::app::machines_cli::BalancerDataArgs),
 }
 
 #[derive(clap::Args)]
@@ -546,6 +555,9 @@ fn main() -> ExitCode {
         Cmd::Sweep(a) => sweep_cmd(a),
         Cmd::Converge(a) => converge_cmd(a),
         Cmd::Merge(a) => merge_cmd(a),
+        Cmd::CrankDrive(a) => vibrofem::app::machines_cli::run_crank_drive(a),
+        Cmd::Autobalancer(a) => vibrofem::app::machines_cli::run_autobalancer(a),
+        Cmd::BalancerData(a) => vibrofem::app::machines_cli::run_balancer_data(a),
     };
     match r {
         Ok(code) => ExitCode::from(code as u8),

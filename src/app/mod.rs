@@ -7,6 +7,7 @@ pub mod cli;
 pub mod converge;
 pub mod design;
 pub mod dynamics;
+pub mod machines_cli;
 pub mod report;
 pub mod scene;
 pub mod sweep;

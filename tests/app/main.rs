@@ -8,5 +8,6 @@ mod common;
 mod cli;
 mod design;
 mod dynamics;
+mod machines;
 mod scenes;
 mod sweep;

@@ -19,8 +19,13 @@
 //! Which mass carries the isolators is in doubt in the paper (printed k-terms against eq. (1)):
 //! see [`KTerms`].
 
+pub mod autobalancer;
+pub mod balancer_data;
+pub mod crank;
 pub mod electromagnet;
 pub mod isolation;
+pub mod machine_files;
+pub mod machine_plot;
 pub mod ode;
 pub mod plot;
 pub mod transient;
