@@ -395,22 +395,7 @@ fn free_rigid_motions(k: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]]) -> Vec<S
             c[d] += x[d] / nodes.len() as f64;
         }
     }
-    let mut r = Mat::zeros(n, 6);
-    for (a, x) in nodes.iter().enumerate() {
-        let d = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
-        let rot = [[0.0, -d[2], d[1]], [d[2], 0.0, -d[0]], [-d[1], d[0], 0.0]];
-        for comp in 0..3 {
-            if let Some(e) = dofs.eq_of(a, comp) {
-                r[(e, comp)] = 1.0;
-                for ax in 0..3 {
-                    r[(e, 3 + ax)] = rot[ax][comp];
-                }
-            }
-            if let Some(e) = dofs.eq_of(a, 3 + comp) {
-                r[(e, 3 + comp)] = 1.0;
-            }
-        }
-    }
+    let r = crate::post::modal::rigid_vectors(dofs, nodes, c);
     let mut kr = Mat::zeros(n, 6);
     k.mul_block(r.as_ref(), kr.as_mut());
     let kmax = k.diagonal().iter().fold(0.0f64, |a, &b| a.max(b.abs()));
@@ -434,6 +419,138 @@ fn free_rigid_motions(k: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]]) -> Vec<S
         }
     }
     out
+}
+
+/// Reactions, reference-node results, resultants and the equilibrium check of one solved load
+/// case: `f` its raw load vector, `u` the full displacement (NCOMP per node).
+fn case_report(
+    model: &Model,
+    mesh: &Mesh,
+    sets: &[&dyn ElementSet],
+    f: &[f64],
+    u: &[f64],
+    rel_residual: f64,
+) -> Result<CaseReport> {
+    let mut rint = internal_forces(model, sets, u)?;
+    // Move slave forces to masters (Tᵀ), so reference nodes carry their group's forces.
+    let mut moved = vec![0.0; rint.len()];
+    for (&s, masters) in &model.dofs.mpc {
+        for &(m, c) in masters {
+            moved[m] += c * (rint[s] - f[s]);
+        }
+    }
+    for (&s, _) in &model.dofs.mpc {
+        rint[s] = f[s];
+    }
+    for i in 0..rint.len() {
+        rint[i] += moved[i];
+    }
+    // Reaction at constrained (fixed) raw DOFs: R = K u − f.
+    let react: Vec<f64> = rint.iter().zip(f).map(|(a, b)| a - b).collect();
+    let fixed_pick = |a: usize, c: usize| model.dofs.fixed[a] & (1 << c) != 0;
+    let mut reactions = Vec::new();
+    let mut total_react = Resultant::default();
+    for (g, _) in &model.spec.fixes {
+        let gn: Vec<u32> = mesh.group_nodes(mesh.group(g)?);
+        let set: std::collections::HashSet<u32> = gn.into_iter().collect();
+        let res = resultant_of(&model.nodes, &react, |a, c| {
+            set.contains(&(a as u32)) && fixed_pick(a, c)
+        });
+        reactions.push(Reaction {
+            group: g.clone(),
+            resultant: res,
+        });
+    }
+    for (g, _) in &model.spec.prescribed {
+        if model.references.iter().any(|r| &r.group == g) {
+            continue;
+        }
+        let set: std::collections::HashSet<u32> = mesh.group_nodes(mesh.group(g)?).into_iter().collect();
+        let res = resultant_of(&model.nodes, &react, |a, c| {
+            set.contains(&(a as u32)) && fixed_pick(a, c)
+        });
+        reactions.push(Reaction {
+            group: g.clone(),
+            resultant: res,
+        });
+    }
+    let all = resultant_of(&model.nodes, &react, fixed_pick);
+    for d in 0..3 {
+        total_react.force[d] = all.force[d];
+        total_react.moment[d] = all.moment[d];
+    }
+    let applied = resultant_of(&model.nodes, f, |a, c| model.dofs.active[a] & (1 << c) != 0);
+    let mut refs = Vec::new();
+    for r in &model.references {
+        let mut disp = [0.0; 6];
+        let mut reac = [0.0; 6];
+        for c in 0..6 {
+            disp[c] = u[NCOMP * r.node + c];
+            if fixed_pick(r.node, c) {
+                reac[c] = react[NCOMP * r.node + c];
+            }
+        }
+        let applied_r = [f[NCOMP * r.node], f[NCOMP * r.node + 1], f[NCOMP * r.node + 2]];
+        // Along the guided axis the reference node carries either an applied force or a
+        // prescribed displacement (then the reaction is the force it takes).
+        let stiffness = r.guided.and_then(|ax| {
+            let force = applied_r[ax] + reac[ax];
+            (disp[ax].abs() > 0.0 && force != 0.0).then(|| force / disp[ax])
+        });
+        refs.push(ReferenceResult {
+            group: r.group.clone(),
+            displacement: disp,
+            applied: applied_r,
+            reaction: reac,
+            stiffness,
+        });
+    }
+    for r in &refs {
+        let x = model.nodes[model
+            .references
+            .iter()
+            .find(|q| q.group == r.group)
+            .map_or(0, |q| q.node)];
+        if r.reaction.iter().any(|v| *v != 0.0) {
+            let f3 = [r.reaction[0], r.reaction[1], r.reaction[2]];
+            let m = [
+                x[1] * f3[2] - x[2] * f3[1] + r.reaction[3],
+                x[2] * f3[0] - x[0] * f3[2] + r.reaction[4],
+                x[0] * f3[1] - x[1] * f3[0] + r.reaction[5],
+            ];
+            reactions.push(Reaction {
+                group: r.group.clone(),
+                resultant: Resultant { force: f3, moment: m },
+            });
+        }
+    }
+    // Scale: the largest single force involved (the sum of balanced reactions is ~0, so it
+    // cannot serve).
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let scale = reactions
+        .iter()
+        .map(|r| norm(r.resultant.force))
+        .fold(norm(applied.force), f64::max)
+        .max(f64::MIN_POSITIVE);
+    let mut eq_err = 0.0f64;
+    for d in 0..3 {
+        eq_err = eq_err.max((applied.force[d] + total_react.force[d]).abs() / scale);
+    }
+    let mut maxd = (0.0f64, 0u64);
+    for a in 0..model.n_mesh_nodes {
+        let m = (0..3).map(|c| u[NCOMP * a + c].powi(2)).sum::<f64>().sqrt();
+        if m > maxd.0 {
+            maxd = (m, mesh.node_tags[a]);
+        }
+    }
+    Ok(CaseReport {
+        max_displacement: maxd,
+        references: refs,
+        reactions,
+        applied,
+        equilibrium_error: eq_err,
+        rel_residual,
+    })
 }
 
 /// Run a static analysis: build the model and its [`System`] (without mass), then [`solve`].
@@ -519,127 +636,8 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
             f2 += rhs[(i, ci)].powi(2);
         }
         let u = model.dofs.full(&xc);
-        let mut rint = internal_forces(&model, &sets, &u)?;
-        let f = &raw_f[ci];
-        // Move slave forces to masters (Tᵀ), so reference nodes carry their group's forces.
-        let mut moved = vec![0.0; rint.len()];
-        for (&s, masters) in &model.dofs.mpc {
-            for &(m, c) in masters {
-                moved[m] += c * (rint[s] - f[s]);
-            }
-        }
-        for (&s, _) in &model.dofs.mpc {
-            rint[s] = f[s];
-        }
-        for i in 0..rint.len() {
-            rint[i] += moved[i];
-        }
-        // Reaction at constrained (fixed) raw DOFs: R = K u − f.
-        let react: Vec<f64> = rint.iter().zip(f).map(|(a, b)| a - b).collect();
-        let fixed_pick = |a: usize, c: usize| model.dofs.fixed[a] & (1 << c) != 0;
-        let mut reactions = Vec::new();
-        let mut total_react = Resultant::default();
-        for (g, _) in &model.spec.fixes {
-            let gn: Vec<u32> = mesh.group_nodes(mesh.group(g)?);
-            let set: std::collections::HashSet<u32> = gn.into_iter().collect();
-            let res = resultant_of(&model.nodes, &react, |a, c| {
-                set.contains(&(a as u32)) && fixed_pick(a, c)
-            });
-            reactions.push(Reaction {
-                group: g.clone(),
-                resultant: res,
-            });
-        }
-        for (g, _) in &model.spec.prescribed {
-            if model.references.iter().any(|r| &r.group == g) {
-                continue;
-            }
-            let set: std::collections::HashSet<u32> = mesh.group_nodes(mesh.group(g)?).into_iter().collect();
-            let res = resultant_of(&model.nodes, &react, |a, c| {
-                set.contains(&(a as u32)) && fixed_pick(a, c)
-            });
-            reactions.push(Reaction {
-                group: g.clone(),
-                resultant: res,
-            });
-        }
-        let all = resultant_of(&model.nodes, &react, fixed_pick);
-        for d in 0..3 {
-            total_react.force[d] = all.force[d];
-            total_react.moment[d] = all.moment[d];
-        }
-        let applied = resultant_of(&model.nodes, f, |a, c| model.dofs.active[a] & (1 << c) != 0);
-        let mut refs = Vec::new();
-        for r in &model.references {
-            let mut disp = [0.0; 6];
-            let mut reac = [0.0; 6];
-            for c in 0..6 {
-                disp[c] = u[NCOMP * r.node + c];
-                if fixed_pick(r.node, c) {
-                    reac[c] = react[NCOMP * r.node + c];
-                }
-            }
-            let applied_r = [f[NCOMP * r.node], f[NCOMP * r.node + 1], f[NCOMP * r.node + 2]];
-            // Along the guided axis the reference node carries either an applied force or a
-            // prescribed displacement (then the reaction is the force it takes).
-            let stiffness = r.guided.and_then(|ax| {
-                let force = applied_r[ax] + reac[ax];
-                (disp[ax].abs() > 0.0 && force != 0.0).then(|| force / disp[ax])
-            });
-            refs.push(ReferenceResult {
-                group: r.group.clone(),
-                displacement: disp,
-                applied: applied_r,
-                reaction: reac,
-                stiffness,
-            });
-        }
-        for r in &refs {
-            let x = model.nodes[model
-                .references
-                .iter()
-                .find(|q| q.group == r.group)
-                .map_or(0, |q| q.node)];
-            if r.reaction.iter().any(|v| *v != 0.0) {
-                let f3 = [r.reaction[0], r.reaction[1], r.reaction[2]];
-                let m = [
-                    x[1] * f3[2] - x[2] * f3[1] + r.reaction[3],
-                    x[2] * f3[0] - x[0] * f3[2] + r.reaction[4],
-                    x[0] * f3[1] - x[1] * f3[0] + r.reaction[5],
-                ];
-                reactions.push(Reaction {
-                    group: r.group.clone(),
-                    resultant: Resultant { force: f3, moment: m },
-                });
-            }
-        }
-        // Scale: the largest single force involved (the sum of balanced reactions is ~0, so it
-        // cannot serve).
-        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-        let scale = reactions
-            .iter()
-            .map(|r| norm(r.resultant.force))
-            .fold(norm(applied.force), f64::max)
-            .max(f64::MIN_POSITIVE);
-        let mut eq_err = 0.0f64;
-        for d in 0..3 {
-            eq_err = eq_err.max((applied.force[d] + total_react.force[d]).abs() / scale);
-        }
-        let mut maxd = (0.0f64, 0u64);
-        for a in 0..model.n_mesh_nodes {
-            let m = (0..3).map(|c| u[NCOMP * a + c].powi(2)).sum::<f64>().sqrt();
-            if m > maxd.0 {
-                maxd = (m, mesh.node_tags[a]);
-            }
-        }
-        reports.push(CaseReport {
-            max_displacement: maxd,
-            references: refs,
-            reactions,
-            applied,
-            equilibrium_error: eq_err,
-            rel_residual: if f2 > 0.0 { (r2 / f2).sqrt() } else { r2.sqrt() },
-        });
+        let rel_residual = if f2 > 0.0 { (r2 / f2).sqrt() } else { r2.sqrt() };
+        reports.push(case_report(model, mesh, &sets, &raw_f[ci], &u, rel_residual)?);
         us.push(u);
     }
     let t_post = t.elapsed().as_secs_f64();

@@ -67,33 +67,8 @@ pub struct Design {
     pub damping: DampingDesign,
 }
 
-/// The sandwich work table (shell model).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TableDesign {
-    /// Length (x), m.
-    pub length: f64,
-    /// Top plate width and thickness, m.
-    pub top_width: f64,
-    /// Top plate thickness, m.
-    pub top_thickness: f64,
-    /// Bottom plate width, m.
-    pub bottom_width: f64,
-    /// Bottom plate thickness, m.
-    pub bottom_thickness: f64,
-    /// Clear web height between the plates, m.
-    pub web_height: f64,
-    /// Longitudinal web positions (y), m.
-    pub long_webs: Vec<f64>,
-    /// Longitudinal web thickness, m.
-    pub long_web_thickness: f64,
-    /// Transverse web positions (x), m.
-    pub trans_webs: Vec<f64>,
-    /// Transverse web thickness, m.
-    pub trans_web_thickness: f64,
-    /// Shell element size, m.
-    pub element_size: f64,
-}
+/// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
+pub type TableDesign = SandwichParams;
 
 /// Masses of the two-mass system.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -188,24 +163,6 @@ pub struct DampingDesign {
 impl Default for Design {
     fn default() -> Self {
         Design::paper()
-    }
-}
-impl Default for TableDesign {
-    fn default() -> Self {
-        let p = SandwichParams::paper();
-        TableDesign {
-            length: p.length,
-            top_width: p.top_width,
-            top_thickness: p.top_thickness,
-            bottom_width: p.bottom_width,
-            bottom_thickness: p.bottom_thickness,
-            web_height: p.web_height,
-            long_webs: p.long_webs.clone(),
-            long_web_thickness: p.long_web_thickness,
-            trans_webs: p.trans_webs.clone(),
-            trans_web_thickness: p.trans_web_thickness,
-            element_size: 0.025,
-        }
     }
 }
 impl Default for MassDesign {
@@ -336,12 +293,12 @@ impl Design {
                 ),
             ));
         }
-        if !(self.table.element_size >= 0.002 && self.table.element_size.is_finite()) {
+        if !(self.table.elem_size >= 0.002 && self.table.elem_size.is_finite()) {
             return Err(crate::app::toml_file::bad_value(
                 "table.element_size",
                 format!(
                     "design: 'table.element_size' must be at least 0.002 m, got {}",
-                    self.table.element_size
+                    self.table.elem_size
                 ),
             ));
         }
@@ -372,20 +329,9 @@ impl Design {
     }
 
     fn sandwich(&self) -> SandwichParams {
-        let t = &self.table;
         SandwichParams {
-            length: t.length,
-            top_width: t.top_width,
-            top_thickness: t.top_thickness,
-            bottom_width: t.bottom_width,
-            bottom_thickness: t.bottom_thickness,
-            web_height: t.web_height,
-            long_webs: t.long_webs.clone(),
-            long_web_thickness: t.long_web_thickness,
-            trans_webs: t.trans_webs.clone(),
-            trans_web_thickness: t.trans_web_thickness,
-            elem_size: t.element_size,
             shell_kind: CellKind::Quad4,
+            ..self.table.clone()
         }
     }
 }

@@ -53,7 +53,7 @@ fn write_file(path: &Path, text: &str) -> Result<()> {
 }
 
 fn to_json<T: Serialize>(v: &T) -> Result<String> {
-    serde_json::to_string_pretty(v).map_err(|e| Error::InvalidInput(format!("JSON: {e}")))
+    serde_json::to_string_pretty(v).map_err(|e| Error::output("report.json", e))
 }
 
 fn make_dir(out: &Path) -> Result<()> {
@@ -841,6 +841,19 @@ pub fn crank_markdown(r: &CrankReport) -> String {
     s
 }
 
+/// Write `report.json` and `report.md` into `out`, and print the JSON (`--json`) or the text.
+fn publish<T: Serialize>(out: &Path, r: &T, markdown: &str, text: &str, json_out: bool) -> Result<()> {
+    let json = to_json(r)?;
+    write_file(&out.join("report.json"), &json)?;
+    write_file(&out.join("report.md"), markdown)?;
+    if json_out {
+        println!("{json}");
+    } else {
+        print!("{text}");
+    }
+    Ok(())
+}
+
 /// Runs `vibrofem crank-drive`.
 pub fn run_crank_drive(a: &CrankDriveArgs) -> Result<i32> {
     let c = match &a.file {
@@ -851,14 +864,7 @@ pub fn run_crank_drive(a: &CrankDriveArgs) -> Result<i32> {
     let mut r = crank_analysis(&c, Some(&a.out))?;
     r.outputs.push(a.out.join("report.md").display().to_string());
     r.outputs.push(a.out.join("report.json").display().to_string());
-    let json = to_json(&r)?;
-    write_file(&a.out.join("report.json"), &json)?;
-    write_file(&a.out.join("report.md"), &crank_markdown(&r))?;
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", crank_text(&r));
-    }
+    publish(&a.out, &r, &crank_markdown(&r), &crank_text(&r), a.json)?;
     if let Some(st) = &r.energy_form.stall {
         eprintln!("error: {}", st.message);
         return Ok(2);
@@ -1721,14 +1727,7 @@ pub fn run_autobalancer(a: &AutobalancerArgs) -> Result<i32> {
     let mut r = autobalancer_analysis(&c, Some(&a.out))?;
     r.outputs.push(a.out.join("report.md").display().to_string());
     r.outputs.push(a.out.join("report.json").display().to_string());
-    let json = to_json(&r)?;
-    write_file(&a.out.join("report.json"), &json)?;
-    write_file(&a.out.join("report.md"), &autobalancer_markdown(&r))?;
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", autobalancer_text(&r));
-    }
+    publish(&a.out, &r, &autobalancer_markdown(&r), &autobalancer_text(&r), a.json)?;
     Ok(0)
 }
 
@@ -1960,13 +1959,6 @@ pub fn run_balancer_data(a: &BalancerDataArgs) -> Result<i32> {
     let mut r = balancer_data_analysis(&name, &text, Some(&a.out))?;
     r.outputs.push(a.out.join("report.md").display().to_string());
     r.outputs.push(a.out.join("report.json").display().to_string());
-    let json = to_json(&r)?;
-    write_file(&a.out.join("report.json"), &json)?;
-    write_file(&a.out.join("report.md"), &balancer_data_markdown(&r))?;
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", balancer_data_text(&r));
-    }
+    publish(&a.out, &r, &balancer_data_markdown(&r), &balancer_data_text(&r), a.json)?;
     Ok(0)
 }

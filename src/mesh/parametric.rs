@@ -436,7 +436,11 @@ fn alias_group(mesh: &mut Mesh, from: &str, to: &str) {
 ///
 /// The mesh controls are `elem_size` (the largest grid spacing of the shell mesh) and
 /// `shell_kind`; the solid generator takes its own size and kind.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// In a design file this is the `[table]` table: the same keys, with `element_size` for
+/// `elem_size` (the shell kind is not a file key).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct SandwichParams {
     /// Length along `x` of both plates and of the longitudinal webs (m).
     pub length: f64,
@@ -459,12 +463,15 @@ pub struct SandwichParams {
     /// Thickness of the transverse webs (m).
     pub trans_web_thickness: f64,
     /// Target element size of the shell mesh: no grid spacing exceeds it (m).
+    #[serde(rename = "element_size")]
     pub elem_size: f64,
     /// Shell cell kind: `Quad4` (the MITC4 shell), or `Quad8`/`Quad9` for quadratic meshes.
+    #[serde(skip)]
     pub shell_kind: CellKind,
 }
 
 impl Default for SandwichParams {
+    /// The paper's table ([`SandwichParams::paper`]).
     fn default() -> Self {
         SandwichParams::paper()
     }

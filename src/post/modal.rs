@@ -59,7 +59,7 @@ pub struct ParticipationTable {
 }
 
 /// Rigid-body direction vectors over the free DOFs (columns X, Y, Z, RX, RY, RZ) about `c`.
-fn rigid_vectors(dofs: &DofMap, nodes: &[[f64; 3]], c: [f64; 3]) -> Mat<f64> {
+pub fn rigid_vectors(dofs: &DofMap, nodes: &[[f64; 3]], c: [f64; 3]) -> Mat<f64> {
     let mut r = Mat::zeros(dofs.n_free, 6);
     for (a, x) in nodes.iter().enumerate() {
         let d = [x[0] - c[0], x[1] - c[1], x[2] - c[2]];
