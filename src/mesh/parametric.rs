@@ -349,7 +349,12 @@ fn grid_solid_impl(
     let face_kind = match kind {
         CellKind::Hex8 => CellKind::Quad4,
         CellKind::Hex20 => CellKind::Quad8,
-        _ => CellKind::Quad9,
+        CellKind::Hex27 => CellKind::Quad9,
+        other => {
+            return Err(Error::InvalidInput(format!(
+                "{WHAT}: the solid table is meshed with hexahedra (hex8, hex20, hex27), not {other}"
+            )));
+        }
     };
     let mut b = Builder::new([lines[0].to_vec(), lines[1].to_vec(), lines[2].to_vec()]);
     let named: Vec<usize> = names.iter().map(|nm| b.group(nm, 3)).collect();
