@@ -187,7 +187,7 @@ struct ModesArgs {
     #[arg(long, conflicts_with = "band")]
     modes: Option<usize>,
     /// All modes with frequency in [F_LO, F_HI] Hz.
-    #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"])]
+    #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"], allow_negative_numbers = true)]
     band: Option<Vec<f64>>,
     #[command(flatten)]
     model: ModelArgs,
@@ -230,6 +230,27 @@ struct MeshInfoArgs {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+}
+
+/// Write to stdout. A closed pipe (`vibrofem … | head`) ends the program quietly with 141, as
+/// a Unix tool killed by SIGPIPE; any other failure (a full disk) is an [`Error::Output`].
+fn emit(s: &str) -> Result<()> {
+    use std::io::Write;
+    let mut o = std::io::stdout().lock();
+    o.write_all(s.as_bytes()).and_then(|()| o.flush()).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(141);
+        }
+        Error::output("standard output", e)
+    })
+}
+
+macro_rules! out {
+    ($($t:tt)*) => { emit(&format!($($t)*))? };
+}
+
+macro_rules! outln {
+    ($($t:tt)*) => { emit(&format!("{}\n", format_args!($($t)*)))? };
 }
 
 fn parse_bytes(s: &str) -> Result<u64> {
@@ -284,12 +305,12 @@ fn modes(a: &ModesArgs) -> Result<i32> {
     let source = a.mesh.clone();
     let run = run_modal(&mesh, &source, &opts, read_time)?;
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&run.report).map_err(|e| Error::output("JSON", e))?
         );
     } else {
-        print!("{}", vibrofem::app::report::modal_table(&run.report));
+        out!("{}", vibrofem::app::report::modal_table(&run.report));
     }
     for p in io::write_mode_shapes(
         &mesh,
@@ -342,10 +363,10 @@ fn design_cmd(a: &DesignArgs) -> Result<i32> {
     std::fs::write(a.out.join("report.md"), vibrofem::app::design::report_markdown(&r))
         .map_err(|e| Error::io(a.out.join("report.md"), e))?;
     if a.json {
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print!("{}", vibrofem::app::design::verdict_text(&r));
-        println!(
+        out!("{}", vibrofem::app::design::verdict_text(&r));
+        outln!(
             "
 report: {}/report.md (plots and mode shapes beside it)",
             a.out.display()
@@ -365,12 +386,12 @@ fn static_cmd(a: &StaticArgs) -> Result<i32> {
     let run = vibrofem::analysis::statics::run_static(&mesh, &a.mesh, &opts)?;
     let report = vibrofem::app::report::static_report(&mesh, &a.mesh, &run)?;
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?
         );
     } else {
-        print!("{}", vibrofem::app::report::static_text(&report));
+        out!("{}", vibrofem::app::report::static_text(&report));
     }
     if a.vtu.is_some() || a.msh_out.is_some() {
         vibrofem::app::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
@@ -387,12 +408,12 @@ fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     mat.validate("--material")?;
     let info = vibrofem::app::report::mesh_info(&mesh, &a.mesh, &mat)?;
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&info).map_err(|e| Error::output("JSON", e))?
         );
     } else {
-        print!("{}", vibrofem::app::report::mesh_info_text(&info));
+        out!("{}", vibrofem::app::report::mesh_info_text(&info));
     }
     Ok(0)
 }
@@ -405,9 +426,9 @@ fn run_cmd(a: &RunArgs) -> Result<i32> {
     let path = a.out.join("summary.json");
     std::fs::write(&path, &json).map_err(|e| Error::io(&path, e))?;
     if a.json {
-        println!("{json}");
+        outln!("{json}");
     } else {
-        print!("{}", report.text());
+        out!("{}", report.text());
     }
     for n in &report.notes {
         eprintln!("note: {n}");
@@ -434,9 +455,13 @@ fn batch_cmd(a: &BatchArgs) -> Result<i32> {
         progress_bar: std::io::stderr().is_terminal(),
     };
     let s = vibrofem::app::scene::run_batch(&opts)?;
-    println!(
+    outln!(
         "{:<48} {:>10} {:>8} {:>14} {:>9}",
-        "file", "status", "dofs", "f elastic / k", "time [s]"
+        "file",
+        "status",
+        "dofs",
+        "f elastic / k",
+        "time [s]"
     );
     for r in &s.rows {
         let key = r
@@ -444,7 +469,7 @@ fn batch_cmd(a: &BatchArgs) -> Result<i32> {
             .map(|f| format!("{f:.4} Hz"))
             .or(r.stiffness.map(|k| format!("{k:.4e}")))
             .unwrap_or_default();
-        println!(
+        outln!(
             "{:<48} {:>10} {:>8} {:>14} {:>9.2}",
             r.file,
             r.status,
@@ -453,10 +478,10 @@ fn batch_cmd(a: &BatchArgs) -> Result<i32> {
             r.time_s
         );
         if let Some(e) = &r.error {
-            println!("    {e}");
+            outln!("    {e}");
         }
     }
-    println!(
+    outln!(
         "{} cases: {} ok, {} resumed, {} failed; summary in {}",
         s.rows.len(),
         s.rows.len() - s.failed - s.resumed,
@@ -500,8 +525,8 @@ fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
             progress: true,
         },
     )?;
-    print!("{}", sweep::table_text(&o));
-    println!("outputs in {}", a.out.display());
+    out!("{}", sweep::table_text(&o));
+    outln!("outputs in {}", a.out.display());
     Ok(0)
 }
 
@@ -514,14 +539,14 @@ fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
     };
     let c = converge::run_case(&case, &|l| eprintln!("{l}"))?;
     converge::write_outputs(&c, &a.out)?;
-    print!("{}", converge::table_markdown(&c));
-    println!("outputs in {}", a.out.display());
+    out!("{}", converge::table_markdown(&c));
+    outln!("outputs in {}", a.out.display());
     Ok(0)
 }
 
 fn merge_cmd(a: &MergeArgs) -> Result<i32> {
     let s = vibrofem::app::sweep::merge(&a.dirs, Some(&a.out))?;
-    println!(
+    outln!(
         "{} cases ({} failed) merged from {} folders into {}",
         s.rows.len(),
         s.failed,
@@ -532,7 +557,14 @@ fn merge_cmd(a: &MergeArgs) -> Result<i32> {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // Usage errors exit 1 (input error), not clap's 2 (our numerical-failure code).
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { 1 } else { 0 });
+        }
+    };
     let level = match cli.verbose {
         0 => "warn",
         1 => "info",
@@ -543,7 +575,16 @@ fn main() -> ExitCode {
         .format_target(false)
         .init();
     if let Some(t) = cli.threads {
-        let _ = rayon::ThreadPoolBuilder::new().num_threads(t.max(1)).build_global();
+        // Far more threads than cores only costs memory (and rayon fails to spawn thousands).
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        let cap = 4 * cores;
+        let t = if t > cap {
+            eprintln!("note: --threads {t} capped to {cap} (4 × the {cores} available cores)");
+            cap
+        } else {
+            t.max(1)
+        };
+        let _ = rayon::ThreadPoolBuilder::new().num_threads(t).build_global();
     }
     let r = match &cli.cmd {
         Cmd::Modes(a) => modes(a),

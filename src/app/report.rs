@@ -58,9 +58,10 @@ pub fn modal_table(r: &ModalReport) -> String {
     );
     let _ = writeln!(
         s,
-        "accuracy: {}  (max residual {:.2e}, M-orthonormality {:.1e})",
+        "accuracy: {}  (max residual {:.2e}, backward error {:.1e}, M-orthonormality {:.1e})",
         if r.accurate { "ok" } else { "NOT GUARANTEED" },
         r.max_rel_residual,
+        r.max_backward_error,
         r.m_orthonormality
     );
     let t = &r.timings_s;

@@ -11,7 +11,11 @@
 //! of multiplicity up to `b` (single-vector Lanczos misses copies in exact arithmetic).
 //!
 //! # Verification (every run)
-//! - relative residual ‖Kx − λMx‖ / ‖Kx‖ of every mode (rigid modes: ‖Kx − λMx‖ / (|σ|‖Mx‖));
+//! - backward error of every mode, η = ‖Kx − λMx‖ / (‖|K||x|‖ + |λ|‖|M||x|‖): the residual
+//!   measured against the size of the rounding that forming Kx − λMx alone can produce. It is
+//!   the acceptance test ([`EigenParams::verify_tol`]); unlike ‖Kx − λMx‖ / ‖Kx‖ (also
+//!   reported) it does not grow with the conditioning (slender and thin parts, where Kx is a
+//!   small difference of large terms) nor blow up for rigid-body modes (Kx ≈ 0);
 //! - M-orthonormality max |XᵀMX − I|;
 //! - Sturm-sequence counts: the number of negative pivots of an LDLᵀ of K − σ_c M is the
 //!   number of eigenvalues below σ_c. A count at a point just above the highest reported
@@ -56,7 +60,8 @@ pub struct EigenParams {
     pub max_applications: usize,
     /// Seed of the start block.
     pub seed: u64,
-    /// Relative residual above which a mode fails verification.
+    /// Backward error η = ‖Kx − λMx‖ / (‖|K||x|‖ + |λ|‖|M||x|‖) above which a mode fails
+    /// verification.
     pub verify_tol: f64,
     /// Models with at most this many free DOFs are solved densely (all modes, exact).
     pub dense_below: usize,
@@ -71,7 +76,7 @@ impl Default for EigenParams {
             tol: 1e-10,
             max_applications: 20_000,
             seed: 0x5eed_cafe_f00d_0001,
-            verify_tol: 1e-6,
+            verify_tol: 1e-10,
             dense_below: 300,
         }
     }
@@ -100,6 +105,10 @@ pub struct EigenSolution {
     pub vectors: Mat<f64>,
     /// Relative residual of each mode.
     pub rel_residual: Vec<f64>,
+    /// Backward error of each mode (see [`backward_errors`]): the acceptance test.
+    pub backward_error: Vec<f64>,
+    /// Notes for the user (request capped, dense solve chosen, ...).
+    pub notes: Vec<String>,
     /// max |XᵀMX − I|.
     pub m_orthonormality: f64,
     /// The completeness check.
@@ -118,6 +127,80 @@ pub struct EigenSolution {
     pub time_verify: f64,
     /// Worst probe backward error of the factorisations used (see [`Factor::probe_residual`]).
     pub factor_backward_error: f64,
+}
+
+/// Largest model solved densely when a request asks for a third of its modes or more.
+const DENSE_MAX: usize = 4000;
+/// Largest block size chosen automatically for models of several unconnected parts.
+const MAX_AUTO_BLOCK: usize = 60;
+
+/// Number of connected parts (of at least `min_size` equations) of the graph of `k`.
+fn components(k: &SymMatrix, min_size: usize) -> usize {
+    let p = &k.pattern;
+    let n = p.n;
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for j in 0..n {
+        for &i in &p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]] {
+            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            if a != b {
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let mut size = vec![0usize; n];
+    for i in 0..n {
+        let r = find(&mut parent, i);
+        size[r] += 1;
+    }
+    size.iter().filter(|&&s| s >= min_size).count()
+}
+
+/// Backward error of each eigenpair, η = ‖Kx − λMx‖ / (‖|K||x|‖ + |λ|‖|M||x|‖): the residual
+/// relative to what rounding in forming it can produce (|K| is K with its entries' magnitudes).
+/// About machine precision for an exact pair; a perturbation δ of the vector raises it to
+/// about ‖δ‖/‖x‖ (its stiff components dominate), so it stays a real check. Unlike the
+/// relative residual ‖Kx − λMx‖/‖Kx‖ it needs no special case for λ ≈ 0 and does not grow
+/// with the conditioning of slender or thin parts (where Kx is a small difference of large
+/// terms).
+pub fn backward_errors(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>) -> Vec<f64> {
+    let n = x.nrows();
+    let nc = x.ncols();
+    let mut kx = Mat::zeros(n, nc);
+    let mut mx = Mat::zeros(n, nc);
+    k.mul_block(x, kx.as_mut());
+    m.mul_block(x, mx.as_mut());
+    let abs_mul = |a: &SymMatrix, c: usize| -> f64 {
+        let p = &a.pattern;
+        let mut s2 = 0.0;
+        for j in 0..n {
+            let mut s = 0.0;
+            for q in p.col_ptr[j]..p.col_ptr[j + 1] {
+                s += a.values[q].abs() * x[(p.row_idx[q], c)].abs();
+            }
+            s2 += s * s;
+        }
+        s2.sqrt()
+    };
+    (0..nc)
+        .map(|c| {
+            let r = (0..n)
+                .map(|i| {
+                    let r = kx[(i, c)] - lambda[c] * mx[(i, c)];
+                    r * r
+                })
+                .sum::<f64>()
+                .sqrt();
+            let denom = abs_mul(k, c) + lambda[c].abs() * abs_mul(m, c);
+            if denom > 0.0 { r / denom } else { r }
+        })
+        .collect()
 }
 
 /// Default shift: a small negative fraction of the typical diagonal ratio K_ii/M_ii (which
@@ -160,6 +243,43 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         return Err(Error::InvalidInput("the model has no free degree of freedom".into()));
     }
     let t0 = Instant::now();
+    let mut notes = Vec::new();
+    let mut pl = p.clone();
+    let p = &mut pl;
+    if let Target::Nearest(nm) = p.target {
+        if nm > n {
+            notes.push(format!(
+                "{nm} modes asked for, but the model has {n} degrees of freedom: computing all {n}"
+            ));
+        }
+    }
+    // A block wider than the wanted count plus a six-fold cluster buys nothing.
+    let block_cap = match p.target {
+        Target::Nearest(nm) => (nm.min(n) + 6).min(n),
+        Target::Band(..) => n,
+    }
+    .max(1);
+    if p.block > block_cap {
+        notes.push(format!("block size {} capped to {block_cap}", p.block));
+        p.block = block_cap;
+    }
+    // Separate bodies: each free one has up to six rigid-body modes at λ = 0, one cluster
+    // that the block must cover (block Lanczos finds at most `block` copies of an eigenvalue).
+    let parts = components(k, 6);
+    if parts > 1 && p.block < 6 * parts {
+        let b = (6 * parts).min(MAX_AUTO_BLOCK).min(block_cap.max(6)).min(n);
+        if b > p.block {
+            notes.push(format!(
+                "the model has {parts} unconnected parts: Lanczos block size raised from {} to {b} to cover their rigid-body modes",
+                p.block
+            ));
+            p.block = b;
+        }
+    }
+    let p = &*p;
+    // Requests for a large share of the spectrum are solved densely when that is affordable
+    // (Lanczos would build a basis of about the model's size anyway, much more slowly).
+    let big_request = |want: usize| 3 * want >= n && n <= DENSE_MAX;
     let (sigma, band) = match p.target {
         Target::Band(lo, hi) => {
             if !(lo < hi) || !lo.is_finite() || !hi.is_finite() {
@@ -179,13 +299,15 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
     let mut backward = fa.probe_residual;
     if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
-        if n > p.dense_below {
+        if n > p.dense_below && !big_request(nm.min(n)) {
             // The diagonal heuristic can put the default shift far below the wanted modes
             // (thin shells: rotational stiffness ∝ 1/t²; huge stiffness contrasts). Then every
             // θ = 1/(λ − σ) is nearly the same and Lanczos crawls. Estimate the low spectrum by a
             // few block inverse iterations and move the shift closer while it is too far.
             for _ in 0..6 {
-                let est = probe_low_spectrum(k, m, &fa, (nm + 6).min(12).min(n), p.seed);
+                // Probe past the block: several free parts put more than six rigid-body modes
+                // first, and the first elastic scale must be among the estimates.
+                let est = probe_low_spectrum(k, m, &fa, (nm + 6).min(12.max(p.block + 6)).min(n), p.seed);
                 let Some(&last) = est.last() else { break };
                 let mut lam_est = est[nm.min(est.len()) - 1];
                 if lam_est < 1e-6 * last {
@@ -224,6 +346,8 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             lambda: vec![],
             vectors: Mat::zeros(n, 0),
             rel_residual: vec![],
+            backward_error: vec![],
+            notes,
             m_orthonormality: 0.0,
             sturm: SturmCheck {
                 lower: (sigma, fa.negative_pivots),
@@ -247,7 +371,13 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     let mut attempt = 0;
     let mut time_iterate = 0.0;
     let lower_count_at_shift = fa.negative_pivots;
-    let mut lz = Lanczos::new(n, want, p, &fa, m, band.is_some());
+    let dense = n <= p.dense_below || big_request(want);
+    if dense && n > p.dense_below {
+        notes.push(format!(
+            "{want} modes of {n} degrees of freedom: solved densely (all eigenpairs) rather than by Lanczos"
+        ));
+    }
+    let mut lz = Lanczos::new(n, if dense { 1 } else { want }, p, &fa, m, band.is_some());
     // The shift factor is dropped before each Sturm factorisation, so that two factors never
     // coexist in memory; it is rebuilt only if the check asks for more iteration.
     let mut fa = Some(fa);
@@ -260,8 +390,10 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let f = fa
             .as_ref()
             .ok_or_else(|| Error::Factorization("lost the shift factor".into()))?;
-        lz.set_want(want);
-        let (lambda, x) = if n <= p.dense_below {
+        if !dense {
+            lz.set_want(want);
+        }
+        let (lambda, x) = if dense {
             let (l, x) = super::dense::eigen_all(k, m, sigma)?;
             lz.last_theta = l.iter().map(|l| 1.0 / (l - sigma)).collect();
             (l, x)
@@ -288,7 +420,10 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let mut found: Vec<(f64, usize)> = lambda.iter().copied().enumerate().map(|(i, l)| (l, i)).collect();
         found.sort_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((lo, hi)) = band {
-            found.retain(|(l, _)| *l >= lo && *l <= hi);
+            // A band from 0 (or below) includes the rigid-body modes, whose computed λ rounds to
+            // either side of 0: keep everything above the lower Sturm point (the shift), which
+            // is what the count includes.
+            found.retain(|(l, _)| (*l >= lo || (lo <= 0.0 && *l > sigma)) && *l <= hi);
         }
         let lam_min = found.first().map_or(sigma, |f| f.0);
         let lam_max = found.last().map_or(sigma, |f| f.0);
@@ -329,7 +464,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             "Sturm check: {expected} eigenvalues in ({lower_pt:.6e}, {upper_pt:.6e}) rad²/s², {n_between} found"
         );
         time_verify += tv.elapsed().as_secs_f64();
-        if expected > n_between && attempt < 4 && band.is_none() && n > p.dense_below {
+        if expected > n_between && attempt < 4 && band.is_none() && !dense {
             // A mode was missed (or sits just above the last one found): continue the same
             // iteration for more modes.
             want = (want + (expected - n_between) + p.block.min(4)).min(n);
@@ -362,11 +497,14 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             lam.push(lambda[i]);
         }
         let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), sigma);
+        let backward_error = backward_errors(k, m, &lam, vectors.as_ref());
         time_verify += tv.elapsed().as_secs_f64();
         let sol = EigenSolution {
             lambda: lam,
             vectors,
             rel_residual,
+            backward_error,
+            notes,
             m_orthonormality: m_orth,
             sturm,
             shift: sigma,
@@ -468,7 +606,14 @@ fn factor_at_checked(
             }
             Err(e) => last_err = Some(e),
         }
-        // Move off the eigenvalue by a relative amount that grows each try.
+        // Move off the eigenvalue by a relative amount that grows each try. Near 0 (a free
+        // body's rigid-body modes) "relative" means relative to the spectrum's scale, the
+        // magnitude of the default shift: a step relative to σ itself would be nothing.
+        let floor = default_shift(k, m).abs();
+        if s.abs() < floor {
+            s += floor * 10f64.powi(i) * if s >= 0.0 { 1.0 } else { -1.0 };
+            continue;
+        }
         let scale = s.abs().max(1e-300);
         s += scale * 1e-7 * 10f64.powi(i) * if s >= 0.0 { 1.0 } else { -1.0 };
     }

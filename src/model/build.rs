@@ -477,7 +477,27 @@ pub(crate) fn active_components(
         mark(&s.conn, if s.section.warping { ALL6 | WARPING } else { ALL6 });
     }
     for d in discrete {
-        mark(&d.nodes, if d.ndpn == 6 { ALL6 } else { TRANSLATIONS });
+        if d.ndpn != 6 {
+            mark(&d.nodes, TRANSLATIONS);
+            continue;
+        }
+        // Rotations only where the element gives them stiffness or inertia: a spring with zero
+        // rotational stiffness on a solid's node must not add rotations that nothing holds
+        // (a zero pivot). A zero diagonal entry of these positive semi-definite matrices means
+        // a zero row, so nothing is lost.
+        let nd = d.per * 6;
+        for (e, nodes) in d.nodes.chunks(d.per).enumerate() {
+            for (l, &a) in nodes.iter().enumerate() {
+                let mut mask = TRANSLATIONS;
+                for c in 3..6 {
+                    let i = l * 6 + c;
+                    if d.ke[e][i * nd + i] != 0.0 || d.me[e][i * nd + i] != 0.0 {
+                        mask |= 1 << c;
+                    }
+                }
+                mark(&[a], mask);
+            }
+        }
     }
     for r in references {
         active[r.node] |= ALL6;

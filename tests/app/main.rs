@@ -6,6 +6,7 @@
 mod common;
 
 mod cli;
+mod cli_15;
 mod design;
 mod dynamics;
 mod machines;

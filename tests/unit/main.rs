@@ -15,6 +15,7 @@ mod extremes;
 mod fuzz_regressions;
 mod mesh_io;
 mod parametric;
+mod regressions_15;
 mod solver;
 mod statics;
 mod stress;
