@@ -227,6 +227,13 @@ struct MeshInfoArgs {
     /// Material for the mass: `steel` or `E,NU,RHO`.
     #[arg(long, default_value = "steel")]
     material: String,
+    /// Shell part (as for `modes`): `GROUP=T[,OFFSET]`; volume and mass then count the model's
+    /// shells, beams and solids instead of the volume cells alone.
+    #[arg(long, value_name = "GROUP=T[,OFFSET]", allow_hyphen_values = true)]
+    shell: Vec<String>,
+    /// Beam part (as for `modes`): `GROUP=SECTION@ORIENT`.
+    #[arg(long, value_name = "GROUP=SECTION@ORIENT", allow_hyphen_values = true)]
+    beam: Vec<String>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -406,7 +413,20 @@ fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.length_unit)?)?;
     let mat = Material::parse(&a.material)?;
     mat.validate("--material")?;
-    let info = vibrofem::app::report::mesh_info(&mesh, &a.mesh, &mat)?;
+    let mut info = vibrofem::app::report::mesh_info(&mesh, &a.mesh, &mat)?;
+    if !a.shell.is_empty() || !a.beam.is_empty() {
+        // Volume and mass of the model the parts describe (shells t·A, beams A·L, solids).
+        let opts = vibrofem::input::options::ModelOptions {
+            material: a.material.clone(),
+            shell: a.shell.clone(),
+            beam: a.beam.clone(),
+            ..Default::default()
+        };
+        let model = vibrofem::model::Model::build(&mesh, &opts.spec()?, &a.mesh)?;
+        let (volume, mass) = model.volume_and_mass()?;
+        info.volume_m3 = volume;
+        info.mass_kg = mass;
+    }
     if a.json {
         outln!(
             "{}",

@@ -103,7 +103,7 @@ pub struct ModalReport {
     pub mesh: String,
     /// Nodes in the mesh.
     pub nodes: usize,
-    /// Solid cells per kind.
+    /// Cells of the model per kind (solids, shells, beams).
     pub cells: Vec<(String, usize)>,
     /// Free DOFs (equations).
     pub dofs: usize,

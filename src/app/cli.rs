@@ -44,8 +44,11 @@ pub struct ModelArgs {
     pub shell: Vec<String>,
     /// Beam part: `GROUP=SECTION@ORIENT`. SECTION: `rect:b,h`, `circle:d`, `tube:d,wall`,
     /// `i:h,b,s,t`, `channel:h,b,s,t`, `gost8239-10`, `gost8240-10`,
-    /// `custom:A,Iy,Iz,J,ky,kz,Cw` (m, m², m⁴, m⁶), with `+warping` for a 7th (warping) DOF.
-    /// ORIENT: the local y axis `x,y,z`, or `radial:cx,cy,cz,ax,ay,az` (from an axis).
+    /// `custom:A,Iy,Iz,J,ky,kz,Cw` (m, m², m⁴, m⁶), with `+warping` for a 7th (warping) DOF
+    /// (line2 cells only; line3 beams refuse it). ORIENT: the local y axis `x,y,z` (made
+    /// orthogonal to the element axis x; z = x × y), or `radial:cx,cy,cz,ax,ay,az` (from an
+    /// axis). Sections put their depth h along local z and their width b (the flanges of I and
+    /// channel sections) along local y: the orientation vector points along the flanges.
     #[arg(long, value_name = "GROUP=SECTION@ORIENT", allow_hyphen_values = true)]
     pub beam: Vec<String>,
     /// Length unit of the mesh coordinates: m (default) or mm.

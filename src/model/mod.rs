@@ -87,8 +87,19 @@ impl Model {
             .sum()
     }
 
-    /// Number of solid cells per kind.
+    /// Number of mesh cells in the model per kind (solids, shells and beams; discrete elements
+    /// are not cells), in order of first appearance.
     pub fn cell_counts(&self) -> Vec<(CellKind, usize)> {
-        self.solids.iter().map(|s| (s.kind, s.len())).collect()
+        let mut out: Vec<(CellKind, usize)> = Vec::new();
+        for set in self.element_sets() {
+            for e in 0..set.len() {
+                let Some(k) = set.cell_kind(e) else { continue };
+                match out.iter_mut().find(|(q, _)| *q == k) {
+                    Some((_, n)) => *n += 1,
+                    None => out.push((k, 1)),
+                }
+            }
+        }
+        out
     }
 }

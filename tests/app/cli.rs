@@ -223,3 +223,52 @@ fn one_mesh_grammar_on_the_command_line() {
         "{err}"
     );
 }
+
+#[test]
+fn shell_runs_list_their_cells() {
+    // Issue 15, item 6: a shell model printed "model 441 nodes, , 2566 free DOFs".
+    let (code, out, err) = run(&[
+        "modes",
+        "sandwich:paper,0.1",
+        "--shell",
+        "top_plate=0.025",
+        "--shell",
+        "bottom_plate=0.008",
+        "--shell",
+        "webs_long=0.0045",
+        "--modes",
+        "8",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let line = out.lines().find(|l| l.starts_with("model")).unwrap();
+    assert!(line.contains(" quad4,") && !line.contains(", ,"), "{line}");
+}
+
+#[test]
+fn mesh_info_counts_shell_parts() {
+    // Issue 15, item 6: mesh-info showed volume and mass 0 for shell meshes. With the parts
+    // named, its mass equals the mass `modes` reports for the same model (same sum, printed
+    // with the same digits).
+    let parts = [
+        "--shell",
+        "top_plate=0.025",
+        "--shell",
+        "bottom_plate=0.008",
+        "--shell",
+        "webs_long=0.0045",
+    ];
+    let mut info_args = vec!["mesh-info", "sandwich:paper,0.1"];
+    info_args.extend(parts);
+    let (code, info, err) = run(&info_args);
+    assert_eq!(code, 0, "{err}");
+    let mut modes_args = vec!["modes", "sandwich:paper,0.1", "--modes", "7"];
+    modes_args.extend(parts);
+    let (code, modes, err) = run(&modes_args);
+    assert_eq!(code, 0, "{err}");
+    let kg = |s: &str| -> f64 {
+        let l = s.lines().find(|l| l.starts_with("mass")).unwrap();
+        l.split_whitespace().nth(1).unwrap().parse().unwrap()
+    };
+    assert!(kg(&info) > 100.0, "{info}");
+    assert_eq!(kg(&info), kg(&modes));
+}
