@@ -65,6 +65,21 @@ impl Default for ModelOptions {
     }
 }
 
+/// Split `text` into a group and what follows its `:` — where the group may itself be an
+/// unnamed group's `dimension:tag` (`2:5:ux` is group `2:5`, components `ux`).
+pub fn split_group(text: &str) -> (&str, Option<&str>) {
+    let mut parts = text.splitn(3, ':');
+    let (a, b) = (parts.next().unwrap_or(""), parts.next());
+    let numeric = |s: &str| !s.is_empty() && s.bytes().all(|c| c.is_ascii_digit());
+    match b {
+        Some(b) if numeric(a) && numeric(b) => (&text[..a.len() + 1 + b.len()], parts.next()),
+        _ => match text.split_once(':') {
+            Some((g, rest)) => (g, Some(rest)),
+            None => (text, None),
+        },
+    }
+}
+
 /// Numbers separated by commas.
 pub fn numbers(opt: &str, text: &str, s: &str) -> Result<Vec<f64>> {
     s.split(',')
@@ -131,9 +146,9 @@ impl ModelOptions {
             spec.group_materials.push((g.to_string(), Material::parse(m)?));
         }
         for f in &self.fix {
-            let (g, comps) = match f.split_once(':') {
-                Some((g, c)) => (g, c),
-                None => (f.as_str(), "ux,uy,uz"),
+            let (g, comps) = match split_group(f) {
+                (g, Some(c)) => (g, c),
+                (g, None) => (g, "ux,uy,uz"),
             };
             let mask = parse_components(comps).ok_or_else(|| {
                 Error::InvalidInput(format!(
@@ -143,9 +158,9 @@ impl ModelOptions {
             spec.fixes.push((g.to_string(), mask));
         }
         for c in &self.couple {
-            let (g, guided) = match c.split_once(':') {
-                None => (c.clone(), None),
-                Some((g, opt)) => {
+            let (g, guided) = match split_group(c) {
+                (g, None) => (g.to_string(), None),
+                (g, Some(opt)) => {
                     let a = opt.strip_prefix("guided=").ok_or_else(|| {
                         Error::InvalidInput(format!("--couple '{c}': expected GROUP or GROUP:guided=AXIS"))
                     })?;

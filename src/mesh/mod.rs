@@ -110,15 +110,50 @@ impl Mesh {
         self.blocks.len() - 1
     }
 
-    /// The group named `name`.
+    /// The group named `name`, or given as `dimension:tag` (how unnamed groups are listed). A
+    /// name that several groups share (in different dimensions) is an error that lists them;
+    /// [`Mesh::group_of_dim`] resolves it by dimension.
     pub fn group(&self, name: &str) -> crate::Result<&Group> {
-        self.groups
-            .iter()
-            .find(|g| g.name == name)
-            .ok_or_else(|| crate::Error::UnknownGroup {
-                name: name.to_string(),
-                available: self.group_names(),
-            })
+        self.group_in(name, None)
+    }
+
+    /// The group called `name` among those of dimension `dim` when the name is used in several
+    /// dimensions (gmsh allows a volume and a surface group of the same name); the formulation
+    /// that asks knows which it means.
+    pub fn group_of_dim(&self, name: &str, dim: u8) -> crate::Result<&Group> {
+        self.group_in(name, Some(dim))
+    }
+
+    fn group_in(&self, name: &str, dim: Option<u8>) -> crate::Result<&Group> {
+        let hits: Vec<&Group> = self.groups.iter().filter(|g| g.name == name).collect();
+        match hits.as_slice() {
+            [g] => return Ok(g),
+            [] => {}
+            several => {
+                if let Some(g) = dim.and_then(|d| several.iter().find(|g| g.dim == d)) {
+                    return Ok(g);
+                }
+                let ids: Vec<String> = several.iter().map(|g| format!("{}:{}", g.dim, g.tag)).collect();
+                return Err(crate::Error::InvalidInput(format!(
+                    "group name '{name}' is used by {} groups ({}, as dimension:tag); rename them in \
+                     the mesh, or name one by its dimension:tag",
+                    several.len(),
+                    ids.join(", ")
+                )));
+            }
+        }
+        // "D:T": a group by dimension and physical tag (unnamed groups are listed so).
+        if let Some((d, t)) = name.split_once(':') {
+            if let (Ok(d), Ok(t)) = (d.parse::<u8>(), t.parse::<i32>()) {
+                if let Some(g) = self.groups.iter().find(|g| g.dim == d && g.tag == t) {
+                    return Ok(g);
+                }
+            }
+        }
+        Err(crate::Error::UnknownGroup {
+            name: name.to_string(),
+            available: self.group_names(),
+        })
     }
 
     /// Comma-separated group names, for messages.

@@ -99,7 +99,7 @@ fn selected_solid_cells(mesh: &Mesh, spec: &ModelSpec) -> Result<Vec<Vec<bool>>>
         .map(|b| vec![all_solids && b.kind.dim() == 3; b.len()])
         .collect();
     for g in spec.solid_groups.iter().flatten() {
-        let grp = mesh.group(g)?;
+        let grp = mesh.group_of_dim(g, 3)?;
         let mut any = false;
         for c in &grp.cells {
             if mesh.blocks[c.block as usize].kind.dim() == 3 {
@@ -164,7 +164,7 @@ pub(crate) fn shell_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Resul
         sp.section.validate(&format!("shell '{}'", sp.group))?;
         let mat = sp.material.unwrap_or(spec.material);
         mat.validate(&format!("for shell '{}'", sp.group))?;
-        let grp = mesh.group(&sp.group)?;
+        let grp = mesh.group_of_dim(&sp.group, 2)?;
         let mut set = ShellSet {
             group: sp.group.clone(),
             kinds: vec![],
@@ -220,7 +220,7 @@ pub(crate) fn beam_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result
         bp.section.validate(&format!("beam '{}'", bp.group))?;
         let mat = bp.material.unwrap_or(spec.material);
         mat.validate(&format!("for beam '{}'", bp.group))?;
-        let grp = mesh.group(&bp.group)?;
+        let grp = mesh.group_of_dim(&bp.group, 1)?;
         let mut set = BeamSet {
             group: bp.group.clone(),
             kinds: vec![],
