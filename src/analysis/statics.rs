@@ -637,7 +637,17 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
         }
         let u = model.dofs.full(&xc);
         let rel_residual = if f2 > 0.0 { (r2 / f2).sqrt() } else { r2.sqrt() };
-        reports.push(case_report(model, mesh, &sets, &raw_f[ci], &u, rel_residual)?);
+        let report = case_report(model, mesh, &sets, &raw_f[ci], &u, rel_residual)?;
+        if !(report.max_displacement.0.is_finite() && report.rel_residual.is_finite()) {
+            return Err(Error::Factorization(format!(
+                "load case {}: the solution is not finite (largest |u| {:.1e} m, solve residual {:.1e}): \
+                 the loads overflow double precision",
+                ci + 1,
+                report.max_displacement.0,
+                report.rel_residual
+            )));
+        }
+        reports.push(report);
         us.push(u);
     }
     let t_post = t.elapsed().as_secs_f64();

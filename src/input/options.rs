@@ -234,6 +234,20 @@ impl ModelOptions {
         for b in &self.beam {
             spec.beams.push(parse_beam(b)?);
         }
+        // A group given twice would be assembled twice (two layers, twice the mass).
+        let mut seen = std::collections::BTreeSet::new();
+        for g in spec
+            .shells
+            .iter()
+            .map(|s| &s.group)
+            .chain(spec.beams.iter().map(|b| &b.group))
+        {
+            if !seen.insert(g.as_str()) {
+                return Err(Error::InvalidInput(format!(
+                    "group '{g}' is given two sections (--shell/--beam twice): each group takes one"
+                )));
+            }
+        }
         Ok(spec)
     }
 }

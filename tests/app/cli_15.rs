@@ -110,3 +110,36 @@ fn huge_thread_count_is_bounded() {
     assert_eq!(code, 0, "{out}{err}");
     assert!(err.contains("capped"), "{err}");
 }
+
+/// Item 9: a force that overflows double precision gave |u| = inf with exit 0; a non-finite
+/// solution is a numerical failure (exit 2). The same model at 1 kN stays fine.
+#[test]
+fn overflowing_static_load_is_a_numerical_failure() {
+    let model = ["box:0.1,0.02,0.02:10,2,2:hex8", "--fix", "xmin"];
+    let mut args = vec!["static"];
+    args.extend(model);
+    args.extend(["--force", "xmax=0,0,1e300"]);
+    let (code, out, err) = run(&args);
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(err.contains("not finite"), "{err}");
+    let mut args = vec!["static"];
+    args.extend(model);
+    args.extend(["--force", "xmax=0,0,1e3"]);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+}
+
+/// Item 9: `--shell G=…` twice stacked two layers (mass ×2); each group takes one section.
+#[test]
+fn a_group_given_two_sections_is_refused() {
+    let (code, _, err) = run(&[
+        "modes",
+        "box:0.3,0.3,0.02:10,10,1:hex8",
+        "--shell",
+        "zmin=0.02",
+        "--shell",
+        "zmin=0.02",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("group 'zmin' is given two sections"), "{err}");
+}
