@@ -179,6 +179,7 @@ fn coil_stiffness(kind: CellKind, per_turn: usize) -> Res<(f64, usize, f64)> {
         couplings: vec![CouplingSpec {
             group: "end_top".into(),
             guided: Some(2),
+            reference: None,
         }],
         ..Default::default()
     };
@@ -492,6 +493,7 @@ fn sandwich_shell_beam(p: &SandwichParams) -> Res<(Mesh, ModelSpec)> {
             .map(|(g, _)| CouplingSpec {
                 group: g.clone(),
                 guided: None,
+                reference: None,
             })
             .collect(),
         ..Default::default()
@@ -910,6 +912,7 @@ fn obstacles() -> Res<()> {
             spec.couplings = vec![CouplingSpec {
                 group: "u1".into(),
                 guided: None,
+                reference: None,
             }];
             let mut force = [0.0; 3];
             force[dir] = 1.0;

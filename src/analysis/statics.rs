@@ -104,7 +104,13 @@ pub struct CaseReport {
     pub equilibrium_error: f64,
     /// ‖K̂û − f̂‖ / ‖f̂‖.
     pub rel_residual: f64,
+    /// Warnings about this case (e.g. rotations beyond the small-displacement range).
+    pub notes: Vec<String>,
 }
+
+/// Rotation (rad) beyond which a linear static solution is flagged: sin θ ≈ θ to 0.04 %,
+/// and the geometry change that a linear analysis ignores is no longer small.
+pub const SMALL_ROTATION: f64 = 0.05;
 
 /// A static run: report plus the full displacement fields.
 pub struct StaticRun {
@@ -543,6 +549,26 @@ fn case_report(
             maxd = (m, mesh.node_tags[a]);
         }
     }
+    let mut notes = Vec::new();
+    let (mut rmax, mut at) = (0.0f64, 0usize);
+    for a in 0..model.dofs.n_nodes() {
+        for c in 3..6 {
+            if u[NCOMP * a + c].abs() > rmax {
+                (rmax, at) = (u[NCOMP * a + c].abs(), a);
+            }
+        }
+    }
+    if rmax > SMALL_ROTATION {
+        let place = match model.references.iter().find(|r| r.node == at) {
+            Some(r) => format!("the reference node of '{}'", r.group),
+            None => format!("node {}", model.node_tags.get(at).copied().unwrap_or(at as u64)),
+        };
+        notes.push(format!(
+            "rotation {rmax:.3} rad at {place} is beyond the small-displacement range ({SMALL_ROTATION} rad): a \
+             linear analysis is not valid there (an eccentric load? place a coupling's reference node with \
+             GROUP@X,Y,Z)"
+        ));
+    }
     Ok(CaseReport {
         max_displacement: maxd,
         references: refs,
@@ -550,6 +576,7 @@ fn case_report(
         applied,
         equilibrium_error: eq_err,
         rel_residual,
+        notes,
     })
 }
 

@@ -20,9 +20,10 @@ pub struct ModelArgs {
     /// Fix a group's nodes: `GROUP` (all translations) or `GROUP:ux,uy,uz` (repeatable).
     #[arg(long, value_name = "GROUP[:COMPONENTS]")]
     pub fix: Vec<String>,
-    /// Couple a group rigidly to a reference node at its centroid: `GROUP`, or
-    /// `GROUP:guided=z` to let the reference node move only along z, without rotation.
-    #[arg(long, value_name = "GROUP[:guided=AXIS]")]
+    /// Couple a group rigidly to a reference node: `GROUP` (node at the group's centroid),
+    /// `GROUP@X,Y,Z` (node at that point, m), with `:guided=z` to let the reference node move
+    /// only along z, without rotation (e.g. `end_top@0,0,0.06:guided=z`).
+    #[arg(long, value_name = "GROUP[@X,Y,Z][:guided=AXIS]", allow_hyphen_values = true)]
     pub couple: Vec<String>,
     /// Point mass: `GROUP=m` or `GROUP=m,Ixx,Iyy,Izz,Ixy,Iyz,Ixz` (kg, kg·m²); on a coupled
     /// group it sits at the reference node.

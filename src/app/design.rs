@@ -400,6 +400,7 @@ pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
         couplings: vec![CouplingSpec {
             group: "xmax".into(),
             guided: Some(2),
+            reference: None,
         }],
         ..Default::default()
     };
@@ -447,6 +448,7 @@ pub fn coil_fe(d: &Design) -> Result<f64> {
         couplings: vec![CouplingSpec {
             group: "end_top".into(),
             guided: Some(2),
+            reference: None,
         }],
         beams: vec![BeamPart {
             group: "wire".into(),
@@ -553,6 +555,7 @@ pub fn sandwich_clear_webs(p: &SandwichParams) -> Result<(crate::mesh::Mesh, Vec
         couplings.push(CouplingSpec {
             group: name,
             guided: None,
+            reference: None,
         });
     }
     mesh.blocks.push(points);

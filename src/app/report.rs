@@ -276,6 +276,9 @@ pub fn static_text(r: &StaticReport) -> String {
     for (ci, c) in r.cases.iter().enumerate() {
         let _ = writeln!(s);
         let _ = writeln!(s, "load case {}", ci + 1);
+        for n in &c.notes {
+            let _ = writeln!(s, "  note: {n}");
+        }
         let _ = writeln!(
             s,
             "  applied force   [{:.6e}, {:.6e}, {:.6e}] N",

@@ -112,6 +112,7 @@ struct RawFix {
 struct RawCouple {
     group: Option<String>,
     guided: Option<String>,
+    reference: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -636,10 +637,15 @@ impl Scene {
                     );
                 }
             };
+            let reference = match &r.reference {
+                None => None,
+                Some(v) => Some(vec3(&ctx, c.span(), "'reference'", v)?),
+            };
             refer(g, c.span(), format!("couple '{g}'"));
             spec.couplings.push(CouplingSpec {
                 group: g.clone(),
                 guided,
+                reference,
             });
         }
         for p in &raw.point_mass {

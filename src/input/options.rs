@@ -22,8 +22,8 @@ pub struct ModelOptions {
     pub group_material: Vec<String>,
     /// Fix a group's nodes: `GROUP` (all translations) or `GROUP:ux,uy,uz` (repeatable).
     pub fix: Vec<String>,
-    /// Couple a group rigidly to a reference node at its centroid: `GROUP`, or
-    /// `GROUP:guided=z` to let the reference node move only along z, without rotation.
+    /// Couple a group rigidly to a reference node: `GROUP` (at its centroid) or `GROUP@X,Y,Z`,
+    /// with `:guided=AXIS` to let the reference node move only along that axis, without rotation.
     pub couple: Vec<String>,
     /// Point mass: `GROUP=m` or `GROUP=m,Ixx,Iyy,Izz,Ixy,Iyz,Ixz` (kg, kg·m²); on a coupled
     /// group it sits at the reference node.
@@ -158,16 +158,7 @@ impl ModelOptions {
             spec.fixes.push((g.to_string(), mask));
         }
         for c in &self.couple {
-            let (g, guided) = match split_group(c) {
-                (g, None) => (g.to_string(), None),
-                (g, Some(opt)) => {
-                    let a = opt.strip_prefix("guided=").ok_or_else(|| {
-                        Error::InvalidInput(format!("--couple '{c}': expected GROUP or GROUP:guided=AXIS"))
-                    })?;
-                    (g.to_string(), Some(axis("--couple", c, a)?))
-                }
-            };
-            spec.couplings.push(CouplingSpec { group: g, guided });
+            spec.couplings.push(parse_coupling(c)?);
         }
         for p in &self.point_mass {
             let (g, v) = p
@@ -250,6 +241,44 @@ impl ModelOptions {
         }
         Ok(spec)
     }
+}
+
+/// Parse a `--couple GROUP[@X,Y,Z][:guided=AXIS]` option: the group, where its reference
+/// node sits (default: the group's centroid) and the guided axis.
+pub fn parse_coupling(c: &str) -> Result<CouplingSpec> {
+    let bad = || Error::InvalidInput(format!("--couple '{c}': expected GROUP[@X,Y,Z][:guided=AXIS]"));
+    let (head, guided) = match c.rsplit_once(":guided=") {
+        Some((h, a)) => (h, Some(axis("--couple", c, a)?)),
+        None => (c, None),
+    };
+    let (g, reference) = match head.split_once('@') {
+        Some((g, p)) => {
+            let v = numbers("--couple", c, p)?;
+            if v.len() != 3 {
+                return Err(bad());
+            }
+            (g, Some([v[0], v[1], v[2]]))
+        }
+        None => (head, None),
+    };
+    // Anything after ':' left in the group is an option this grammar does not know (a
+    // dimension:tag group name, `2:5`, is a group).
+    if let (_, Some(_)) = split_group(g) {
+        let numeric = g
+            .split(':')
+            .all(|s| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()));
+        if !numeric {
+            return Err(bad());
+        }
+    }
+    if g.is_empty() {
+        return Err(bad());
+    }
+    Ok(CouplingSpec {
+        group: g.to_string(),
+        guided,
+        reference,
+    })
 }
 
 /// Parse a `--beam GROUP=SECTION@ORIENT` option.

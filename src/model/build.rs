@@ -284,7 +284,7 @@ fn no_elements(mesh: &Mesh, source: &str) -> Error {
     }
 }
 
-/// Step 3: a reference node at the centroid of each coupled group (numbered after the mesh
+/// Step 3: a reference node at the centroid of each coupled group (or where the user placed it) (numbered after the mesh
 /// nodes), with the group's nodes.
 pub(crate) fn reference_nodes(mesh: &Mesh, spec: &ModelSpec) -> Result<(Vec<ReferenceNode>, Vec<Vec<u32>>)> {
     let mut references: Vec<ReferenceNode> = Vec::new();
@@ -306,12 +306,24 @@ pub(crate) fn reference_nodes(mesh: &Mesh, spec: &ModelSpec) -> Result<(Vec<Refe
                 )));
             }
         }
-        let mut p = [0.0; 3];
-        for &a in &gn {
-            for d in 0..3 {
-                p[d] += mesh.nodes[a as usize][d] / gn.len() as f64;
+        let p = match c.reference {
+            Some(x) if x.iter().all(|v| v.is_finite()) => x,
+            Some(x) => {
+                return Err(Error::InvalidInput(format!(
+                    "coupling '{}': reference point {x:?} is not finite",
+                    c.group
+                )));
             }
-        }
+            None => {
+                let mut p = [0.0; 3];
+                for &a in &gn {
+                    for d in 0..3 {
+                        p[d] += mesh.nodes[a as usize][d] / gn.len() as f64;
+                    }
+                }
+                p
+            }
+        };
         references.push(ReferenceNode {
             group: c.group.clone(),
             node: mesh.n_nodes() + references.len(),
@@ -690,6 +702,7 @@ mod tests {
             couplings: vec![CouplingSpec {
                 group: "xmax".into(),
                 guided: Some(2),
+                reference: None,
             }],
             ..Default::default()
         };

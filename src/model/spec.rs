@@ -93,7 +93,7 @@ impl Default for ModelSpec {
 }
 
 /// A rigid coupling (RBE2 / kinematic coupling): every node of `group` follows a reference node
-/// at the group's centroid as a rigid body, u_s = u_R + θ_R × (x_s − x_R) (and θ_s = θ_R for
+/// (at the group's centroid unless placed) as a rigid body, u_s = u_R + θ_R × (x_s − x_R) (and θ_s = θ_R for
 /// nodes with rotations). Implemented by eliminating the slave DOFs, not by penalty springs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CouplingSpec {
@@ -102,6 +102,9 @@ pub struct CouplingSpec {
     /// "Guided": the reference node may only translate along this axis (0 = x, 1 = y, 2 = z)
     /// and may not rotate.
     pub guided: Option<usize>,
+    /// Where the reference node sits (m); `None`: the centroid of the group's nodes. A load on
+    /// the reference node acts there, so an eccentric point gives a moment.
+    pub reference: Option<[f64; 3]>,
 }
 
 /// A point mass with rotary inertia.

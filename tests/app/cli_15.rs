@@ -143,3 +143,43 @@ fn a_group_given_two_sections_is_refused() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("group 'zmin' is given two sections"), "{err}");
 }
+
+/// Item 3: a coupling's reference node can be placed (`GROUP@X,Y,Z`); a linear solution with
+/// rotations beyond the small-displacement range says so. The coil's end face has its centroid
+/// off the axis: the axial load there tilts the end by about 0.5 rad (flagged); on the axis it
+/// does not (the end only twists by the coil's wind-up, 0.0135 rad).
+#[test]
+fn coupling_reference_point_and_large_rotation_note() {
+    let coil = [
+        "static",
+        "helix:0.032,0.01,6,12,line3",
+        "--beam",
+        "wire=circle:0.006@radial:0,0,0,0,0,1",
+        "--material",
+        "2.002e11,0.3,7850",
+        "--fix",
+        "end_bottom:all",
+        "--force",
+        "end_top=0,0,-600",
+        "--couple",
+    ];
+    let mut a = coil.to_vec();
+    a.push("end_top");
+    let (code, out, err) = run(&a);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("note: rotation") && out.contains("small-displacement"),
+        "{out}"
+    );
+    let mut a = coil.to_vec();
+    a.push("end_top@0,0,0.06");
+    let (code, out, err) = run(&a);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("note: rotation"), "{out}");
+    // A malformed point is an input error naming the grammar.
+    let mut a = coil.to_vec();
+    a.push("end_top@0,0");
+    let (code, _, err) = run(&a);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("GROUP[@X,Y,Z][:guided=AXIS]"), "{err}");
+}

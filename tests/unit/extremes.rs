@@ -445,6 +445,7 @@ fn stiffness_contrast_approaches_the_rigid_limit_or_says_so() {
         couplings: vec![CouplingSpec {
             group: "right".into(),
             guided: None,
+            reference: None,
         }],
         point_masses: vec![PointMassSpec {
             group: "right".into(),
@@ -782,6 +783,7 @@ fn lumped_mass_with_a_massless_coupled_reference_node() {
         couplings: vec![CouplingSpec {
             group: "xmax".into(),
             guided: None,
+            reference: None,
         }],
         lumping,
         ..Default::default()
@@ -835,6 +837,7 @@ fn lumped_cantilevers_restarted_by_the_sturm_check_converge_or_say_so() {
                 vec![CouplingSpec {
                     group: "xmax".into(),
                     guided: None,
+                    reference: None,
                 }]
             } else {
                 vec![]
@@ -892,6 +895,7 @@ fn massless_spring_node_gives_no_spurious_modes() {
         couplings: vec![CouplingSpec {
             group: "zmin".into(),
             guided: None,
+            reference: None,
         }],
         ..Default::default()
     };

@@ -385,3 +385,19 @@ fn split_group_reads_dimension_tag_names() {
     assert_eq!(split_group("top"), ("top", None));
     assert_eq!(split_group("x1:2"), ("x1", Some("2")));
 }
+
+#[test]
+fn coupling_grammar() {
+    use vibrofem::input::options::parse_coupling;
+    let c = parse_coupling("end_top@0,0,0.06:guided=z").unwrap();
+    assert_eq!(
+        (c.group.as_str(), c.guided, c.reference),
+        ("end_top", Some(2), Some([0.0, 0.0, 0.06]))
+    );
+    let c = parse_coupling("top:guided=x").unwrap();
+    assert_eq!((c.group.as_str(), c.guided, c.reference), ("top", Some(0), None));
+    let c = parse_coupling("2:5@-1,0,1").unwrap();
+    assert_eq!((c.group.as_str(), c.reference), ("2:5", Some([-1.0, 0.0, 1.0])));
+    assert!(parse_coupling("top:free").is_err());
+    assert!(parse_coupling("top@1,2").is_err());
+}

@@ -17,6 +17,7 @@ fn spec(fix: &[&str], couple: &[(&str, Option<usize>)]) -> ModelSpec {
             .map(|(g, a)| CouplingSpec {
                 group: g.to_string(),
                 guided: *a,
+                reference: None,
             })
             .collect(),
         ..Default::default()

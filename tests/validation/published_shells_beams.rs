@@ -375,6 +375,7 @@ fn mass_properties_with_a_point_mass() {
         couplings: vec![CouplingSpec {
             group: "zmax".into(),
             guided: None,
+            reference: None,
         }],
         point_masses: vec![
             PointMassSpec {
@@ -574,6 +575,7 @@ fn twisted_beam_through_a_rigid_tip_coupling() {
         spec.couplings = vec![CouplingSpec {
             group: "u1".into(),
             guided: None,
+            reference: None,
         }];
         let mut force = [0.0; 3];
         force[dir] = 1.0;
@@ -734,6 +736,7 @@ fn coil_stiffness(kind: CellKind, per_turn: usize) -> f64 {
         couplings: vec![CouplingSpec {
             group: "end_top".into(),
             guided: Some(2),
+            reference: None,
         }],
         ..Default::default()
     };
