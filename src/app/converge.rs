@@ -270,10 +270,19 @@ pub fn builtin(name: &str) -> Result<Case> {
     }
 }
 
+/// Most refinement levels of a scene study.
+pub const MAX_LEVELS: usize = 6;
+
 /// A scene refined `levels` times by halving its element size: `box:` divisions doubled,
 /// `helix:` elements per turn doubled, `sandwich:paper,SIZE` size halved. One formulation (the
 /// scene's); the reference is its own finest levels.
 pub fn from_scene(path: &Path, levels: usize) -> Result<Case> {
+    if levels > MAX_LEVELS {
+        return Err(invalid(format!(
+            "converge: --levels {levels}: at most {MAX_LEVELS} (each level halves the element size, so a 3D mesh grows \
+             8× per level; level {MAX_LEVELS} already has 32 768× the cells of the first)"
+        )));
+    }
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let scene = Scene::parse(path, &text)?;
     let g = match &scene.mesh {

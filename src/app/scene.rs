@@ -1398,7 +1398,17 @@ pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
         files = shard(&files, i, n);
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
-    let jobs = opts.jobs.max(1);
+    // More workers than cases, or far more than cores, only cost threads and memory.
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cap = (4 * cores).min(files.len()).max(1);
+    let jobs = opts.jobs.clamp(1, cap);
+    if opts.jobs > cap {
+        eprintln!(
+            "note: --jobs {} capped at {cap} ({} cases, {cores} cores)",
+            opts.jobs,
+            files.len()
+        );
+    }
     let budget = MemoryBudget {
         limit: available_memory().map(|m| m / 10 * 7).unwrap_or(4 << 30).max(256 << 20),
         used: std::sync::Mutex::new(0),

@@ -395,3 +395,17 @@ force = [0.0, 0.0, -1200.0]
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Issue 15, item 15: `--jobs 1000` hung; workers are capped by the cases and the cores.
+#[test]
+fn batch_caps_its_workers() {
+    let d = batch_folder("jobs_cap");
+    let (code, out) = batch(&d, "out", &["--jobs", "1000"]);
+    assert_eq!(code, 3, "{out}"); // the broken mesh fails, the others run
+    assert!(out.contains("--jobs 1000 capped at"), "{out}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("out/summary.json")).unwrap()).unwrap();
+    let jobs = s["jobs"].as_u64().unwrap();
+    assert!((1..=4).contains(&jobs), "jobs = {jobs}"); // 4 mesh cases
+    assert_eq!(s["rows"].as_array().unwrap().len(), 4);
+}

@@ -280,3 +280,18 @@ fn committed_s7_study_is_valid() {
     assert_eq!((s.constraints.min_f1_hz, s.constraints.max_mass_kg), (300.0, 165.0));
     assert_eq!(s.check.designs, 4);
 }
+
+/// Issue 15, item 15: `converge --levels 30` ran on; more than MAX_LEVELS levels is refused
+/// up front with the growth it would mean.
+#[test]
+fn converge_refuses_too_many_levels() {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_vibrofem"))
+        .args(["converge", "scenes/s1_plate_solid.toml", "--levels", "30", "-o"])
+        .arg(std::env::temp_dir().join(format!("vibrofem-cv-levels-{}", std::process::id())))
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--levels 30: at most 6"), "{err}");
+}
