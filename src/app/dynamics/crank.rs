@@ -798,6 +798,48 @@ fn stall_message(drive: &CrankDrive, phi: f64, t: f64, w0: f64, how: &str) -> St
     }
 }
 
+/// Close a revolution of a φ-domain run: record its mean speed and say whether the run is
+/// steady (two successive revolutions agree within the tolerance, after the minimum count).
+fn revolution_closed(
+    last: &Samples,
+    prev: &mut Option<Metrics>,
+    means: &mut Vec<f64>,
+    revs: usize,
+    o: &SteadyOptions,
+) -> Result<bool> {
+    let (m, _, _) = revolution_metrics(last)
+        .ok_or_else(|| Error::InvalidInput("crank drive: a revolution took no time (speed not finite)".into()))?;
+    means.push(m.omega_mean);
+    let steady = matches!(prev, Some(p) if revs >= o.min_revolutions && steady_change(&m, p) < o.steady_tol);
+    *prev = Some(m);
+    Ok(steady)
+}
+
+/// The result of a φ-domain run that reached its end without stalling.
+fn steady_run(
+    method: &str,
+    revolutions: usize,
+    converged: bool,
+    means: Vec<f64>,
+    last: Samples,
+    evaluations: usize,
+) -> Result<SteadyRun> {
+    let (m, mid, am) = revolution_metrics(&last)
+        .ok_or_else(|| Error::InvalidInput("crank drive: no complete revolution was integrated".into()))?;
+    Ok(SteadyRun {
+        method: method.into(),
+        revolutions,
+        converged,
+        metrics: Some(m),
+        omega_midrange: Some(mid),
+        omega_angle_mean: Some(am),
+        mean_per_revolution: means,
+        last,
+        stall: None,
+        evaluations,
+    })
+}
+
 /// The paper's Baranov finite-difference step in φ, from `o.omega_start` at `o.phi_start`:
 ///
 /// ```text
@@ -856,32 +898,12 @@ pub fn baranov(drive: &CrankDrive, o: &SteadyOptions) -> Result<SteadyRun> {
         let e_last = *last.eps.last().unwrap_or(&0.0);
         last.push(phi - phi0, t - t0, w, e_last);
         revs = rev + 1;
-        let (m, _, _) = revolution_metrics(&last)
-            .ok_or_else(|| Error::InvalidInput("crank drive: a revolution took no time (speed not finite)".into()))?;
-        means.push(m.omega_mean);
-        if let Some(p) = prev
-            && revs >= o.min_revolutions
-            && steady_change(&m, &p) < o.steady_tol
-        {
+        if revolution_closed(&last, &mut prev, &mut means, revs, o)? {
             converged = true;
             break;
         }
-        prev = Some(m);
     }
-    let (m, mid, am) = revolution_metrics(&last)
-        .ok_or_else(|| Error::InvalidInput("crank drive: no complete revolution was integrated".into()))?;
-    Ok(SteadyRun {
-        method: "baranov".into(),
-        revolutions: revs,
-        converged,
-        metrics: Some(m),
-        omega_midrange: Some(mid),
-        omega_angle_mean: Some(am),
-        mean_per_revolution: means,
-        last,
-        stall: None,
-        evaluations: steps,
-    })
+    steady_run("baranov", revs, converged, means, last, steps)
 }
 
 /// The energy form of (1) integrated in φ by Dormand–Prince 5(4): state (K = I ω², t) with
@@ -942,32 +964,12 @@ pub fn energy_form(drive: &CrankDrive, o: &SteadyOptions) -> Result<SteadyRun> {
         y = sol.y[sol.y.len() - 1].clone();
         phi = outs[outs.len() - 1];
         revs = rev + 1;
-        let (m, _, _) = revolution_metrics(&last)
-            .ok_or_else(|| Error::InvalidInput("crank drive: a revolution took no time".into()))?;
-        means.push(m.omega_mean);
-        if let Some(p) = prev
-            && revs >= o.min_revolutions
-            && steady_change(&m, &p) < o.steady_tol
-        {
+        if revolution_closed(&last, &mut prev, &mut means, revs, o)? {
             converged = true;
             break;
         }
-        prev = Some(m);
     }
-    let (m, mid, am) = revolution_metrics(&last)
-        .ok_or_else(|| Error::InvalidInput("crank drive: no complete revolution was integrated".into()))?;
-    Ok(SteadyRun {
-        method: "energy-form (Dormand–Prince 5(4))".into(),
-        revolutions: revs,
-        converged,
-        metrics: Some(m),
-        omega_midrange: Some(mid),
-        omega_angle_mean: Some(am),
-        mean_per_revolution: means,
-        last,
-        stall: None,
-        evaluations: evals,
-    })
+    steady_run("energy-form (Dormand–Prince 5(4))", revs, converged, means, last, evals)
 }
 
 /// Options of [`run_up`].
