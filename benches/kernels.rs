@@ -60,14 +60,14 @@ fn assembly_and_solve(c: &mut Criterion) {
     let (k, m) = (sys.k(), sys.m().unwrap());
     let a = k.sub_scaled(-1e4, m);
     g.bench_function("numeric LDLT", |b| {
-        b.iter(|| Factor::new(sys.symbolic().clone(), &a).unwrap())
+        b.iter(|| Factor::new(sys.symbolic().unwrap().clone(), &a).unwrap())
     });
     g.bench_function("eigen 18 lowest (with verification)", |b| {
         b.iter(|| {
             solve(
                 k,
                 m,
-                sys.symbolic(),
+                sys.symbolic().unwrap(),
                 &EigenParams {
                     target: Target::Nearest(18),
                     ..Default::default()

@@ -101,6 +101,14 @@ pub enum Error {
         /// Why.
         msg: String,
     },
+    /// An external engine (SLEPc under MPI) is not installed, or it failed.
+    #[error("{engine}: {msg}")]
+    Engine {
+        /// The engine (e.g. `SLEPc engine`).
+        engine: String,
+        /// What is missing or what went wrong, with the remedy.
+        msg: String,
+    },
     /// The eigen solver did not converge.
     #[error("eigen solve did not converge: {0}")]
     EigenNotConverged(String),
@@ -153,6 +161,7 @@ impl Error {
     /// | 2 | numerical failure (no convergence, failed verification, singular model) |
     /// | 3 | batch run in which some cases failed |
     /// | 4 | a result could not be written (disk full, serialisation) |
+    /// | 5 | an external engine (SLEPc, MPI) is missing or failed |
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Io { .. }
@@ -168,6 +177,7 @@ impl Error {
                 2
             }
             Error::Output { .. } => 4,
+            Error::Engine { .. } => 5,
         }
     }
 

@@ -37,6 +37,9 @@ enum Cmd {
     Modes(ModesArgs),
     /// Linear static analysis: displacements, reactions, stiffness and stresses.
     Static(StaticArgs),
+    /// Write K, M (PETSc binary and Matrix Market), the DOF map and a model summary for
+    /// another solver (SLEPc, scipy).
+    Export(ExportArgs),
     /// Groups, cell kinds and counts, bounding box, volume and mass of a mesh.
     MeshInfo(MeshInfoArgs),
     /// Run a scene file (TOML): the modal and/or static analyses it describes.
@@ -215,6 +218,33 @@ struct ModesArgs {
     /// Write the mesh with one $NodeData view per mode (gmsh).
     #[arg(long = "msh-out")]
     msh_out: Option<PathBuf>,
+    /// Eigen solver: native (verified block Lanczos, default) or slepc (SLEPc Krylov–Schur with
+    /// a MUMPS LDLᵀ under mpirun; Debian's python3-slepc4py and openmpi-bin).
+    #[arg(long, default_value = "native")]
+    engine: String,
+    /// MPI ranks of --engine slepc.
+    #[arg(long, default_value_t = 1)]
+    ranks: usize,
+    /// Keep the SLEPc work folder (matrices, script, eigenpairs) here instead of a temporary one.
+    #[arg(long = "slepc-dir")]
+    slepc_dir: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct ExportArgs {
+    /// gmsh mesh file (MSH 2.2 or 4.1), or a generator (`box:`, `helix:`, `sandwich:`, `ibeam-*:`).
+    mesh: String,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Folder for K.petsc, M.petsc, K.mtx, M.mtx, dofs.csv and model.json.
+    #[arg(short, long)]
+    out: PathBuf,
+    /// Matrix formats: petsc, mtx or both.
+    #[arg(long, default_value = "both")]
+    format: String,
+    /// Print the summary (model.json) on stdout.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(clap::Args)]
@@ -310,7 +340,35 @@ fn modes(a: &ModesArgs) -> Result<i32> {
     let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
     let source = a.mesh.clone();
-    let run = run_modal(&mesh, &source, &opts, read_time)?;
+    let run = match a.engine.as_str() {
+        "native" => {
+            if a.ranks != 1 || a.slepc_dir.is_some() {
+                return Err(Error::InvalidInput(
+                    "--ranks and --slepc-dir apply to --engine slepc".into(),
+                ));
+            }
+            run_modal(&mesh, &source, &opts, read_time)?
+        }
+        "slepc" => {
+            let t = std::time::Instant::now();
+            let model = vibrofem::model::Model::build(&mesh, &opts.spec, &source)?;
+            let sys = vibrofem::system::System::assemble_only(model, &source)?;
+            let t_model = t.elapsed().as_secs_f64() - sys.timings.assemble;
+            let so = vibrofem::app::slepc::SlepcOptions {
+                ranks: a.ranks,
+                workdir: a.slepc_dir.clone(),
+                ..Default::default()
+            };
+            let mut run = vibrofem::app::slepc::solve(&sys, &opts.params(), &so)?;
+            run.report.timings_s.read = read_time;
+            run.report.timings_s.assemble += t_model;
+            run.report.timings_s.total += read_time + t_model;
+            run
+        }
+        e => {
+            return Err(Error::InvalidInput(format!("--engine '{e}': use native or slepc")));
+        }
+    };
     if a.json {
         outln!(
             "{}",
@@ -404,6 +462,37 @@ fn static_cmd(a: &StaticArgs) -> Result<i32> {
         vibrofem::app::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
     }
     for n in &run.model.notes {
+        eprintln!("note: {n}");
+    }
+    Ok(0)
+}
+
+fn export_cmd(a: &ExportArgs) -> Result<i32> {
+    use vibrofem::app::export;
+    let formats = export::Formats::parse(&a.format)?;
+    let spec = a.model.spec()?;
+    let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let model = vibrofem::model::Model::build(&mesh, &spec, &a.mesh)?;
+    let sys = vibrofem::system::System::assemble_only(model, &a.mesh)?;
+    let (summary, files) = export::export(&sys, &a.out, formats)?;
+    if a.json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&summary).map_err(|e| Error::output("JSON", e))?
+        );
+    } else {
+        outln!(
+            "{}: {} free DOFs, {} entries in K and M, mass {} kg",
+            a.mesh,
+            summary.dofs,
+            summary.nnz,
+            vibrofem::io::fmt_sig(summary.mass_kg, 4)
+        );
+        for f in &files {
+            outln!("wrote {}", f.display());
+        }
+    }
+    for n in &summary.notes {
         eprintln!("note: {n}");
     }
     Ok(0)
@@ -611,6 +700,7 @@ fn main() -> ExitCode {
         Cmd::Design(a) => design_cmd(a),
         Cmd::Static(a) => static_cmd(a),
         Cmd::MeshInfo(a) => mesh_info(a),
+        Cmd::Export(a) => export_cmd(a),
         Cmd::Run(a) => run_cmd(a),
         Cmd::Batch(a) => batch_cmd(a),
         Cmd::Sweep(a) => sweep_cmd(a),

@@ -66,7 +66,8 @@ pub struct System {
     pattern: Arc<Pattern>,
     k: SymMatrix,
     m: Option<SymMatrix>,
-    symbolic: Arc<SymbolicFactor>,
+    /// `None` for a system assembled for another solver ([`System::assemble_only`]).
+    symbolic: Option<Arc<SymbolicFactor>>,
     ordering: Ordering,
     /// Time spent building.
     pub timings: SystemTimings,
@@ -110,11 +111,42 @@ impl System {
             pattern,
             k: km.k,
             m: opts.mass.then_some(km.m),
-            symbolic: Arc::new(symbolic),
+            symbolic: Some(Arc::new(symbolic)),
             ordering: opts.ordering,
             timings: SystemTimings {
                 assemble: t_assemble,
                 order: t_order,
+            },
+        })
+    }
+
+    /// Assemble K and M of `model` without ordering or analysing a factorisation: for
+    /// exporting the matrices or handing them to another solver (SLEPc on a cluster), whose
+    /// memory need is not this machine's. [`System::symbolic`] is then an error.
+    pub fn assemble_only(model: Model, source: &str) -> Result<System> {
+        let t = Instant::now();
+        let sets = model.element_sets();
+        let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
+        let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
+        drop(graph);
+        let km = assemble(pattern.clone(), &model.dofs, &sets, true)?;
+        drop(sets);
+        if model.dofs.n_free == 0 {
+            return Err(Error::InvalidInput(format!(
+                "{source}: every degree of freedom is fixed or constrained; nothing to solve"
+            )));
+        }
+        Ok(System {
+            model: Arc::new(model),
+            source: source.to_string(),
+            pattern,
+            k: km.k,
+            m: Some(km.m),
+            symbolic: None,
+            ordering: Ordering::Natural,
+            timings: SystemTimings {
+                assemble: t.elapsed().as_secs_f64(),
+                order: 0.0,
             },
         })
     }
@@ -171,8 +203,13 @@ impl System {
     }
 
     /// The symbolic factorisation (ordering and elimination structure) for K − σM.
-    pub fn symbolic(&self) -> &Arc<SymbolicFactor> {
-        &self.symbolic
+    pub fn symbolic(&self) -> Result<&Arc<SymbolicFactor>> {
+        self.symbolic.as_ref().ok_or_else(|| {
+            Error::InvalidInput(format!(
+                "{}: the system was assembled for another solver, without a factorisation analysis",
+                self.source
+            ))
+        })
     }
 
     /// The ordering used.

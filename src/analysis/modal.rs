@@ -243,8 +243,6 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
 /// M-orthonormality, a Sturm count and the backward error of every factorisation.
 pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
     let t_all = Instant::now();
-    let model = sys.model();
-    let source = sys.source();
     let mut tm = Timings {
         assemble: sys.timings.assemble,
         order: sys.timings.order,
@@ -252,7 +250,7 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
     };
     let k_mat = sys.k();
     let m_mat = sys.m()?;
-    let sym = sys.symbolic();
+    let sym = sys.symbolic()?;
     let target = match opts.target {
         ModalTarget::Modes(n) => Target::Nearest(n),
         ModalTarget::Band(lo, hi) => {
@@ -289,7 +287,22 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
     tm.factor = sol.time_factor;
     tm.solve = sol.time_iterate;
     tm.verify = sol.time_verify;
+    finish(sys, sol, tm, t_all, params.verify_tol)
+}
 
+/// The report of a verified eigen solution of `sys` (from [`eigen::solve`], or from another
+/// engine whose pairs were verified here): participation, rigid-body modes, shapes at the
+/// nodes, notes. `tm` holds the phases timed so far; `t_all` started the solve.
+pub fn finish(
+    sys: &System,
+    sol: eigen::EigenSolution,
+    mut tm: Timings,
+    t_all: Instant,
+    verify_tol: f64,
+) -> Result<ModalRun> {
+    let model = sys.model();
+    let source = sys.source();
+    let m_mat = sys.m()?;
     let t = Instant::now();
     let nodes = &model.nodes;
     let part: ParticipationTable = participation(m_mat, &model.dofs, nodes, sol.vectors.as_ref());
@@ -324,13 +337,13 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
 
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
     let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
-    let accurate = max_back <= params.verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
+    let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let mut notes = model.notes.clone();
     notes.extend(sol.notes.iter().cloned());
     if !accurate {
         notes.push(format!(
             "accuracy not guaranteed: largest backward error {max_back:.2e} (tolerance {:.0e}; relative residual {max_res:.2e}), M-orthonormality error {:.2e}",
-            params.verify_tol, sol.m_orthonormality
+            verify_tol, sol.m_orthonormality
         ));
     }
     // The backward error accepts what the data allow; how far that is from the exact modes
@@ -359,7 +372,8 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
             sol.sturm.expected, sol.sturm.lower.0, sol.sturm.upper.0, sol.sturm.found
         ));
     }
-    let factor_flops = sym.flops;
+    // The factorisation this process analysed (none when another engine solved).
+    let (factor_flops, factor_nnz) = sys.symbolic().map_or((0.0, 0), |s| (s.flops, s.nnz_l));
     let report = ModalReport {
         mesh: source.to_string(),
         nodes: model.n_mesh_nodes,
@@ -393,7 +407,7 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
         } else {
             0.0
         },
-        factor_nnz: sym.nnz_l,
+        factor_nnz,
         factorizations: sol.factorizations,
         operator_applications: sol.applications,
         notes,

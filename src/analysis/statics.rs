@@ -618,7 +618,7 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
             )
         })
     };
-    let sym = sys.symbolic().clone();
+    let sym = sys.symbolic()?.clone();
     let fa = match Factor::new(sym, km_k) {
         Ok(f) => f,
         Err(e) => return Err(singular(e.locate(|eq| sys.describe_equation(eq)).to_string())),

@@ -3,12 +3,15 @@
 //! - [`dynamics`]: the lumped two-mass machine (paper §5–§8), electromagnet, transient, plots.
 //! - [`design`], [`sweep`], [`converge`]: the design chain and the studies built on the core.
 //! - [`scene`], [`report`], [`cli`]: scene files, batch runs, text reports, clap options.
+//! - [`export`], [`slepc`]: K, M and the DOF map for other solvers; the SLEPc/MPI engine.
 pub mod cli;
 pub mod converge;
 pub mod design;
 pub mod dynamics;
+pub mod export;
 pub mod machines_cli;
 pub mod report;
 pub mod scene;
+pub mod slepc;
 pub mod sweep;
 pub mod toml_file;

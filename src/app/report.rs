@@ -70,15 +70,19 @@ pub fn modal_table(r: &ModalReport) -> String {
         "time [s]: read {:.3}  assemble {:.3}  order {:.3}  factor {:.3}  solve {:.3}  verify {:.3}  total {:.3}",
         t.read, t.assemble, t.order, t.factor, t.solve, t.verify, t.total
     );
-    let _ = writeln!(
-        s,
-        "factor: {} entries, {:.3e} flop ({:.2} GFLOP/s); peak memory {}",
-        r.factor_nnz,
-        r.factor_flops,
-        r.factor_gflops,
-        r.peak_memory_bytes
-            .map_or("n/a".into(), |b| format!("{:.1} MiB", b as f64 / 1048576.0))
-    );
+    let peak = r
+        .peak_memory_bytes
+        .map_or("n/a".into(), |b| format!("{:.1} MiB", b as f64 / 1048576.0));
+    if r.factor_nnz > 0 {
+        let _ = writeln!(
+            s,
+            "factor: {} entries, {:.3e} flop ({:.2} GFLOP/s); peak memory {peak}",
+            r.factor_nnz, r.factor_flops, r.factor_gflops,
+        );
+    } else {
+        // Another engine factorised (SLEPc + MUMPS): this process only assembled and verified.
+        let _ = writeln!(s, "factor: by the external engine; peak memory of this process {peak}");
+    }
     s
 }
 

@@ -5,6 +5,7 @@
 //! ([`vtk::gmsh_to_vtk`]).
 
 pub mod gmsh;
+pub mod matrix;
 pub mod msh_out;
 pub mod vtk;
 

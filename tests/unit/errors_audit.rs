@@ -194,6 +194,13 @@ fn every_variant_maps_to_its_documented_exit_code() {
             2,
         ),
         (Error::output("summary.json", "disk full"), 4),
+        (
+            Error::Engine {
+                engine: "SLEPc engine".into(),
+                msg: "mpirun not found".into(),
+            },
+            5,
+        ),
     ];
     for (e, code) in cases {
         assert_eq!(e.exit_code(), code, "{e:?}");
