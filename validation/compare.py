@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
-"""Compare the ``vibrofem`` CLI against the committed scikit-fem references.
+"""Compare vibrofem against the committed scikit-fem references.
 
-For every ``validation/reference/*.json`` this runs, from the crate root::
+For every ``validation/reference/*.json`` this solves, with the vibrofem Python package
+(``pip install ./python``)::
 
-    vibrofem modes MESH --modes N --json --material E,NU,RHO [--fix GROUP ...] [--length-unit mm]
+    mesh = vf.read_mesh(MESH, length_unit=UNIT)
+    modes = vf.Model(mesh, material=(E, NU, RHO), fix=[GROUP, ...]).modes(N)
 
-with N = the number of reference frequencies (rigid modes included), parses the JSON the CLI prints
-on stdout and checks it against the reference:
+with N = the number of reference frequencies (rigid modes included), or with ``--cli BINARY`` runs
+``BINARY modes MESH --modes N --json --material E,NU,RHO [--fix GROUP ...] [--length-unit mm]``
+and parses the JSON it prints, and checks the report against the reference:
 
 * the command exits 0 and reports ``"complete": true``;
 * ``n_rigid`` equals the reference; each rigid-mode frequency is below
@@ -19,14 +22,14 @@ on stdout and checks it against the reference:
 * ``mass_kg`` agrees to 1e-8 relative; ``dofs`` equals the reference's free (``dofs``) or total
   (``dofs_total``) DOF count.
 
-Usage (needs only the Python standard library)::
+Usage::
 
-    python3 validation/compare.py target/release/vibrofem
-    python3 validation/compare.py target/release/vibrofem --cases s1_plate_tet10 --verbose
-    python3 validation/compare.py target/release/vibrofem --json-out validation/out/compare.json
+    validation/.venv/bin/python validation/compare.py
+    validation/.venv/bin/python validation/compare.py --cases s1_plate_tet10 --verbose
+    python3 validation/compare.py --cli target/release/vibrofem --json-out validation/out/compare.json
 
 Prints one line per case, then ``N passed, N failed``; exits 1 if any case fails, 2 on bad usage.
-CLI output contract used (extra keys are ignored)::
+Report contract used (the package's ``Modes.report`` is the CLI's JSON; extra keys are ignored)::
 
     {"frequencies_hz": [...], "n_rigid": 6, "dofs": N, "mass_kg": m, "complete": true,
      "timings_s": {"read", "assemble", "factor", "solve", "verify", "total"},
@@ -57,6 +60,15 @@ def cli_command(binary: str, ref: dict, n_modes: int) -> list:
     if ref.get("length_unit", "m") != "m":
         cmd += ["--length-unit", ref["length_unit"]]
     return cmd
+
+
+def package_run(ref: dict, n_modes: int) -> dict:
+    import vibrofem as vf
+    mat = ref["material"]
+    mesh = vf.read_mesh(os.path.join(ROOT, ref["mesh"]), length_unit=ref.get("length_unit", "m"))
+    model = vf.Model(mesh, material=(mat["young"], mat["poisson"], mat["density"]),
+                     fix=ref.get("fixed_groups", []))
+    return model.modes(n_modes).report
 
 
 def parse_json_output(text: str) -> dict:
@@ -106,7 +118,8 @@ def check(ref: dict, out: dict, rel_tol: float, rigid_tol_hz: float,
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("binary", help="path to the vibrofem executable")
+    ap.add_argument("--cli", metavar="BINARY",
+                    help="run this vibrofem executable instead of the Python package")
     ap.add_argument("--ref-dir", default=os.path.join(HERE, "reference"))
     ap.add_argument("--cases", action="append", default=[],
                     help="substring of case names to run (repeatable); default all")
@@ -119,10 +132,17 @@ def main(argv=None) -> int:
     ap.add_argument("--verbose", "-v", action="store_true", help="print commands and stderr")
     args = ap.parse_args(argv)
 
-    binary = os.path.abspath(args.binary)
-    if not os.access(binary, os.X_OK):
-        print(f"compare.py: {args.binary} is not an executable", file=sys.stderr)
+    binary = os.path.abspath(args.cli) if args.cli else None
+    if binary and not os.access(binary, os.X_OK):
+        print(f"compare.py: {args.cli} is not an executable", file=sys.stderr)
         return 2
+    if not binary:
+        try:
+            import vibrofem  # noqa: F401
+        except ImportError:
+            print("compare.py: the vibrofem package is not installed (pip install ./python), "
+                  "or give --cli target/release/vibrofem", file=sys.stderr)
+            return 2
     refs = []
     for path in sorted(glob.glob(os.path.join(args.ref_dir, "*.json"))):
         with open(path) as fh:
@@ -137,28 +157,35 @@ def main(argv=None) -> int:
 
     passed, failed, results = 0, 0, []
     print(f"{'case':32s} {'dofs':>7s} {'f_first_elastic':>16s} {'max rel err':>11s} "
-          f"{'cli s':>7s} {'wall s':>7s}  status")
+          f"{'run s':>7s} {'wall s':>7s}  status")
     for ref in refs:
-        cmd = cli_command(binary, ref, len(ref["frequencies_hz"]))
+        n_modes = len(ref["frequencies_hz"])
+        cmd = cli_command(binary, ref, n_modes) if binary else ["package", ref["mesh"], str(n_modes)]
         if args.verbose:
             print("  $ " + " ".join(cmd))
         t0 = time.perf_counter()
         errs, worst, out = [], float("nan"), {}
         try:
-            proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
-                                  timeout=args.timeout)
-            if proc.returncode != 0:
-                errs.append(f"exit code {proc.returncode}: {proc.stderr.strip()[-500:]}")
+            if binary:
+                proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
+                                      timeout=args.timeout)
+                if proc.returncode != 0:
+                    errs.append(f"exit code {proc.returncode}: {proc.stderr.strip()[-500:]}")
+                else:
+                    out = parse_json_output(proc.stdout)
+                if args.verbose and proc.stderr.strip():
+                    print("  stderr: " + proc.stderr.strip()[-2000:].replace("\n", "\n          "))
             else:
-                out = parse_json_output(proc.stdout)
+                out = package_run(ref, n_modes)
+            if out:
                 errs, worst = check(ref, out, args.rel_tol, args.rigid_tol_hz,
                                     args.rigid_rel)
-            if args.verbose and proc.stderr.strip():
-                print("  stderr: " + proc.stderr.strip()[-2000:].replace("\n", "\n          "))
         except subprocess.TimeoutExpired:
             errs.append(f"timed out after {args.timeout:g} s")
         except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
             errs.append(f"bad JSON output: {exc}")
+        except Exception as exc:  # the package's VibrofemError and its subclasses
+            errs.append(f"{type(exc).__name__}: {exc}")
         wall = time.perf_counter() - t0
         cli_total = (out.get("timings_s") or {}).get("total", float("nan")) \
             if isinstance(out, dict) else float("nan")

@@ -6,7 +6,7 @@
 #   PY="$(bash validation/python.sh)"
 set -euo pipefail
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
-has_tools() { "$1" -c "import gmsh, skfem, numpy, scipy" >/dev/null 2>&1; }
+has_tools() { "$1" -c "import gmsh, skfem, numpy, scipy, pytest" >/dev/null 2>&1; }
 for attempt in 1 2; do
     if [ -x "$HERE/.venv/bin/python" ] && has_tools "$HERE/.venv/bin/python"; then
         echo "$HERE/.venv/bin/python"

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Convergence tables of the spring checks S3 (leaf stiffness and stress), S4 (leaf + reduced
-mass frequency) and S5 (coil isolator stiffness), run through the vibrofem CLI on built-in
-meshes (``box:`` hex20 leaves, ``helix:`` beam coils; no files needed).
+mass frequency) and S5 (coil isolator stiffness), run with the vibrofem Python package
+(``pip install ./python``) on built-in meshes (``box:`` hex20 leaves, ``helix:`` beam coils; no
+files needed).
 
-    python3 validation/springs_s3_s4_s5.py [--vibrofem target/release/vibrofem]
+    validation/.venv/bin/python validation/springs_s3_s4_s5.py
 
 S3: leaf 169 x 146 x 9 mm, E 2.1e11, nu 0.3; clamped at x = 0 ("xmin"), the x = l face rigidly
 coupled to a reference node guided along z ("xmax:guided=z"). Stiffness from Fz = 1000 N;
@@ -20,27 +21,15 @@ Prints markdown tables.
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
-import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def run(binary: str, args: list[str]) -> dict:
-    p = subprocess.run([binary] + args + ["--json"], capture_output=True, text=True, cwd=ROOT)
-    if p.returncode != 0:
-        raise RuntimeError(f"vibrofem {' '.join(args)} failed: {p.stderr.strip()}")
-    return json.loads(p.stdout)
+import vibrofem as vf
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--vibrofem", default=os.path.join(ROOT, "target", "release", "vibrofem"))
-    args = ap.parse_args(argv)
-    b = args.vibrofem
+    ap.parse_args(argv)
     E, nu, l, w, h = 2.1e11, 0.3, 0.169, 0.146, 0.009
     kb = E * w * h**3 / l**3
     print("### S3 / S4: leaf spring 169 x 146 x 9 mm, fixed-guided\n")
@@ -51,17 +40,17 @@ def main(argv=None) -> int:
           "| S4 f1 [Hz] | vs 109.56 | time [s] |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for d in [(6, 2, 1), (12, 4, 1), (24, 8, 2), (36, 12, 3), (48, 16, 4)]:
-        mesh = f"box:{l},{w},{h}:{d[0]},{d[1]},{d[2]}:hex20"
-        common = ["--fix", "xmin", "--couple", "xmax:guided=z"]
-        s1 = run(b, ["static", mesh] + common + ["--force", "xmax=0,0,1000"])
-        s2 = run(b, ["static", mesh] + common + ["--displace", "xmax=-,-,0.00046"])
-        m = run(b, ["modes", mesh, "--material", f"{E},{nu},1", "--point-mass", "xmax=11.34", "--modes", "1"] + common)
-        uz = s1["cases"][0]["references"][0]["displacement"][2]
-        k = 1000 / uz
-        vm = next(g["value"] for g in s2["stress"][0]["von_mises"] if g["group"] == "(all)")
-        f1 = m["frequencies_hz"][0]
-        t = s1["timings_s"]
-        print(f"| {d[0]}×{d[1]}×{d[2]} | {s1['dofs']} | {uz * 1e3:.4f} | {k:.4e} | {(k / 5.163e6 - 1) * 100:+.1f} % | "
+        mesh = vf.read_mesh(f"box:{l},{w},{h}:{d[0]},{d[1]},{d[2]}:hex20")
+        leaf = vf.Model(mesh, fix=["xmin"], couple={"xmax": "z"})
+        s1 = leaf.static(force={"xmax": (0, 0, 1000)})
+        s2 = leaf.static(displace={"xmax": (None, None, 0.46e-3)})
+        light = vf.Model(mesh, material=(E, nu, 1), fix=["xmin"], couple={"xmax": "z"}, point_mass={"xmax": 11.34})
+        f1 = light.modes(1).frequencies_hz[0]
+        k = s1.stiffness["xmax"]
+        uz = 1000 / k
+        vm = s2.von_mises.max()
+        t = s1.report["timings_s"]
+        print(f"| {d[0]}×{d[1]}×{d[2]} | {s1.report['dofs']} | {uz * 1e3:.4f} | {k:.4e} | {(k / 5.163e6 - 1) * 100:+.1f} % | "
               f"{vm / 1e6:.1f} | {f1:.2f} | {(f1 / 109.56 - 1) * 100:+.1f} % | {sum(t.values()):.2f} |")
     G, dw, D, i, Q = 7.7e10, 0.006, 0.032, 6.0, 600.0
     kf = G * dw**4 / (8 * D**3 * i)
@@ -75,14 +64,15 @@ def main(argv=None) -> int:
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     for kind in ("line2", "line3"):
         for n in (6, 12, 24, 48):
-            mesh = f"helix:{D},0.01,6,{n},{kind}"
-            r = run(b, ["static", mesh, "--beam", f"wire=circle:{dw}@radial:0,0,0,0,0,1",
-                        "--material", f"{2 * G * 1.3},0.3,7850", "--fix", "end_bottom:all",
-                        "--couple", "end_top:guided=z", "--force", f"end_top=0,0,-{Q}"])
-            uz = -r["cases"][0]["references"][0]["displacement"][2]
-            k = Q / uz
-            print(f"| {kind} | {n} | {r['dofs']} | {uz * 1e3:.4f} | {k:.0f} | {(k / kf - 1) * 100:+.2f} % | "
-                  f"{(uz / 9.96e-3 - 1) * 100:+.1f} % | {sum(r['timings_s']):.3f} |")
+            coil = vf.Model(vf.read_mesh(f"helix:{D},0.01,6,{n},{kind}"),
+                            beam={"wire": f"circle:{dw}@radial:0,0,0,0,0,1"},
+                            material=(2 * G * 1.3, 0.3, 7850), fix={"end_bottom": "all"},
+                            couple={"end_top": "z"})
+            r = coil.static(force={"end_top": (0, 0, -Q)})
+            k = r.stiffness["end_top"]
+            uz = Q / k
+            print(f"| {kind} | {n} | {r.report['dofs']} | {uz * 1e3:.4f} | {k:.0f} | {(k / kf - 1) * 100:+.2f} % | "
+                  f"{(uz / 9.96e-3 - 1) * 100:+.1f} % | {sum(r.report['timings_s'].values()):.3f} |")
     return 0
 
 

@@ -168,6 +168,8 @@ struct RawModal {
     shift_hz: Option<f64>,
     mass: Option<String>,
     block: Option<i64>,
+    engine: Option<String>,
+    ranks: Option<i64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -241,6 +243,9 @@ pub struct Scene {
     pub vtu: bool,
     /// Write gmsh `.msh` files with result views.
     pub msh: bool,
+    /// `[modal] engine = "slepc"`: solve with SLEPc on this many MPI ranks (`ranks`, default 1);
+    /// `None`: the native solver.
+    pub slepc_ranks: Option<usize>,
     groups: Vec<GroupRef>,
 }
 
@@ -773,6 +778,7 @@ impl Scene {
             None
         };
 
+        let mut slepc_ranks = None;
         let modal = match &raw.modal {
             None => None,
             Some(m) => {
@@ -808,6 +814,22 @@ impl Scene {
                 if block < 1 {
                     return ctx.err(m.span(), format!("'block' must be at least 1, got {block}"));
                 }
+                slepc_ranks = match (r.engine.as_deref(), r.ranks) {
+                    (None | Some("native"), None) => None,
+                    (None | Some("native"), Some(_)) => {
+                        return ctx.err(m.span(), "'ranks' applies to engine = \"slepc\"");
+                    }
+                    (Some("slepc"), ranks) => {
+                        let n = ranks.unwrap_or(1);
+                        if n < 1 {
+                            return ctx.err(m.span(), format!("'ranks' must be at least 1, got {n}"));
+                        }
+                        Some(n as usize)
+                    }
+                    (Some(e), _) => {
+                        return ctx.err(m.span(), format!("'engine' must be \"native\" or \"slepc\", got \"{e}\""));
+                    }
+                };
                 Some((target, r.shift_hz, block as usize))
             }
         };
@@ -833,6 +855,7 @@ impl Scene {
             static_cases,
             vtu,
             msh,
+            slepc_ranks,
             groups,
         })
     }
@@ -960,14 +983,19 @@ impl Scene {
         let t_model = Instant::now();
         let model = crate::model::Model::build(&mesh, &self.spec, &source)?;
         let t_model = t_model.elapsed().as_secs_f64();
-        let sys = crate::system::System::build(
-            model,
-            &crate::system::SystemOptions {
-                mass: self.modal.is_some(),
-                ..Default::default()
-            },
-            &source,
-        )?;
+        let sys = if self.slepc_ranks.is_some() && self.static_cases.is_none() {
+            // SLEPc factorises on its ranks: no ordering or memory check for this machine.
+            crate::system::System::assemble_only(model, &source)?
+        } else {
+            crate::system::System::build(
+                model,
+                &crate::system::SystemOptions {
+                    mass: self.modal.is_some(),
+                    ..Default::default()
+                },
+                &source,
+            )?
+        };
         let modal = match &self.modal {
             None => None,
             Some((target, shift_hz, block)) => {
@@ -977,7 +1005,17 @@ impl Scene {
                     block: *block,
                     ..Default::default()
                 };
-                let mut run = crate::analysis::modal::solve(&sys, &params)?;
+                let mut run = match self.slepc_ranks {
+                    None => crate::analysis::modal::solve(&sys, &params)?,
+                    Some(ranks) => crate::app::slepc::solve(
+                        &sys,
+                        &params,
+                        &crate::app::slepc::SlepcOptions {
+                            ranks,
+                            ..Default::default()
+                        },
+                    )?,
+                };
                 let tm = &mut run.report.timings_s;
                 tm.read = read_time;
                 tm.assemble += t_model;

@@ -342,7 +342,7 @@ pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<Mod
         backward_error,
         notes: vec![format!(
             "solved by SLEPc {} (Krylov–Schur, shift-and-invert at σ = {:.4e} rad²/s², MUMPS LDLᵀ) on {} MPI ranks \
-             in {} restarts ({} pairs converged, {} kept and refined by one inverse iteration with Rayleigh–Ritz); \
+             in {} restarts ({} pairs converged, {} kept, refined by {} inverse iteration(s) with Rayleigh–Ritz); \
              residuals, backward errors and M-orthonormality recomputed here; \
              completeness from the inertia of MUMPS factorisations of K − sM at s = {:.6e} and {:.6e} (Sturm counts {} and {})",
             info.slepc,
@@ -351,6 +351,7 @@ pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<Mod
             info.iterations,
             info.converged,
             info.nconv,
+            info.timings_s.get("refinements").copied().unwrap_or(0.0),
             info.lower.0,
             info.upper.0,
             info.lower.1,

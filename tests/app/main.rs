@@ -9,6 +9,7 @@ mod cli;
 mod cli_15;
 mod design;
 mod dynamics;
+mod export_engine;
 mod machines;
 mod scenes;
 mod sweep;

@@ -1,0 +1,414 @@
+"""vibrofem: finite-element modal and stiffness analysis for vibrating machines, from Python.
+
+numpy and scipy native::
+
+    import vibrofem as vf
+    mesh = vf.read_mesh("plate.msh", length_unit="mm")     # or "box:0.3,0.3,0.02:10,10,2:hex20"
+    model = vf.Model(mesh, material=(2.1e11, 0.3, 7850), fix=["clamp"])
+    K, M = model.assemble()             # scipy.sparse.csr_matrix over the free DOFs
+    model.dofs.node, model.dofs.component   # the node and component of each row
+    modes = model.modes(12)             # .frequencies_hz, .shapes (n_nodes × 6 × k), .complete …
+    st = model.static(force={"top": (0, 0, 1000)})   # .displacement, .reactions, .von_mises …
+    vf.run_scene("scenes/s3_leaf_stiffness.toml")     # the scene report as a dict
+
+Units are SI throughout (m, kg, s, N, Pa); a mesh drawn in millimetres is scaled on reading.
+Model options take the command line's grammar as strings, or Python values:
+
+============== ============================================ =====================================
+keyword        Python value                                 command line
+============== ============================================ =====================================
+material       ``"steel"`` or ``(E, nu, rho)``              ``--material``
+group_material ``{"web": (E, nu, rho)}``                    ``--group-material web=E,NU,RHO``
+fix            ``["clamp"]``, ``{"base": "ux,uy"}``          ``--fix clamp``, ``--fix base:ux,uy``
+couple         ``["top"]``, ``{"top": "z"}`` (guided along  ``--couple top``,
+               z), ``{"top": "@0,0,0.06:guided=z"}``        ``--couple top:guided=z``
+point_mass     ``{"top": 12.5}`` or ``{"top": (m, Ixx, …)}``  ``--point-mass top=12.5``
+spring         ``{"a:b": (kx, ky, kz, krx, kry, krz)}``     ``--spring a:b=...``
+shell          ``{"top": 0.02}`` or ``{"top": (t, offset)}`` ``--shell top=0.02``
+beam           ``{"coil": "circle:0.006@radial:0,0,0,0,0,1"}`` ``--beam coil=…``
+solid          ``["body"]``                                 ``--solid body``
+mass           ``"consistent"`` or ``"lumped"``              ``--mass``
+============== ============================================ =====================================
+
+Errors raise :class:`VibrofemError` subclasses (:class:`InputError`, :class:`NumericalError`,
+:class:`OutputError`, :class:`EngineError`) carrying the command line's message.
+"""
+
+import json as _json
+from dataclasses import dataclass as _dataclass, field as _field
+
+import numpy as _np
+
+from . import _core
+from ._core import (  # noqa: F401
+    EngineError,
+    InputError,
+    NumericalError,
+    OutputError,
+    VibrofemError,
+    __version__,
+)
+
+__all__ = [
+    "read_mesh",
+    "Mesh",
+    "Model",
+    "Dofs",
+    "Modes",
+    "Static",
+    "run_scene",
+    "COMPONENTS",
+    "VibrofemError",
+    "InputError",
+    "NumericalError",
+    "OutputError",
+    "EngineError",
+]
+
+#: DOF component names in component order (index 0..6).
+COMPONENTS = tuple(_core.component_names())
+
+
+def _num(x):
+    return repr(float(x))
+
+
+def _nums(v):
+    if isinstance(v, (str, bytes)):
+        return str(v)
+    if _np.ndim(v) == 0:
+        return _num(v)
+    return ",".join(_num(a) for a in v)
+
+
+def _material(m):
+    return m if isinstance(m, str) else _nums(m)
+
+
+def _group_values(d, opt):
+    """{group: value} or [\"group=value\"] → list of 'group=value' strings."""
+    if d is None:
+        return []
+    if isinstance(d, dict):
+        return [f"{g}={_nums(v)}" for g, v in d.items()]
+    if isinstance(d, str):
+        return [d]
+    out = list(d)
+    for s in out:
+        if not isinstance(s, str):
+            raise InputError(f"{opt}: give a dict {{group: value}} or strings 'GROUP=VALUE', got {s!r}")
+    return out
+
+
+def _fixes(d):
+    if d is None:
+        return []
+    if isinstance(d, str):
+        return [d]
+    if isinstance(d, dict):
+        return [g if c in (None, "", True) else f"{g}:{c if isinstance(c, str) else ','.join(c)}" for g, c in d.items()]
+    return list(d)
+
+
+def _couplings(d):
+    if d is None:
+        return []
+    if isinstance(d, str):
+        return [d]
+    if isinstance(d, dict):
+        out = []
+        for g, v in d.items():
+            if v in (None, "", True):
+                out.append(g)
+            elif v in ("x", "y", "z"):
+                out.append(f"{g}:guided={v}")
+            elif isinstance(v, str) and v.startswith(("@", ":")):
+                out.append(f"{g}{v}")
+            elif isinstance(v, str):
+                out.append(f"{g}:{v}")
+            else:  # a point: the reference node's position
+                out.append(f"{g}@{_nums(v)}")
+        return out
+    return list(d)
+
+
+def _names(d):
+    if d is None:
+        return []
+    if isinstance(d, str):
+        return [d]
+    return list(d)
+
+
+class Mesh:
+    """A mesh in metres: nodes, cells per kind, physical groups. Made by :func:`read_mesh`."""
+
+    def __init__(self, core):
+        self._core = core
+
+    @property
+    def source(self):
+        return self._core.source
+
+    @property
+    def nodes(self):
+        """Node coordinates, m (n × 3 ndarray)."""
+        return self._core.nodes
+
+    @property
+    def node_tags(self):
+        """The file's tag of each node."""
+        return self._core.node_tags
+
+    @property
+    def groups(self):
+        """{name: {"dim", "tag", "cells", "nodes"}} of the physical groups."""
+        return {
+            name: {"dim": dim, "tag": tag, "cells": nc, "nodes": nn}
+            for name, dim, tag, nc, nn in self._core.group_list
+        }
+
+    @property
+    def cell_kinds(self):
+        """{kind: count} of the cells, e.g. {"tet10": 5120, "tri6": 640}."""
+        return dict(self._core.cell_kinds)
+
+    def cells(self, kind):
+        """Connectivity of the cells of one kind (0-based node indices, gmsh order), c × k."""
+        return self._core.cells(kind)
+
+    def cell_tags(self, kind):
+        return self._core.cell_tags(kind)
+
+    def group_nodes(self, name):
+        """0-based indices of a group's nodes, sorted."""
+        return self._core.group_nodes(name)
+
+    def __repr__(self):
+        return repr(self._core)
+
+
+def read_mesh(source, length_unit="m"):
+    """Read a gmsh mesh (MSH 2.2 or 4.1, ASCII or binary) or generate one
+    (``box:LX,LY,LZ:NX,NY,NZ:KIND``, ``helix:…``, ``sandwich:paper[,SIZE]``, ``ibeam-*:…``),
+    scaling coordinates from ``length_unit`` (m, cm, mm) to metres."""
+    return Mesh(_core.read_mesh(str(source), length_unit))
+
+
+@_dataclass
+class Dofs:
+    """The free DOFs: row i of K and M is component ``component[i]`` of node ``node[i]``
+    (0-based mesh node index; reference nodes of couplings follow the mesh nodes)."""
+
+    node: _np.ndarray
+    component: _np.ndarray
+    n_mesh_nodes: int
+
+    @property
+    def names(self):
+        return [COMPONENTS[c] for c in self.component]
+
+    def index(self, node, component):
+        """Row of a node's component (component as an index or a name such as "uz"), or -1."""
+        if isinstance(component, str):
+            component = COMPONENTS.index(component)
+        hit = _np.nonzero((self.node == node) & (self.component == component))[0]
+        return int(hit[0]) if len(hit) else -1
+
+    def __len__(self):
+        return len(self.node)
+
+
+@_dataclass
+class Modes:
+    """A verified modal solution."""
+
+    frequencies_hz: _np.ndarray
+    eigenvalues: _np.ndarray
+    #: Mode shapes at the mesh nodes: n_nodes × 6 (ux, uy, uz, rx, ry, rz) × k, M-normalised.
+    shapes: _np.ndarray
+    #: The same modes over the free DOFs (n_free × k), rows as in :attr:`Model.dofs`.
+    vectors: _np.ndarray
+    #: The Sturm count found every mode in the range.
+    complete: bool
+    #: Every backward error ≤ 1e-10, M-orthonormal, stable factorisations.
+    accurate: bool
+    #: Relative residuals ‖Kx − λMx‖/‖Kx‖ per mode.
+    residuals: _np.ndarray
+    #: Backward errors per mode (the acceptance test).
+    backward_errors: _np.ndarray
+    #: Participation factors per mode (k × 6: X, Y, Z, RX, RY, RZ).
+    participation: _np.ndarray
+    #: Effective masses per mode (k × 6, kg and kg·m²).
+    effective_mass: _np.ndarray
+    #: "rigid" or "elastic" per mode.
+    kinds: list
+    #: The whole report (what ``vibrofem modes --json`` prints).
+    report: dict = _field(repr=False)
+
+    @property
+    def notes(self):
+        return self.report.get("notes", [])
+
+
+@_dataclass
+class Static:
+    """A linear static solution (one load case)."""
+
+    #: Displacements at the mesh nodes, n_nodes × 6 (m, rad).
+    displacement: _np.ndarray
+    #: Nodal von Mises stress of the solid cells (Pa; 0 at nodes of no solid).
+    von_mises: _np.ndarray
+    #: {group: {"force": (Fx, Fy, Fz), "moment": (Mx, My, Mz)}} reaction resultants.
+    reactions: dict
+    #: {coupled group: stiffness along its guided axis, N/m} where defined.
+    stiffness: dict
+    #: The whole report (what ``vibrofem static --json`` prints).
+    report: dict = _field(repr=False)
+
+
+class Model:
+    """A mesh bound to materials, supports, couplings and parts (see the module's table of
+    keywords). K and M are assembled once, on first use, and shared by every analysis."""
+
+    def __init__(
+        self,
+        mesh,
+        material="steel",
+        group_material=None,
+        fix=None,
+        couple=None,
+        point_mass=None,
+        spring=None,
+        mass="consistent",
+        solid=None,
+        shell=None,
+        beam=None,
+    ):
+        if isinstance(mesh, (str, bytes)):
+            mesh = read_mesh(mesh)
+        self.mesh = mesh
+        gm = group_material
+        if isinstance(gm, dict):
+            gm = [f"{g}={_material(m)}" for g, m in gm.items()]
+        self._core = _core.Model(
+            mesh._core,
+            material=_material(material),
+            group_material=_names(gm),
+            fix=_fixes(fix),
+            couple=_couplings(couple),
+            point_mass=_group_values(point_mass, "point_mass"),
+            spring=_group_values(spring, "spring"),
+            mass=mass,
+            solid=_names(solid),
+            shell=_group_values(shell, "shell"),
+            beam=_group_values(beam, "beam"),
+        )
+        self._kwargs = dict(
+            material=material,
+            group_material=group_material,
+            fix=fix,
+            couple=couple,
+            point_mass=point_mass,
+            spring=spring,
+            mass=mass,
+            solid=solid,
+            shell=shell,
+            beam=beam,
+        )
+
+    def assemble(self):
+        """K and M over the free DOFs as ``scipy.sparse.csr_matrix`` (symmetric, both triangles
+        stored; N/m and kg, N·m/rad and kg·m² on rotations)."""
+        import scipy.sparse as sp
+
+        (kd, ki, kp), (md, mi, mp), n = self._core.assemble()
+        return (
+            sp.csr_matrix((kd, ki, kp), shape=(n, n)),
+            sp.csr_matrix((md, mi, mp), shape=(n, n)),
+        )
+
+    @property
+    def dofs(self):
+        """The node and component of each free DOF (:class:`Dofs`)."""
+        node, comp = self._core.dof_table()
+        n_mesh, _ = self._core.node_counts()
+        return Dofs(node=node, component=comp, n_mesh_nodes=n_mesh)
+
+    @property
+    def volume(self):
+        return self._core.summary()[0]
+
+    @property
+    def mass(self):
+        """Total mass, kg (point masses included)."""
+        return self._core.summary()[1]
+
+    @property
+    def notes(self):
+        return self._core.summary()[2]
+
+    def modes(self, n=None, band=None, shift_hz=None, block=6, engine="native", ranks=1):
+        """The ``n`` lowest modes (12 by default; nearest ``shift_hz`` if given), or every mode
+        with frequency in ``band = (f_lo, f_hi)`` Hz; verified (Sturm count, backward errors).
+        ``engine="slepc"`` solves with SLEPc + MUMPS on ``ranks`` MPI ranks instead. A result
+        that fails its verification is returned with ``complete``/``accurate`` False (the command
+        line then exits 2); check them."""
+        rep, lam, vec, shapes = self._core.modes(
+            n=n, band=None if band is None else tuple(band), shift_hz=shift_hz, block=block, engine=engine, ranks=ranks
+        )
+        r = _json.loads(rep)
+        rows = r["modes"]
+        return Modes(
+            frequencies_hz=_np.array(r["frequencies_hz"]),
+            eigenvalues=_np.asarray(lam),
+            shapes=shapes,
+            vectors=vec,
+            complete=bool(r["complete"]),
+            accurate=bool(r["accurate"]),
+            residuals=_np.array([m["rel_residual"] for m in rows]),
+            backward_errors=_np.array([m["backward_error"] for m in rows]),
+            participation=_np.array([m["participation"] for m in rows]).reshape(-1, 6),
+            effective_mass=_np.array([m["effective_mass"] for m in rows]).reshape(-1, 6),
+            kinds=[m["kind"] for m in rows],
+            report=r,
+        )
+
+    def static(self, force=None, pressure=None, gravity=None, displace=None):
+        """Linear statics, one load case: ``force={group: (Fx, Fy, Fz)}`` (N; on a coupled group
+        at its reference node, on a surface as a uniform traction), ``pressure={surface: p}``
+        (Pa, into the solid), ``gravity=(gx, gy, gz)`` (m/s²), ``displace={group: (ux, uy, uz)}``
+        (m; None leaves a component free)."""
+        disp = []
+        if isinstance(displace, dict):
+            for g, v in displace.items():
+                disp.append(f"{g}=" + ",".join("-" if a is None else _num(a) for a in v))
+        elif displace is not None:
+            disp = _names(displace)
+        rep, u, vm = self._core.static_analysis(
+            force=_group_values(force, "force"),
+            pressure=_group_values(pressure, "pressure"),
+            gravity=None if gravity is None else _nums(gravity),
+            displace=disp,
+        )
+        r = _json.loads(rep)
+        case = r["cases"][0]
+        reactions = {
+            x["group"]: {"force": tuple(x["resultant"]["force"]), "moment": tuple(x["resultant"]["moment"])}
+            for x in case["reactions"]
+        }
+        stiffness = {x["group"]: x["stiffness"] for x in case["references"] if x.get("stiffness") is not None}
+        return Static(displacement=u, von_mises=vm, reactions=reactions, stiffness=stiffness, report=r)
+
+    def export(self, dir, format="both"):
+        """Write K, M (PETSc binary, Matrix Market), dofs.csv and model.json into ``dir``."""
+        return self._core.export(str(dir), format)
+
+    def __repr__(self):
+        return f"<vibrofem Model of {self.mesh.source!r}>"
+
+
+def run_scene(path, out=None):
+    """Run a scene file (TOML) and return its report (what ``vibrofem run --json`` prints) as a
+    dict; ``out`` is the folder for the result files the scene asks for."""
+    return _json.loads(_core.run_scene(str(path), None if out is None else str(out)))
