@@ -228,6 +228,11 @@ struct ModesArgs {
     /// Keep the SLEPc work folder (matrices, script, eigenpairs) here instead of a temporary one.
     #[arg(long = "slepc-dir")]
     slepc_dir: Option<PathBuf>,
+    /// Read the eigenpairs of a SLEPc job run elsewhere (a cluster) from this folder (written by
+    /// `vibrofem export` with the same mesh and model options, then solved by its
+    /// slepc_modes.py), verify and post-process them.
+    #[arg(long = "slepc-import", conflicts_with = "slepc_dir")]
+    slepc_import: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -245,6 +250,15 @@ struct ExportArgs {
     /// Print the summary (model.json) on stdout.
     #[arg(long)]
     json: bool,
+    /// Modes of the SLEPc job written beside the PETSc matrices (params.json, slepc_modes.py).
+    #[arg(long, default_value_t = 12, conflicts_with = "band")]
+    modes: usize,
+    /// The SLEPc job's band in Hz instead (all modes in [F_LO, F_HI]).
+    #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"], allow_negative_numbers = true)]
+    band: Option<Vec<f64>>,
+    /// The SLEPc job's shift in Hz.
+    #[arg(long, allow_negative_numbers = true)]
+    shift: Option<f64>,
 }
 
 #[derive(clap::Args)]
@@ -340,7 +354,12 @@ fn modes(a: &ModesArgs) -> Result<i32> {
     let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
     let source = a.mesh.clone();
-    let run = match a.engine.as_str() {
+    let engine = if a.slepc_import.is_some() {
+        "slepc"
+    } else {
+        a.engine.as_str()
+    };
+    let run = match engine {
         "native" => {
             if a.ranks != 1 || a.slepc_dir.is_some() {
                 return Err(Error::InvalidInput(
@@ -357,6 +376,7 @@ fn modes(a: &ModesArgs) -> Result<i32> {
             let so = vibrofem::app::slepc::SlepcOptions {
                 ranks: a.ranks,
                 workdir: a.slepc_dir.clone(),
+                import: a.slepc_import.clone(),
                 ..Default::default()
             };
             let mut run = vibrofem::app::slepc::solve(&sys, &opts.params(), &so)?;
@@ -474,7 +494,23 @@ fn export_cmd(a: &ExportArgs) -> Result<i32> {
     let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let model = vibrofem::model::Model::build(&mesh, &spec, &a.mesh)?;
     let sys = vibrofem::system::System::assemble_only(model, &a.mesh)?;
-    let (summary, files) = export::export(&sys, &a.out, formats)?;
+    let (summary, mut files) = export::export(&sys, &a.out, formats)?;
+    if formats != export::Formats::MatrixMarket {
+        // The SLEPc job beside the PETSc matrices: `mpirun -n N python3 DIR/slepc_modes.py DIR`.
+        let target = match (&a.band, a.modes) {
+            (Some(b), _) => ModalTarget::Band(b[0], b[1]),
+            (None, 0) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
+            (None, n) => ModalTarget::Modes(n),
+        };
+        let params = vibrofem::analysis::modal::ModalParams {
+            target,
+            shift_hz: a.shift,
+            ..Default::default()
+        };
+        vibrofem::app::slepc::write_job(&sys, &params, &a.out, false)?;
+        files.push(a.out.join("params.json"));
+        files.push(a.out.join("slepc_modes.py"));
+    }
     if a.json {
         outln!(
             "{}",

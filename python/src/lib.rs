@@ -94,7 +94,15 @@ impl PyMesh {
         self.mesh
             .groups
             .iter()
-            .map(|g| (g.name.clone(), g.dim, g.tag, g.cells.len(), self.mesh.group_nodes(g).len()))
+            .map(|g| {
+                (
+                    g.name.clone(),
+                    g.dim,
+                    g.tag,
+                    g.cells.len(),
+                    self.mesh.group_nodes(g).len(),
+                )
+            })
             .collect()
     }
 
@@ -202,7 +210,11 @@ impl PyModel {
 fn csr<'py>(
     py: Python<'py>,
     a: &vibrofem::linalg::sparse::SymMatrix,
-) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>) {
+) -> (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+) {
     // Both triangles stored: the CSC arrays of a symmetric matrix are its CSR arrays.
     let p = &a.pattern;
     (
@@ -212,7 +224,11 @@ fn csr<'py>(
     )
 }
 
-type Csr<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
+type Csr<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+);
 
 #[pymethods]
 impl PyModel {
@@ -306,7 +322,12 @@ impl PyModel {
         block: usize,
         engine: &str,
         ranks: usize,
-    ) -> PyResult<(String, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, numpy::PyArray3<f64>>)> {
+    ) -> PyResult<(
+        String,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, numpy::PyArray3<f64>>,
+    )> {
         let target = match (band, n) {
             (Some(_), Some(_)) => return Err(InputError::new_err("give n or band, not both")),
             (Some((lo, hi)), None) => ModalTarget::Band(lo, hi),
@@ -392,7 +413,14 @@ impl PyModel {
             .detach(move || -> vibrofem::Result<(String, Vec<f64>, Vec<f64>)> {
                 let mut spec = opts.spec()?;
                 let case = loads.apply(&mut spec)?;
-                let run = run_static(&mesh, &source, &StaticOptions { spec, cases: vec![case] })?;
+                let run = run_static(
+                    &mesh,
+                    &source,
+                    &StaticOptions {
+                        spec,
+                        cases: vec![case],
+                    },
+                )?;
                 let report = vibrofem::app::report::static_report(&mesh, &source, &run)?;
                 let json = serde_json::to_string(&report).map_err(|e| vibrofem::Error::output("JSON", e))?;
                 let n = run.model.n_mesh_nodes;
@@ -408,7 +436,9 @@ impl PyModel {
         let n = vm.len();
         Ok((
             json,
-            numpy::ndarray::Array2::from_shape_vec((n, 6), u).expect("n × 6").into_pyarray(py),
+            numpy::ndarray::Array2::from_shape_vec((n, 6), u)
+                .expect("n × 6")
+                .into_pyarray(py),
             vm.into_pyarray(py),
         ))
     }

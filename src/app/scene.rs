@@ -827,7 +827,10 @@ impl Scene {
                         Some(n as usize)
                     }
                     (Some(e), _) => {
-                        return ctx.err(m.span(), format!("'engine' must be \"native\" or \"slepc\", got \"{e}\""));
+                        return ctx.err(
+                            m.span(),
+                            format!("'engine' must be \"native\" or \"slepc\", got \"{e}\""),
+                        );
                     }
                 };
                 Some((target, r.shift_hz, block as usize))

@@ -46,6 +46,9 @@ pub struct SlepcOptions {
     pub mpirun: Option<String>,
     /// Keep the work folder here (default: a temporary folder, removed after the run).
     pub workdir: Option<PathBuf>,
+    /// Read the results of a job run elsewhere (e.g. on a cluster) from this folder, written by
+    /// `vibrofem export` and completed by `slepc_modes.py`, instead of running one.
+    pub import: Option<PathBuf>,
 }
 
 impl Default for SlepcOptions {
@@ -55,6 +58,7 @@ impl Default for SlepcOptions {
             python: None,
             mpirun: None,
             workdir: None,
+            import: None,
         }
     }
 }
@@ -169,13 +173,24 @@ fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
     Ok(WorkDir { path, remove })
 }
 
-/// Write what the SLEPc script needs into `dir`: K, M (PETSc binary), `params.json` and the
-/// script itself. σ and the target follow the native solver's conventions.
-pub fn stage(sys: &System, params: &ModalParams, dir: &Path) -> Result<f64> {
+/// A fingerprint of K (size, entries, Σ|Kij|) that ties SLEPc results to the model they were
+/// computed for: importing them for other model options is refused.
+fn fingerprint(sys: &System) -> serde_json::Value {
+    let k = sys.k();
+    let sum: f64 = k.values.iter().map(|v| v.abs()).sum();
+    serde_json::json!({ "n": sys.n_free(), "nnz": k.pattern.nnz(), "abs_sum": sum })
+}
+
+/// Write the SLEPc job for `sys` into `dir` — `params.json` (what to compute, σ, the model's
+/// fingerprint) and the script `slepc_modes.py` — beside K and M in PETSc format (written here
+/// when `matrices`). σ and the target follow the native solver's conventions. Returns σ.
+pub fn write_job(sys: &System, params: &ModalParams, dir: &Path, matrices: bool) -> Result<f64> {
     let k = sys.k();
     let m = sys.m()?;
-    matrix::write_petsc(&dir.join("K.petsc"), k)?;
-    matrix::write_petsc(&dir.join("M.petsc"), m)?;
+    if matrices {
+        matrix::write_petsc(&dir.join("K.petsc"), k)?;
+        matrix::write_petsc(&dir.join("M.petsc"), m)?;
+    }
     let sigma = match (params.shift_hz, params.target) {
         (Some(f), _) => lambda_of_hz(f),
         (None, ModalTarget::Band(lo, _)) if lo > 0.0 => lambda_of_hz(lo) * (1.0 - 1e-9),
@@ -188,7 +203,7 @@ pub fn stage(sys: &System, params: &ModalParams, dir: &Path) -> Result<f64> {
         )));
     }
     let n = sys.n_free();
-    let p = match params.target {
+    let mut p = match params.target {
         ModalTarget::Modes(nm) => serde_json::json!({ "nev": nm.min(n), "sigma": sigma, "tol": 1e-12 }),
         ModalTarget::Band(lo, hi) => {
             if !(lo < hi) {
@@ -202,8 +217,13 @@ pub fn stage(sys: &System, params: &ModalParams, dir: &Path) -> Result<f64> {
             serde_json::json!({ "band": [l, h], "sigma": sigma, "tol": 1e-12 })
         }
     };
+    p["model"] = fingerprint(sys);
     let path = dir.join("params.json");
-    std::fs::write(&path, p.to_string()).map_err(|e| Error::io(&path, e))?;
+    std::fs::write(
+        &path,
+        serde_json::to_string_pretty(&p).map_err(|e| Error::output(path.display(), e))?,
+    )
+    .map_err(|e| Error::io(&path, e))?;
     let script = dir.join("slepc_modes.py");
     std::fs::write(&script, SCRIPT).map_err(|e| Error::io(&script, e))?;
     Ok(sigma)
@@ -224,27 +244,19 @@ struct SlepcOut {
     slepc: String,
 }
 
-/// Solve the modal problem of `sys` with SLEPc under MPI and verify it here.
-pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<ModalRun> {
-    let t_all = Instant::now();
-    if o.ranks == 0 {
-        return Err(Error::InvalidInput("--ranks must be at least 1".into()));
-    }
-    let versions = check_available(o)?;
-    let wd = workdir(o)?;
-    let dir = &wd.path;
-    let t = Instant::now();
-    let sigma = stage(sys, params, dir)?;
-    let t_export = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
+/// Run the job in `dir` under mpirun (Open MPI's flags only for Open MPI's launchers).
+fn run_mpi(o: &SlepcOptions, dir: &Path, versions: &str) -> Result<()> {
     let mpi = mpirun(o);
     let mut c = Command::new(&mpi);
-    if is_root() {
+    let open_mpi = matches!(
+        Path::new(&mpi).file_name().and_then(|f| f.to_str()),
+        Some("mpirun" | "mpiexec" | "orterun")
+    );
+    if open_mpi && is_root() {
         c.arg("--allow-run-as-root");
     }
     let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
-    if o.ranks > cores {
+    if open_mpi && o.ranks > cores {
         c.arg("--oversubscribe");
     }
     c.args(["-n", &o.ranks.to_string(), &python(o)])
@@ -258,19 +270,83 @@ pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<Mod
     let out = c
         .output()
         .map_err(|e| engine_err(format!("cannot run {mpi} ({e}); {INSTALL}")))?;
-    let t_slepc = t.elapsed().as_secs_f64();
     if !out.status.success() {
         let err = String::from_utf8_lossy(&out.stderr);
         let tail: Vec<&str> = err.lines().rev().take(12).collect();
         let tail: Vec<&str> = tail.into_iter().rev().collect();
         return Err(engine_err(format!(
-            "mpirun -n {} exited with {} (work folder {}):\n{}",
+            "{mpi} -n {} exited with {} (work folder {}):\n{}",
             o.ranks,
             out.status,
             dir.display(),
             tail.join("\n")
         )));
     }
+    Ok(())
+}
+
+/// The shift of the job in `dir`, after checking that it was exported from this very model
+/// (same K: size, entries and Σ|Kij| to rounding).
+fn check_import(sys: &System, dir: &Path) -> Result<f64> {
+    let path = dir.join("params.json");
+    let p: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?)
+        .map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
+    let want = fingerprint(sys);
+    let have = &p["model"];
+    let same = have["n"] == want["n"]
+        && have["nnz"] == want["nnz"]
+        && match (have["abs_sum"].as_f64(), want["abs_sum"].as_f64()) {
+            (Some(a), Some(b)) => (a - b).abs() <= 1e-12 * b.abs(),
+            _ => false,
+        };
+    if !same {
+        return Err(Error::InvalidInput(format!(
+            "{}: these results were computed for another model (exported: {} DOFs, {} entries; this model: {} DOFs, {} entries, or other values): give the mesh and model options of the export",
+            dir.display(),
+            have["n"],
+            have["nnz"],
+            want["n"],
+            want["nnz"]
+        )));
+    }
+    p["sigma"]
+        .as_f64()
+        .ok_or_else(|| Error::InvalidInput(format!("{}: no 'sigma'", path.display())))
+}
+
+/// Solve the modal problem of `sys` with SLEPc under MPI and verify it here.
+pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<ModalRun> {
+    let t_all = Instant::now();
+    if o.ranks == 0 {
+        return Err(Error::InvalidInput("--ranks must be at least 1".into()));
+    }
+    // Either run the job here under mpirun, or import the results of one run elsewhere (a
+    // cluster) from the folder `vibrofem export` wrote.
+    let (wd, sigma, t_export, t_slepc) = match &o.import {
+        Some(dir) => {
+            let sigma = check_import(sys, dir)?;
+            (
+                WorkDir {
+                    path: dir.clone(),
+                    remove: false,
+                },
+                sigma,
+                0.0,
+                0.0,
+            )
+        }
+        None => {
+            let versions = check_available(o)?;
+            let wd = workdir(o)?;
+            let t = Instant::now();
+            let sigma = write_job(sys, params, &wd.path, true)?;
+            let t_export = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            run_mpi(o, &wd.path, &versions)?;
+            (wd, sigma, t_export, t.elapsed().as_secs_f64())
+        }
+    };
+    let dir = &wd.path;
     let info_path = dir.join("slepc.json");
     let info: SlepcOut =
         serde_json::from_str(&std::fs::read_to_string(&info_path).map_err(|e| Error::io(&info_path, e))?)

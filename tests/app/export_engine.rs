@@ -33,12 +33,20 @@ fn tmp(name: &str) -> std::path::PathBuf {
 fn read_mtx(path: &std::path::Path) -> (usize, std::collections::BTreeMap<(usize, usize), f64>) {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('%'));
-    let head: Vec<usize> = lines.next().unwrap().split_whitespace().map(|x| x.parse().unwrap()).collect();
+    let head: Vec<usize> = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|x| x.parse().unwrap())
+        .collect();
     let mut m = std::collections::BTreeMap::new();
     for l in lines {
         let f: Vec<&str> = l.split_whitespace().collect();
         let (i, j): (usize, usize) = (f[0].parse().unwrap(), f[1].parse().unwrap());
-        assert!(i >= j, "upper-triangle entry ({i}, {j}) in a symmetric Matrix Market file");
+        assert!(
+            i >= j,
+            "upper-triangle entry ({i}, {j}) in a symmetric Matrix Market file"
+        );
         m.insert((i - 1, j - 1), f[2].parse::<f64>().unwrap());
     }
     assert_eq!(m.len(), head[2], "entry count of the header");
@@ -95,7 +103,10 @@ fn export_writes_matrices_that_read_back_exactly() {
     let row = csv.lines().nth(5).unwrap();
     let (a, c) = sys.dofs().node_comp_of(4);
     let f: Vec<&str> = row.split(',').collect();
-    assert_eq!((f[0], f[1], f[3]), ("4", a.to_string().as_str(), vibrofem::dof::COMPONENT_NAMES[c]));
+    assert_eq!(
+        (f[0], f[1], f[3]),
+        ("4", a.to_string().as_str(), vibrofem::dof::COMPONENT_NAMES[c])
+    );
     let json = std::fs::read_to_string(dir.join("model.json")).unwrap();
     assert!(json.contains(&format!("\"dofs\": {}", sys.n_free())), "{json}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -118,7 +129,10 @@ fn a_missing_slepc_or_mpi_is_exit_5_naming_the_packages() {
         .args(["modes", PLATE, "--engine", "slepc", "--ranks", "2"])
         .env("VIBROFEM_SLEPC_PYTHON", "/nonexistent/python3"));
     assert_eq!(code, 5, "{err}");
-    assert!(err.contains("SLEPc engine") && err.contains("python3-slepc4py") && err.contains("openmpi-bin"), "{err}");
+    assert!(
+        err.contains("SLEPc engine") && err.contains("python3-slepc4py") && err.contains("openmpi-bin"),
+        "{err}"
+    );
     // With Python found (or not), a missing mpirun is named too, before any work is staged.
     let (code, _, err) = run(bin()
         .args(["modes", PLATE, "--engine", "slepc"])
@@ -153,5 +167,35 @@ fn engine_options_are_checked() {
         assert_eq!(code, 1, "{body}: {err}");
         assert!(err.contains(want) && err.contains("s.toml"), "{body}: {err}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn slepc_results_are_imported_only_for_the_exported_model() {
+    let dir = tmp("import");
+    let (code, _, err) = run(bin()
+        .args(["export", PLATE, "--format", "petsc", "--modes", "8", "-o"])
+        .arg(&dir));
+    assert_eq!(code, 0, "{err}");
+    let params = std::fs::read_to_string(dir.join("params.json")).unwrap();
+    assert!(
+        params.contains("\"nev\": 8") && params.contains("\"sigma\""),
+        "{params}"
+    );
+    assert!(
+        std::fs::read_to_string(dir.join("slepc_modes.py"))
+            .unwrap()
+            .contains("Krylov")
+    );
+    // Other model options (a fixed face) make another K: refused before reading any result.
+    let (code, _, err) = run(bin()
+        .args(["modes", PLATE, "--fix", "xmin", "--slepc-import"])
+        .arg(&dir));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("computed for another model"), "{err}");
+    // The same model without results yet: the missing file is named.
+    let (code, _, err) = run(bin().args(["modes", PLATE, "--slepc-import"]).arg(&dir));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("slepc.json"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
