@@ -447,6 +447,8 @@ fn design_cmd(a: &DesignArgs) -> Result<i32> {
     std::fs::write(a.out.join("report.json"), &json).map_err(|e| Error::io(a.out.join("report.json"), e))?;
     std::fs::write(a.out.join("report.md"), vibrofem::app::design::report_markdown(&r))
         .map_err(|e| Error::io(a.out.join("report.md"), e))?;
+    let html = a.out.join("report.html");
+    std::fs::write(&html, vibrofem::app::design::report_html(&r, &a.out)).map_err(|e| Error::io(&html, e))?;
     if a.json {
         outln!("{json}");
     } else {

@@ -339,6 +339,9 @@ impl Design {
 /// One line of the verdict table.
 #[derive(Clone, Debug, Serialize)]
 pub struct Quantity {
+    /// Stable key in `report.json` (`c12`, `k_leaf`, `x1`, …; README, *Design report*).
+    #[serde(skip)]
+    pub id: String,
     /// What.
     pub name: String,
     /// Unit.
@@ -354,6 +357,9 @@ pub struct Quantity {
 /// A design check.
 #[derive(Clone, Debug, Serialize)]
 pub struct Check {
+    /// Stable key in `report.json`.
+    #[serde(skip)]
+    pub id: String,
     /// What is checked.
     pub name: String,
     /// Value.
@@ -366,15 +372,38 @@ pub struct Check {
     pub ok: bool,
 }
 
+fn by_id<T: Serialize, S: serde::Serializer>(
+    items: &[T],
+    id: impl Fn(&T) -> &str,
+    ser: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut m = ser.serialize_map(Some(items.len()))?;
+    for x in items {
+        m.serialize_entry(id(x), x)?;
+    }
+    m.end()
+}
+
+fn by_id_quantities<S: serde::Serializer>(q: &[Quantity], ser: S) -> std::result::Result<S::Ok, S::Error> {
+    by_id(q, |x| x.id.as_str(), ser)
+}
+
+fn by_id_checks<S: serde::Serializer>(c: &[Check], ser: S) -> std::result::Result<S::Ok, S::Error> {
+    by_id(c, |x| x.id.as_str(), ser)
+}
+
 /// Everything the chain computed.
 #[derive(Clone, Debug, Serialize)]
 pub struct DesignReport {
     /// The design's name.
     pub name: String,
-    /// Quantities with published values.
-    pub quantities: Vec<Quantity>,
-    /// Checks.
+    /// Checks, in the order they are reported (in JSON: an object keyed by each check's id).
+    #[serde(serialize_with = "by_id_checks")]
     pub checks: Vec<Check>,
+    /// Quantities with published values (in JSON: an object keyed by each quantity's id).
+    #[serde(serialize_with = "by_id_quantities")]
+    pub quantities: Vec<Quantity>,
     /// Work-table elastic frequencies (first six), Hz.
     pub table_frequencies_hz: Vec<f64>,
     /// Leaf thicknesses tried while tuning (m) and the detuning each gave.
@@ -606,13 +635,14 @@ pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::Mo
     Ok((run.report.mass_kg, el, run, mesh))
 }
 
-fn check(name: &str, value: f64, limit: f64, upper: bool) -> Check {
+fn check(id: &str, name: &str, value: f64, limit: f64, upper: bool) -> Check {
     let margin = if upper {
         (limit - value) / limit
     } else {
         (value - limit) / limit
     };
     Check {
+        id: id.into(),
         name: name.into(),
         value,
         limit,
@@ -621,8 +651,9 @@ fn check(name: &str, value: f64, limit: f64, upper: bool) -> Check {
     }
 }
 
-fn q(name: &str, unit: &str, value: f64, published: Option<f64>, note: &str) -> Quantity {
+fn q(id: &str, name: &str, unit: &str, value: f64, published: Option<f64>, note: &str) -> Quantity {
     Quantity {
+        id: id.into(),
         name: name.into(),
         unit: unit.into(),
         value,
@@ -737,6 +768,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
 
     let mut quantities = vec![
         q(
+            "table_mass",
             "work-table mass (FE shells)",
             "kg",
             m_table,
@@ -744,16 +776,25 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "S7 reconstruction: no edge thinning, so heavier",
         ),
         q(
+            "table_f1",
             "work-table first elastic frequency",
             "Hz",
             f_table.first().copied().unwrap_or(f64::NAN),
             Some(300.82),
             "S7",
         ),
-        q("active mass m1", "kg", m1, Some(206.7), "FE table + other active parts"),
-        q("reactive mass m2", "kg", m2, Some(161.8), "given"),
-        q("reduced mass m_red", "kg", m_red, Some(90.75), "eq. (5)"),
         q(
+            "m1",
+            "active mass m1",
+            "kg",
+            m1,
+            Some(206.7),
+            "FE table + other active parts",
+        ),
+        q("m2", "reactive mass m2", "kg", m2, Some(161.8), "given"),
+        q("m_red", "reduced mass m_red", "kg", m_red, Some(90.75), "eq. (5)"),
+        q(
+            "k_leaf_given",
             "FE leaf stiffness, h as given",
             "N/m",
             k_leaf_given,
@@ -761,58 +802,93 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "S3: 1000 N / 1.937e-4 m",
         ),
         q(
+            "leaf_thickness",
             "leaf thickness used",
             "mm",
             h * 1e3,
             Some(9.0),
             if d.tune == "leaf" { "tuned for z by FE" } else { "given" },
         ),
-        q("FE leaf stiffness, used", "N/m", k_leaf, None, ""),
+        q("k_leaf", "FE leaf stiffness, used", "N/m", k_leaf, None, ""),
         q(
+            "c12",
             "c12 = n · k_leaf · k_c",
             "N/m",
             c12,
             Some(3.808e7),
             "paper: from z = 0.97 (eq. 5)",
         ),
-        q("detuning z = Ω/ω0", "-", z, Some(0.97), ""),
+        q("z", "detuning z = Ω/ω0", "-", z, Some(0.97), ""),
         q(
+            "k_coil",
             "FE coil stiffness (beam helix)",
             "N/m",
             k_coil,
             Some(60266.0),
             "S5: formula at i = 6.3; FE 9.96 mm → 60 240",
         ),
-        q("c13 = n · k_coil", "N/m", c13, Some(8.0 * 60266.0), ""),
+        q("c13", "c13 = n · k_coil", "N/m", c13, Some(8.0 * 60266.0), ""),
         q(
+            "f_n1",
             "natural frequency 1 (isolation)",
             "Hz",
             w1,
             Some(5.0),
             "paper: 5 Hz design",
         ),
-        q("natural frequency 2 (resonant)", "Hz", w2, Some(103.09), "ω0 = Ω/z"),
         q(
+            "f_n2",
+            "natural frequency 2 (resonant)",
+            "Hz",
+            w2,
+            Some(103.09),
+            "ω0 = Ω/z",
+        ),
+        q(
+            "drive_force",
             "drive force amplitude F = 4/(3π)·n·P_em",
             "N",
             force,
             Some(1256.0),
             "eq. (11)",
         ),
-        q("constant pull", "N", drive.constant(), Some(1884.0), "eq. (9)"),
-        q("static offset P_const/c12", "mm", offset * 1e3, Some(0.05), ""),
         q(
+            "constant_pull",
+            "constant pull",
+            "N",
+            drive.constant(),
+            Some(1884.0),
+            "eq. (9)",
+        ),
+        q(
+            "static_offset",
+            "static offset P_const/c12",
+            "mm",
+            offset * 1e3,
+            Some(0.05),
+            "",
+        ),
+        q(
+            "x1",
             "work-table amplitude X1",
             "mm",
             x1 * 1e3,
             Some(0.2),
             "steady state at the excitation",
         ),
-        q("reactive amplitude X2", "mm", ss.amp2() * 1e3, None, ""),
-        q("work-table acceleration", "g", x1 * omega * omega / 9.81, Some(8.0), ""),
-        q("dynamic factor γ1", "-", gamma1, Some(13.0), "eq. (7)"),
-        q("dynamic factor γ2", "-", gamma2, Some(13.0), "eq. (7)"),
+        q("x2", "reactive amplitude X2", "mm", ss.amp2() * 1e3, None, ""),
         q(
+            "table_acceleration",
+            "work-table acceleration",
+            "g",
+            x1 * omega * omega / 9.81,
+            Some(8.0),
+            "",
+        ),
+        q("gamma1", "dynamic factor γ1", "-", gamma1, Some(13.0), "eq. (7)"),
+        q("gamma2", "dynamic factor γ2", "-", gamma2, Some(13.0), "eq. (7)"),
+        q(
+            "relative_amplitude",
             "relative amplitude |X1 − X2|",
             "mm",
             rel * 1e3,
@@ -820,6 +896,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "A0 = A(1 + m1/m2)",
         ),
         q(
+            "leaf_von_mises",
             "leaf von Mises at the working amplitude (FE)",
             "MPa",
             sigma_leaf / 1e6,
@@ -827,6 +904,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "S3 FE; hand 91 MPa",
         ),
         q(
+            "magnet_pull",
             "pull per magnet for the target amplitude",
             "N",
             p_req,
@@ -834,6 +912,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "eq. (15)",
         ),
         q(
+            "drive_power",
             "drive power, eq. (6)",
             "W",
             power,
@@ -843,8 +922,16 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
                 d.drive.power_overload_g, d.drive.power_load_share, d.drive.efficiency
             ),
         ),
-        q("transient: steady X1", "mm", trs.amplitude1 * 1e3, Some(0.2), "Fig. 22"),
         q(
+            "transient_x1",
+            "transient: steady X1",
+            "mm",
+            trs.amplitude1 * 1e3,
+            Some(0.2),
+            "Fig. 22",
+        ),
+        q(
+            "transient_offset",
             "transient: static offset of x1 − x2",
             "mm",
             trs.relative_mean * 1e3,
@@ -852,14 +939,16 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "Fig. 22",
         ),
         q(
+            "transient_settling_time",
             "transient: settling time of x1 (2 %)",
             "s",
             trs.settling_time1.unwrap_or(f64::NAN),
             None,
             "",
         ),
-        q("isolation frequency", "Hz", f_iso, Some(5.0), ""),
+        q("f_isolation", "isolation frequency", "Hz", f_iso, Some(5.0), ""),
         q(
+            "transmissibility",
             "transmissibility at the excitation",
             "-",
             trans,
@@ -867,6 +956,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "1/(r² − 1)",
         ),
         q(
+            "coil_shear_stress",
             "coil shear stress at static load (Wahl)",
             "MPa",
             tau / 1e6,
@@ -879,6 +969,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
         let m2_need = crate::app::dynamics::tuning::reactive_mass_for_detuning(m1, c12, omega, d.target_detuning);
         match m2_need {
             Ok(v) => quantities.push(q(
+                "m2_for_target_z",
                 "reactive mass for the target z",
                 "kg",
                 v,
@@ -913,36 +1004,42 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     let f1 = f_table.first().copied().unwrap_or(0.0);
     let checks = vec![
         check(
+            "table_f1_vs_excitation",
             "work-table first elastic mode ≥ 3 × excitation [Hz]",
             f1,
             3.0 * d.excitation_hz,
             false,
         ),
         check(
+            "isolation",
             "isolation frequency ≤ excitation / 5 [Hz]",
             f_iso,
             d.excitation_hz / 5.0,
             true,
         ),
         check(
+            "leaf_stress",
             "leaf stress at working amplitude ≤ allowable [MPa]",
             sigma_leaf / 1e6,
             d.leaf.allowable / 1e6,
             true,
         ),
         check(
+            "coil_stress",
             "coil shear stress under static load ≤ allowable [MPa]",
             tau / 1e6,
             d.coil.allowable_shear / 1e6,
             true,
         ),
         check(
+            "table_amplitude",
             "work-table amplitude reaches the target [mm]",
             x1 * 1e3,
             d.target_amplitude * 1e3,
             false,
         ),
         check(
+            "drive_power",
             "drive power within installed power [W]",
             power,
             d.drive.installed_power,
@@ -1041,37 +1138,43 @@ pub fn verdict_text(r: &DesignReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "design: {}\n", r.name);
+    let failed = r.checks.iter().filter(|c| !c.ok).count();
     let _ = writeln!(
         s,
-        "{:<48} {:>14} {:>12} {:>9}  {:<6} note",
-        "quantity", "vibrofem", "published", "diff", "unit"
+        "checks: {}",
+        if failed == 0 {
+            "all passed".to_string()
+        } else {
+            format!("{failed} of {} FAILED", r.checks.len())
+        }
     );
-    for x in &r.quantities {
-        let (p, dif) = match x.published {
-            Some(p) => (format!("{p:.6}"), format!("{:+.1} %", (x.value / p - 1.0) * 100.0)),
-            None => ("-".into(), "".into()),
-        };
-        let _ = writeln!(
-            s,
-            "{:<48} {:>14.6} {:>12} {:>9}  {:<6} {}",
-            x.name,
-            x.value,
-            trim(&p),
-            dif,
-            x.unit,
-            x.note
-        );
-    }
-    let _ = writeln!(s, "\nchecks");
     for c in &r.checks {
         let _ = writeln!(
             s,
-            "  [{}] {:<56} {:>10.4} vs {:>10.4}  margin {:+.1} %",
+            "  [{}] {:<56} {:>10} vs {:>10}  margin {:+.1} %",
             if c.ok { " ok " } else { "FAIL" },
             c.name,
-            c.value,
-            c.limit,
+            sig(c.value),
+            sig(c.limit),
             c.margin * 100.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n{:<48} {:>11} {:>11} {:>9}  {:<6} note",
+        "quantity", "vibrofem", "published", "diff", "unit"
+    );
+    for x in &r.quantities {
+        let (p, dif) = published(x);
+        let _ = writeln!(
+            s,
+            "{:<48} {:>11} {:>11} {:>9}  {:<6} {}",
+            x.name,
+            sig(x.value),
+            p,
+            dif,
+            x.unit,
+            x.note
         );
     }
     for n in &r.notes {
@@ -1090,52 +1193,174 @@ pub fn verdict_text(r: &DesignReport) -> String {
     s
 }
 
-fn trim(s: &str) -> String {
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s.to_string()
+/// A reported number: four significant digits, plain or with an exponent (184.2, 4.990e6).
+fn sig(x: f64) -> String {
+    crate::io::fmt_sig(x, 4)
+}
+
+/// The published value (as the paper gives it) and the difference, or dashes.
+fn published(x: &Quantity) -> (String, String) {
+    match x.published {
+        // As the paper gives it: its own digits, with an exponent for large or small values.
+        Some(p) => (
+            if p != 0.0 && !(1e-3..1e5).contains(&p.abs()) {
+                format!("{p:e}")
+            } else {
+                format!("{p}")
+            },
+            format!("{:+.1} %", (x.value / p - 1.0) * 100.0),
+        ),
+        None => ("–".into(), String::new()),
     }
 }
+
+fn html_escape(t: &str) -> String {
+    t.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// A self-contained HTML report (`report.html`): the checks first, the quantities, notes and
+/// the plots inlined from `dir` (SVG files the chain wrote there), readable without the folder.
+pub fn report_html(r: &DesignReport, dir: &std::path::Path) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Design report: {}</title>\n<style>\
+         body{{font-family:sans-serif;max-width:72em;margin:2em auto;padding:0 1em}}\
+         table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:.25em .6em}}\
+         td.n{{text-align:right;font-variant-numeric:tabular-nums}}.ok{{color:#070}}.fail{{color:#b00;font-weight:bold}}\
+         figure{{margin:1.5em 0}}</style></head><body>\n<h1>Design report: {}</h1>\n",
+        html_escape(&r.name),
+        html_escape(&r.name)
+    );
+    let failed = r.checks.iter().filter(|c| !c.ok).count();
+    let _ = writeln!(
+        s,
+        "<h2>Checks: {}</h2>\n<table><tr><th>check</th><th>value</th><th>limit</th><th>margin</th><th>verdict</th></tr>",
+        if failed == 0 {
+            "all passed".to_string()
+        } else {
+            format!("{failed} of {} failed", r.checks.len())
+        }
+    );
+    for c in &r.checks {
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{:+.1} %</td><td class={}>{}</td></tr>",
+            html_escape(&c.name),
+            sig(c.value),
+            sig(c.limit),
+            c.margin * 100.0,
+            if c.ok { "ok" } else { "fail" },
+            if c.ok { "ok" } else { "FAIL" }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "</table>\n<h2>Quantities</h2>\n<table><tr><th>id</th><th>quantity</th><th>vibrofem</th><th>published</th><th>difference</th><th>unit</th><th>note</th></tr>"
+    );
+    for x in &r.quantities {
+        let (p, d) = published(x);
+        let _ = writeln!(
+            s,
+            "<tr><td><code>{}</code></td><td>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td>{}</td><td>{}</td></tr>",
+            x.id,
+            html_escape(&x.name),
+            sig(x.value),
+            p,
+            d,
+            html_escape(&x.unit),
+            html_escape(&x.note)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "</table>\n<h2>Work-table elastic frequencies (shell model)</h2>\n<ul>"
+    );
+    for (i, f) in r.table_frequencies_hz.iter().enumerate() {
+        let _ = writeln!(s, "<li>mode {}: {} Hz</li>", i + 7, sig(*f));
+    }
+    let _ = writeln!(s, "</ul>");
+    if !r.notes.is_empty() {
+        let _ = writeln!(s, "<h2>Notes</h2>\n<ul>");
+        for n in &r.notes {
+            let _ = writeln!(s, "<li>{}</li>", html_escape(n));
+        }
+        let _ = writeln!(s, "</ul>");
+    }
+    let _ = writeln!(s, "<h2>Plots</h2>");
+    for (file, caption) in PLOTS {
+        // Inline the SVG (its XML prologue dropped) so the page stands alone.
+        if let Ok(svg) = std::fs::read_to_string(dir.join(file)) {
+            let body = svg.find("<svg").map_or(svg.as_str(), |i| &svg[i..]);
+            let _ = writeln!(s, "<figure>{body}<figcaption>{caption}</figcaption></figure>");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "<p>Mode shapes: <code>table_modes.vtu</code> (ParaView), <code>table_modes.msh</code> (gmsh), beside this file.</p>\n</body></html>"
+    );
+    s
+}
+
+/// The plots the chain writes, with their captions.
+const PLOTS: [(&str, &str); 4] = [
+    (
+        "amplitude_frequency.svg",
+        "Amplitude–frequency and phase curves with the operating point",
+    ),
+    ("transient.svg", "Start-up transient"),
+    ("electromagnet.svg", "Electromagnet force and its harmonics"),
+    ("table_mode7.svg", "Work-table mode 7"),
+];
 
 /// Markdown report.
 pub fn report_markdown(r: &DesignReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "# Design report: {}\n", r.name);
+    let failed = r.checks.iter().filter(|c| !c.ok).count();
     let _ = writeln!(
         s,
-        "| quantity | vibrofem | published | difference | unit | note |\n|---|---:|---:|---:|---|---|"
-    );
-    for x in &r.quantities {
-        let (p, d) = match x.published {
-            Some(p) => (format!("{p}"), format!("{:+.1} %", (x.value / p - 1.0) * 100.0)),
-            None => ("–".into(), "".into()),
-        };
-        let _ = writeln!(
-            s,
-            "| {} | {:.6} | {} | {} | {} | {} |",
-            x.name, x.value, p, d, x.unit, x.note
-        );
-    }
-    let _ = writeln!(
-        s,
-        "\n## Checks\n\n| check | value | limit | margin | verdict |\n|---|---:|---:|---:|---|"
+        "## Checks: {}\n\n| check | value | limit | margin | verdict |\n|---|---:|---:|---:|---|",
+        if failed == 0 {
+            "all passed".to_string()
+        } else {
+            format!("{failed} of {} failed", r.checks.len())
+        }
     );
     for c in &r.checks {
         let _ = writeln!(
             s,
-            "| {} | {:.4} | {:.4} | {:+.1} % | {} |",
+            "| {} | {} | {} | {:+.1} % | {} |",
             c.name,
-            c.value,
-            c.limit,
+            sig(c.value),
+            sig(c.limit),
             c.margin * 100.0,
-            if c.ok { "ok" } else { "FAIL" }
+            if c.ok { "ok" } else { "**FAIL**" }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Quantities\n\n| id | quantity | vibrofem | published | difference | unit | note |\n|---|---|---:|---:|---:|---|---|"
+    );
+    for x in &r.quantities {
+        let (p, d) = published(x);
+        let _ = writeln!(
+            s,
+            "| `{}` | {} | {} | {} | {} | {} | {} |",
+            x.id,
+            x.name,
+            sig(x.value),
+            p,
+            d,
+            x.unit,
+            x.note
         );
     }
     let _ = writeln!(s, "\n## Work-table elastic frequencies (shell model)\n");
     for (i, f) in r.table_frequencies_hz.iter().enumerate() {
-        let _ = writeln!(s, "- mode {}: {f:.2} Hz", i + 7);
+        let _ = writeln!(s, "- mode {}: {} Hz", i + 7, sig(*f));
     }
     if !r.notes.is_empty() {
         let _ = writeln!(s, "\n## Notes\n");

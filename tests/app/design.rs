@@ -43,6 +43,46 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
     }
     assert_eq!(r.checks.len(), 6);
     assert!(r.table_frequencies_hz.len() == 6 && r.table_frequencies_hz[0] > 50.0);
+    report_formats(&r, &dir);
+}
+
+/// The report as an engineer reads it (issue 13, item 4): every quantity and check under a
+/// stable id in JSON, numbers with four significant digits and the checks first in the text,
+/// Markdown and a self-contained HTML page.
+fn report_formats(r: &vibrofem::app::design::DesignReport, dir: &std::path::Path) {
+    use vibrofem::app::design::{report_html, report_markdown, verdict_text};
+    let json: serde_json::Value = serde_json::to_value(r).unwrap();
+    let c12 = &json["quantities"]["c12"];
+    let want = value(r, "c12");
+    assert_eq!(c12["value"].as_f64(), Some(want), "{c12}");
+    assert_eq!(c12["unit"], "N/m");
+    assert_eq!(c12["published"].as_f64(), Some(3.808e7));
+    assert_eq!(
+        json["quantities"].as_object().unwrap().len(),
+        r.quantities.len(),
+        "ids are unique"
+    );
+    assert_eq!(
+        json["checks"].as_object().unwrap().len(),
+        r.checks.len(),
+        "check ids are unique"
+    );
+    assert!(json["checks"]["table_f1_vs_excitation"]["ok"].is_boolean());
+    // Four significant digits: the active mass m1 as e.g. "206.7", c12 with an exponent.
+    let m1 = value(r, "active mass m1");
+    let text = verdict_text(r);
+    assert!(text.contains(&vibrofem::io::fmt_sig(m1, 4)), "{text}");
+    assert!(!text.contains(&format!("{m1:.6}")), "six decimals in: {text}");
+    assert!(text.contains(&vibrofem::io::fmt_sig(want, 4)) && vibrofem::io::fmt_sig(want, 4).contains('e'));
+    for page in [text.clone(), report_markdown(r)] {
+        let checks = page.find("checks").or_else(|| page.find("Checks")).unwrap();
+        assert!(checks < page.find("c12").unwrap(), "checks come first");
+    }
+    let html = report_html(r, dir);
+    assert!(html.starts_with("<!DOCTYPE html>") && html.contains("<code>c12</code>"));
+    // The four plots are inlined (no file references), so the page stands alone.
+    assert_eq!(html.matches("<svg").count(), 4, "inline plots");
+    assert!(!html.contains("src=\""));
 }
 
 #[test]
