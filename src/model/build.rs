@@ -667,10 +667,43 @@ pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
             }
         }
     }
+    notes.extend(curved_cells_note(solids));
     if orphan_nodes > 0 {
         notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
     }
     notes
+}
+
+/// The note on curved quadratic cells ([`solid::integration`]): how many of each kind were
+/// curved and which rules integrate them and the straight ones; `None` when no cell is curved.
+fn curved_cells_note(solids: &[SolidSet]) -> Option<String> {
+    use crate::element::solid::{self, Integration};
+    let mut parts = Vec::new();
+    let mut x = [[0.0; 3]; 27];
+    for set in solids {
+        let nn = set.kind.n_nodes();
+        let curved = (0..set.tags.len())
+            .filter(|&e| {
+                set.coords(e, &mut x[..nn]);
+                solid::integration(set.kind, &x[..nn]) == Integration::Curved
+            })
+            .count();
+        if curved > 0 {
+            parts.push(format!(
+                "{curved} of {} {} (stiffness {} rule, straight cells {})",
+                set.tags.len(),
+                set.kind,
+                solid::stiffness_rule_name(set.kind, Integration::Curved),
+                solid::stiffness_rule_name(set.kind, Integration::Straight),
+            ));
+        }
+    }
+    (!parts.is_empty()).then(|| {
+        format!(
+            "curved quadratic cells (mid-side nodes off the straight edges) integrated with higher-order rules: {}",
+            parts.join("; ")
+        )
+    })
 }
 
 #[cfg(test)]
