@@ -70,6 +70,7 @@ struct RawMesh {
     file: Option<String>,
     generator: Option<String>,
     length_unit: Option<String>,
+    hex8: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -432,6 +433,15 @@ impl Scene {
                 (src, scale)
             }
         };
+        let hex8 = match raw
+            .mesh
+            .as_ref()
+            .and_then(|m| m.get_ref().hex8.as_ref().map(|h| (m, h)))
+        {
+            None => Default::default(),
+            Some((m, h)) => crate::element::incompatible::Hex8Formulation::parse(h)
+                .map_err(|e| ctx.error(ctx.line(m.span().start), format!("[mesh] 'hex8': {e}")))?,
+        };
 
         // Materials.
         let mut materials: Vec<(String, Material)> = Vec::new();
@@ -477,6 +487,7 @@ impl Scene {
         };
 
         let mut spec = ModelSpec::default();
+        spec.hex8 = hex8;
         let mut groups = Vec::new();
         let mut parts = Vec::new();
         let mut solid_groups = Vec::new();

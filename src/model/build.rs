@@ -151,6 +151,7 @@ pub(crate) fn solid_parts(
             mat: keep.iter().map(|&i| matb[i]).collect(),
             materials: materials.to_vec(),
             lumping: spec.lumping,
+            hex8: spec.hex8,
             nodes: nodes.clone(),
         });
     }
@@ -659,9 +660,14 @@ pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
                 .map(|&i| set.materials[i as usize])
                 .find(|m| m.poisson > 0.49)
             {
+                let hint = if set.kind == CellKind::Hex8 && !set.incompatible() {
+                    ", or --hex8 incompatible (incompatible modes: far less locking in volume and in bending)"
+                } else {
+                    ""
+                };
                 notes.push(format!(
                     "material ν = {} is nearly incompressible: linear {} elements lock (frequencies and \
-                     stiffness too high); use tet10 or hex20",
+                     stiffness too high); use tet10 or hex20{hint}",
                     m.poisson, set.kind
                 ));
             }

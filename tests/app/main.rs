@@ -10,5 +10,6 @@ mod cli_15;
 mod design;
 mod dynamics;
 mod machines;
+mod numerics_15;
 mod scenes;
 mod sweep;
