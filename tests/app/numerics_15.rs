@@ -57,9 +57,10 @@ fn curved_tet10_cells_are_reported_in_text_and_json() {
     assert!(notes.contains("curved quadratic cells"), "{notes}");
     assert!(notes.contains("72 of 72 tet10"), "{notes}");
     assert!(notes.contains("24-point degree 6"), "{notes}");
-    let (code, out, _) = run(&["modes", curved.to_str().unwrap(), "--modes", "7"]);
+    // Text mode: notes are printed on stderr, after the table.
+    let (code, _, err) = run(&["modes", curved.to_str().unwrap(), "--modes", "7"]);
     assert_eq!(code, 0);
-    assert!(out.contains("curved quadratic cells"), "{out}");
+    assert!(err.contains("note: curved quadratic cells"), "{err}");
     // The same topology straight: no note.
     let straight = ring_msh(false);
     let (code, out, err) = run(&["modes", straight.to_str().unwrap(), "--modes", "7", "--json"]);
