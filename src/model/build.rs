@@ -29,11 +29,12 @@ impl Model {
         let mesh_nodes: Nodes = Arc::new(mesh.nodes.clone());
         let mut solids = solid_parts(mesh, spec, &materials, &group_materials, &mesh_nodes)?;
         let mut shells = shell_parts(mesh, spec, &mesh_nodes)?;
+        let orientation_notes = super::orient::orient_shells(&mut shells)?;
         let mut beams = beam_parts(mesh, spec, &mesh_nodes)?;
         if solids.is_empty() && shells.is_empty() && beams.is_empty() {
             return Err(no_elements(mesh, source));
         }
-        let mut notes = Vec::new();
+        let mut notes = orientation_notes;
         let (references, coupled) = reference_nodes(mesh, spec)?;
         let mut all_nodes = mesh.nodes.clone();
         all_nodes.extend(references.iter().map(|r| r.position));
