@@ -648,3 +648,47 @@ fn a_one_sided_shell_with_an_offset_is_refused_and_without_one_runs() {
     let model = vibrofem::model::Model::build(&mesh, &spec(0.0), "moebius").unwrap();
     assert!(model.notes.iter().all(|n| !n.contains("reversed")));
 }
+
+// ---------------------------------------------------------------------------------------------
+// Notes: flat linear cells
+
+fn model_notes(src: &str, hex8: Hex8Formulation) -> Vec<String> {
+    let mesh = vibrofem::input::source::load(src, 1.0).unwrap();
+    let spec = ModelSpec {
+        hex8,
+        ..Default::default()
+    };
+    vibrofem::model::Model::build(&mesh, &spec, src).unwrap().notes
+}
+
+#[test]
+fn thin_plates_of_linear_solids_get_a_note() {
+    let flat = |n: &Vec<String>| n.iter().any(|s| s.contains("flat or slender"));
+    // 1 m × 1 m × 1 mm, 20 × 20 × 1 cells: every cell is 50 mm wide and 1 mm thick.
+    for kind in ["tet4", "hex8", "wedge6"] {
+        let n = model_notes(&format!("box:1,1,0.001:20,20,1:{kind}"), Hex8Formulation::Standard);
+        assert!(flat(&n), "{kind}: {n:?}");
+        // Well-shaped cells (and quadratic ones) get none.
+        assert!(
+            !flat(&model_notes(
+                &format!("box:1,1,1:4,4,4:{kind}"),
+                Hex8Formulation::Standard
+            )),
+            "{kind}"
+        );
+    }
+    let n = model_notes("box:1,1,0.001:20,20,1:hex8", Hex8Formulation::Standard);
+    assert!(
+        n.iter()
+            .any(|s| s.contains("400 of 400 hex8") && s.contains("--hex8 incompatible")),
+        "{n:?}"
+    );
+    assert!(!flat(&model_notes(
+        "box:1,1,0.001:20,20,1:tet10",
+        Hex8Formulation::Standard
+    )));
+    assert!(!flat(&model_notes(
+        "box:1,1,0.001:20,20,1:hex8",
+        Hex8Formulation::Incompatible
+    )));
+}
