@@ -54,6 +54,7 @@ impl Model {
         couplings(mesh, spec, &active, &references, &coupled, &fixed_by, &nodes, &mut cons)?;
         prescribed(mesh, spec, &active, &references, &mut cons)?;
         notes.extend(lints(&solids, orphan_nodes));
+        notes.extend(singular_supports(mesh, spec, &solids, &shells, &beams));
         let dofs = DofMap::with_constraints(active, cons)?;
         Ok(Model {
             solids,
@@ -678,6 +679,59 @@ pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
     notes.extend(solids.iter().filter_map(flat_linear_cells_note));
     if orphan_nodes > 0 {
         notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
+    }
+    notes
+}
+
+/// Step 7: a note per fixed group that is a line or a point of a solid (no shell or beam node in
+/// it): such a support is singular — its reaction concentrates on a line or point, the stress
+/// there is infinite in the continuum and grows with refinement, and displacements and
+/// frequencies depend on the mesh.
+fn singular_supports(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    solids: &[SolidSet],
+    shells: &[ShellSet],
+    beams: &[BeamSet],
+) -> Vec<String> {
+    use crate::element::ElementSet;
+    let n = mesh.n_nodes();
+    let (mut solid, mut structural) = (vec![false; n], vec![false; n]);
+    for s in solids {
+        s.conn
+            .iter()
+            .filter(|&&a| (a as usize) < n)
+            .for_each(|&a| solid[a as usize] = true);
+    }
+    let sets = shells
+        .iter()
+        .map(|s| s as &dyn ElementSet)
+        .chain(beams.iter().map(|s| s as &dyn ElementSet));
+    for s in sets {
+        for e in 0..s.len() {
+            s.nodes(e)
+                .iter()
+                .filter(|&&a| (a as usize) < n)
+                .for_each(|&a| structural[a as usize] = true);
+        }
+    }
+    let mut notes = Vec::new();
+    for (g, _) in &spec.fixes {
+        let Ok(grp) = mesh.group(g) else { continue };
+        if grp.dim > 1 {
+            continue;
+        }
+        let gn = mesh.group_nodes(grp);
+        if gn.iter().any(|&a| structural[a as usize]) || !gn.iter().any(|&a| solid[a as usize]) {
+            continue;
+        }
+        let what = if grp.dim == 0 { "a point" } else { "a line" };
+        notes.push(format!(
+            "support '{g}' is {what} of a solid: a line or point support is singular (the stress there \
+             grows without bound with refinement, and displacements and frequencies depend on the \
+             mesh); support a face, or for a hinge couple a strip of faces (--couple) and hold its \
+             reference node (--displace GROUP=0,0,0)"
+        ));
     }
     notes
 }

@@ -692,3 +692,64 @@ fn thin_plates_of_linear_solids_get_a_note() {
         Hex8Formulation::Incompatible
     )));
 }
+
+// ---------------------------------------------------------------------------------------------
+// Notes: singular supports
+
+/// Adds a line group `name` of line2 cells through the nodes selected by `on`, ordered by
+/// their coordinate `axis`.
+fn add_line_group(mesh: &mut Mesh, name: &str, on: impl Fn([f64; 3]) -> bool, axis: usize) {
+    let mut ids: Vec<u32> = (0..mesh.nodes.len() as u32)
+        .filter(|&a| on(mesh.nodes[a as usize]))
+        .collect();
+    ids.sort_by(|&a, &b| mesh.nodes[a as usize][axis].total_cmp(&mesh.nodes[b as usize][axis]));
+    let bi = mesh.block_index_mut(CellKind::Line2);
+    let start = mesh.blocks[bi].len() as u32;
+    for w in ids.windows(2) {
+        mesh.blocks[bi].push(w, 1000 + w[0] as u64);
+    }
+    let end = mesh.blocks[bi].len() as u32;
+    let tag = 100 + mesh.groups.len() as i32;
+    mesh.groups.push(Group {
+        name: name.into(),
+        dim: 1,
+        tag,
+        cells: (start..end)
+            .map(|index| CellRef {
+                block: bi as u32,
+                index,
+            })
+            .collect(),
+    });
+}
+
+#[test]
+fn a_line_support_on_a_solid_gets_a_note_and_a_shell_edge_does_not() {
+    let mut mesh = box_mesh(CellKind::Hex20, [1.0, 0.1, 0.1], [10, 1, 1]);
+    add_line_group(&mut mesh, "root_edge", |p| p[0] == 0.0 && p[2] == 0.0, 1);
+    let notes = |fix: &str, m: &Mesh, shells: Vec<ShellPart>| {
+        let spec = ModelSpec {
+            fixes: vec![(fix.into(), TRANSLATIONS)],
+            shells,
+            ..Default::default()
+        };
+        vibrofem::model::Model::build(m, &spec, "t").unwrap().notes
+    };
+    let n = notes("root_edge", &mesh, vec![]);
+    assert!(
+        n.iter().any(|s| s.contains("support 'root_edge' is a line of a solid")),
+        "{n:?}"
+    );
+    let n = notes("xmin", &mesh, vec![]);
+    assert!(!n.iter().any(|s| s.contains("support")), "{n:?}");
+    // A clamped shell edge is an ordinary support.
+    let mut p = plate(|_, _| false);
+    add_line_group(&mut p, "edge", |x| x[1] == 0.0, 0);
+    let sh = vec![ShellPart {
+        group: "plate".into(),
+        section: ShellSection::new(0.004),
+        material: None,
+    }];
+    let n = notes("edge", &p, sh);
+    assert!(!n.iter().any(|s| s.contains("support")), "{n:?}");
+}
