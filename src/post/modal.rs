@@ -359,40 +359,26 @@ pub fn rigid_analysis(
             count,
         });
     }
-    // Modes in the span of the free motions: F = R·(coefficients) per part.
-    let nf = basis.len();
+    // Modes in the span of the free motions. The motions f_j = R y_j of a part are M-orthonormal
+    // (yᵢᵀ G_M y_j = δᵢⱼ by construction) and parts do not share equations, so the M-norm² of
+    // φ's component in their span is Σ_j (f_jᵀ M φ)², with f_jᵀ M φ = y_jᵀ (Σ_{e in part} MR_e φ_e).
     let mut rigid = vec![false; phi.ncols()];
-    if nf > 0 {
-        let mut f = Mat::<f64>::zeros(n, nf);
-        for (j, (c, y)) in basis.iter().enumerate() {
+    if !basis.is_empty() {
+        let mut mphi = Mat::<f64>::zeros(n, phi.ncols());
+        m.mul_block(phi, mphi.as_mut());
+        for (k, flag) in rigid.iter_mut().enumerate() {
+            let mut p = vec![nalgebra::Vector6::<f64>::zeros(); nc];
             for e in 0..n {
-                if comp[e] == *c {
-                    f[(e, j)] = (0..6).map(|i| r[(e, i)] * y[i]).sum();
+                let v = phi[(e, k)];
+                if v != 0.0 {
+                    for i in 0..6 {
+                        p[comp[e]][i] += v * mr[(e, i)];
+                    }
                 }
             }
-        }
-        let mut mf = Mat::<f64>::zeros(n, nf);
-        m.mul_block(f.as_ref(), mf.as_mut());
-        let g = nalgebra::DMatrix::from_fn(nf, nf, |i, j| (0..n).map(|e| f[(e, i)] * mf[(e, j)]).sum::<f64>());
-        let g = (&g + g.transpose()) * 0.5;
-        let eg = g.clone().symmetric_eigen();
-        let gmax = eg.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
-        let mut ginv = nalgebra::DMatrix::zeros(nf, nf);
-        for i in 0..nf {
-            if eg.eigenvalues[i] > 1e-12 * gmax {
-                let v = eg.eigenvectors.column(i);
-                ginv += v * v.transpose() / eg.eigenvalues[i];
-            }
-        }
-        for (k, flag) in rigid.iter_mut().enumerate() {
-            let gam = nalgebra::DVector::from_fn(nf, |j, _| (0..n).map(|e| phi[(e, k)] * mf[(e, j)]).sum::<f64>());
-            let phin: f64 = {
-                let mut mp = Mat::<f64>::zeros(n, 1);
-                m.mul_block(phi.subcols(k, 1), mp.as_mut());
-                (0..n).map(|e| phi[(e, k)] * mp[(e, 0)]).sum()
-            };
-            let inside = (gam.transpose() * &ginv * &gam)[(0, 0)];
-            *flag = phin > 0.0 && 1.0 - inside / phin < 1e-8;
+            let inside: f64 = basis.iter().map(|(c, y)| p[*c].dot(y).powi(2)).sum();
+            let norm: f64 = (0..n).map(|e| phi[(e, k)] * mphi[(e, k)]).sum();
+            *flag = norm > 0.0 && 1.0 - inside / norm < 1e-8;
         }
     }
     RigidAnalysis {
