@@ -271,6 +271,19 @@ pub struct SceneReport {
     pub notes: Vec<String>,
     /// Wall time of the whole scene, s.
     pub time_s: f64,
+    /// Mode shapes of the modal analysis at the mesh nodes (3 per node, one per mode of
+    /// `modal`), for callers that compare shapes (`converge`); not serialised.
+    #[serde(skip)]
+    pub mode_shapes: Option<ModeShapes>,
+}
+
+/// Mode shapes at mesh nodes.
+#[derive(Clone, Debug, Default)]
+pub struct ModeShapes {
+    /// Node coordinates (m).
+    pub points: Vec<[f64; 3]>,
+    /// Per mode, 3 displacement components per node.
+    pub shapes: Vec<Vec<f64>>,
 }
 
 impl SceneReport {
@@ -979,6 +992,7 @@ impl Scene {
             },
             &source,
         )?;
+        let mut mode_shapes = None;
         let modal = match &self.modal {
             None => None,
             Some((target, shift_hz, block)) => {
@@ -1014,6 +1028,10 @@ impl Scene {
                     }
                 }
                 notes.extend(run.report.notes.iter().cloned());
+                mode_shapes = Some(ModeShapes {
+                    points: mesh.nodes.clone(),
+                    shapes: std::mem::take(&mut run.shapes),
+                });
                 Some(run.report)
             }
         };
@@ -1060,6 +1078,7 @@ impl Scene {
             outputs,
             notes,
             time_s: t0.elapsed().as_secs_f64(),
+            mode_shapes,
         })
     }
 }
