@@ -867,3 +867,43 @@ fn rigid_labels_do_not_depend_on_the_scale() {
         assert!(kinds[6..].iter().all(|k| *k == "elastic"), "size {size}: {kinds:?}");
     }
 }
+
+#[test]
+fn suspension_modes_on_soft_springs_are_elastic() {
+    // A 0.1 m steel cube of hex20 on a coupled base with springs to the ground: the six
+    // suspension modes are rigid-body shapes at 1.6–5 Hz, not zero-frequency modes, so they are
+    // "elastic" (before, shape alone labelled them rigid).
+    let src = "box:0.1,0.1,0.1:2,2,2:hex20";
+    let mesh = vibrofem::input::source::load(src, 1.0).unwrap();
+    let spec = ModelSpec {
+        couplings: vec![CouplingSpec {
+            group: "zmin".into(),
+            guided: None,
+            reference: None,
+        }],
+        springs: vec![vibrofem::model::SpringSpec {
+            a: "zmin".into(),
+            b: None,
+            k: [1e3, 1e3, 1e3, 10.0, 10.0, 10.0],
+        }],
+        ..Default::default()
+    };
+    let rep = run_modal(
+        &mesh,
+        src,
+        &ModalOptions {
+            spec,
+            target: ModalTarget::Modes(7),
+            ..Default::default()
+        },
+        0.0,
+    )
+    .unwrap()
+    .report;
+    assert_eq!(rep.n_rigid, 0, "{:?}", rep.frequencies_hz);
+    assert!(
+        rep.frequencies_hz[0] > 1.0 && rep.frequencies_hz[5] < 10.0,
+        "{:?}",
+        rep.frequencies_hz
+    );
+}
