@@ -303,18 +303,21 @@ pub fn finish(
     let model = sys.model();
     let source = sys.source();
     let m_mat = sys.m()?;
+    let k_mat = sys.k();
     let t = Instant::now();
     let nodes = &model.nodes;
     let part: ParticipationTable = participation(m_mat, &model.dofs, nodes, sol.vectors.as_ref());
-    // Rigid-body modes: shapes in the span of the six rigid-body motions (they come first).
-    let n_rigid = part.rigid.iter().take_while(|&&r| r).count();
+    // Rigid-body modes: shapes in the span of the free rigid motions of the model's connected
+    // parts (they come first).
+    let parts = crate::post::modal::rigid_analysis(k_mat, m_mat, &model.dofs, nodes, sol.vectors.as_ref());
+    let n_rigid = parts.rigid.iter().take_while(|&&r| r).count();
     let mut modes = Vec::with_capacity(sol.lambda.len());
     for (i, &l) in sol.lambda.iter().enumerate() {
         modes.push(ModeRow {
             mode: i + 1,
             frequency_hz: hz(l),
             eigenvalue: l,
-            kind: if part.rigid[i] { "rigid" } else { "elastic" },
+            kind: if parts.rigid[i] { "rigid" } else { "elastic" },
             rel_residual: sol.rel_residual[i],
             backward_error: sol.backward_error[i],
             participation: part.modes[i].factor,
@@ -340,6 +343,7 @@ pub fn finish(
     let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let mut notes = model.notes.clone();
     notes.extend(sol.notes.iter().cloned());
+    notes.extend(free_part_notes(model, &parts));
     if !accurate {
         notes.push(format!(
             "accuracy not guaranteed: largest backward error {max_back:.2e} (tolerance {:.0e}; relative residual {max_res:.2e}), M-orthonormality error {:.2e}",
@@ -418,4 +422,49 @@ pub fn finish(
         lambda: sol.lambda,
         vectors: sol.vectors,
     })
+}
+
+/// Notes naming the parts of a model that can move freely while others are supported (or that
+/// are one of several separate free bodies): node count, one node, the element sets in them and
+/// their free motions. A single free body has no note (its rigid modes are expected).
+fn free_part_notes(model: &crate::model::Model, parts: &crate::post::modal::RigidAnalysis) -> Vec<String> {
+    let any_fixed = model.dofs.fixed.iter().any(|&f| f != 0);
+    if parts.free.is_empty() || (parts.n_parts == 1 && !any_fixed) {
+        return vec![];
+    }
+    let sets = model.element_sets();
+    parts
+        .free
+        .iter()
+        .map(|p| {
+            let mut inside = vec![false; model.nodes.len()];
+            p.node_list.iter().for_each(|&a| inside[a] = true);
+            let mut names: Vec<String> = Vec::new();
+            for s in &sets {
+                if (0..s.len()).any(|e| s.nodes(e).iter().any(|&a| inside[a as usize])) {
+                    let g = s.group().to_string();
+                    if !names.contains(&g) {
+                        names.push(g);
+                    }
+                }
+            }
+            let node = model
+                .node_tags
+                .get(p.first_node)
+                .map_or_else(|| format!("reference node #{}", p.first_node), |t| format!("node {t}"));
+            let motions = if p.motions.len() == p.count {
+                p.motions.join(", ")
+            } else {
+                format!("{} combined motions", p.count)
+            };
+            format!(
+                "a part of {} nodes ({}; e.g. {node}) is not connected to the supports or the rest of the \
+                 model: it moves freely in {motions}, and its {} rigid-body modes are labelled rigid; \
+                 connect it (shared nodes, --couple, --spring) or support it",
+                p.nodes,
+                names.join(", "),
+                p.count
+            )
+        })
+        .collect()
 }

@@ -36,6 +36,10 @@ pub struct ModelArgs {
     /// Mass matrix: consistent (default) or lumped (HRZ).
     #[arg(long, default_value = "consistent")]
     pub mass: String,
+    /// Hex8 formulation: standard (default; locks in bending, e.g. one element through a
+    /// thickness) or incompatible (Wilson–Taylor incompatible modes, condensed per element).
+    #[arg(long, default_value = "standard", value_name = "standard|incompatible")]
+    pub hex8: String,
     /// Analyse only these volume groups as solids (default: every volume cell).
     #[arg(long = "solid", value_name = "GROUP")]
     pub solid: Vec<String>,
@@ -68,6 +72,7 @@ impl ModelArgs {
             point_mass: self.point_mass.clone(),
             spring: self.spring.clone(),
             mass: self.mass.clone(),
+            hex8: self.hex8.clone(),
             solid: self.solid.clone(),
             shell: self.shell.clone(),
             beam: self.beam.clone(),

@@ -14,6 +14,7 @@
 //! extrapolation of the reference formulation's last three levels (each halving the element size)
 //! when they converge monotonically at an order ≥ 1.5, else its finest level.
 
+use crate::analysis::modal::ModalTarget;
 use crate::app::scene::{MeshSource, Scene};
 use crate::app::sweep::analyse;
 use crate::mesh::parametric::SandwichParams;
@@ -83,6 +84,81 @@ pub struct LevelResult {
     pub time_s: f64,
     /// Peak resident memory of the run (bytes), where the OS reports it.
     pub peak_memory_bytes: Option<u64>,
+    /// When MAC pairing with the finest level's mode chose another than this level's first
+    /// elastic mode: which one (1-based among the elastic modes) and the MAC.
+    pub paired: Option<(usize, f64)>,
+}
+
+/// Elastic modes of one level for MAC pairing: frequencies and shapes at the mesh nodes.
+#[derive(Clone, Debug, Default)]
+pub struct LevelModes {
+    /// Node coordinates.
+    pub points: Vec<[f64; 3]>,
+    /// Elastic frequencies, ascending (Hz).
+    pub freqs: Vec<f64>,
+    /// Their shapes, 3 per node.
+    pub shapes: Vec<Vec<f64>>,
+}
+
+/// Extra elastic modes computed per level so that a mode that moves up in the order with
+/// refinement can still be found.
+const PAIRING_EXTRA: usize = 5;
+
+/// Modal assurance criterion of two shapes sampled at the same points.
+pub fn mac(a: &[f64], b: &[f64]) -> f64 {
+    let ab: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
+    let aa: f64 = a.iter().map(|x| x * x).sum();
+    let bb: f64 = b.iter().map(|x| x * x).sum();
+    if aa > 0.0 && bb > 0.0 { ab * ab / (aa * bb) } else { 0.0 }
+}
+
+/// For each of `samples`, the index of the nearest of `points` (brute force; exact on nested
+/// refinements, where every coarse node is a fine node).
+fn nearest(samples: &[[f64; 3]], points: &[[f64; 3]]) -> Vec<usize> {
+    samples
+        .iter()
+        .map(|s| {
+            let d = |p: &[f64; 3]| (p[0] - s[0]).powi(2) + (p[1] - s[1]).powi(2) + (p[2] - s[2]).powi(2);
+            (0..points.len())
+                .min_by(|&i, &j| d(&points[i]).total_cmp(&d(&points[j])))
+                .unwrap_or(0)
+        })
+        .collect()
+}
+
+/// A shape sampled at the given node indices (3 components each).
+fn sample(shape: &[f64], at: &[usize]) -> Vec<f64> {
+    at.iter()
+        .flat_map(|&a| shape.get(3 * a..3 * a + 3).unwrap_or(&[0.0; 3]).to_vec())
+        .collect()
+}
+
+/// Pair each level's modes with the finest level's first elastic mode by MAC: the shapes are
+/// sampled at the coarsest level's nodes (the nearest node of each level; box and helix
+/// refinements are nested, so these are the same points), and the level's mode with the
+/// largest MAC is taken. Returns, per level, `(index among its elastic modes, MAC)`, or `None`
+/// where a level has no shapes.
+pub fn pair_by_mac(levels: &[Option<LevelModes>]) -> Vec<Option<(usize, f64)>> {
+    let Some(finest) = levels.iter().rev().flatten().next() else {
+        return vec![None; levels.len()];
+    };
+    let coarsest = levels.iter().flatten().min_by_key(|l| l.points.len()).unwrap_or(finest);
+    let Some(target) = finest.shapes.first() else {
+        return vec![None; levels.len()];
+    };
+    let target = sample(target, &nearest(&coarsest.points, &finest.points));
+    levels
+        .iter()
+        .map(|l| {
+            let l = l.as_ref()?;
+            let at = nearest(&coarsest.points, &l.points);
+            l.shapes
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (i, mac(&sample(s, &at), &target)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+        })
+        .collect()
 }
 
 /// A finished convergence study.
@@ -373,12 +449,30 @@ fn reset_peak_memory() -> bool {
 
 /// Run one level: (value, dofs, wall time, peak memory).
 pub fn run_level(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>)> {
+    run_level_modes(l).map(|(v, d, t, m, _)| (v, d, t, m))
+}
+
+/// [`run_level`] with the level's elastic modes (scenes with a modal analysis, which then
+/// compute [`PAIRING_EXTRA`] more modes than asked).
+pub fn run_level_modes(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>, Option<LevelModes>)> {
     let reset = reset_peak_memory();
     let t = Instant::now();
+    let mut modes = None;
     let (value, dofs) = match &l.runner {
         Runner::Scene(text) => {
-            let scene = Scene::parse(Path::new("converge.toml"), text)?;
+            let mut scene = Scene::parse(Path::new("converge.toml"), text)?;
+            if let Some((ModalTarget::Modes(n), None, _)) = &mut scene.modal {
+                *n += PAIRING_EXTRA;
+            }
             let r = scene.run(None)?;
+            if let (Some(m), Some(s)) = (&r.modal, &r.mode_shapes) {
+                let elastic: Vec<usize> = (0..m.modes.len()).filter(|&i| m.modes[i].kind == "elastic").collect();
+                modes = Some(LevelModes {
+                    points: s.points.clone(),
+                    freqs: elastic.iter().map(|&i| m.modes[i].frequency_hz).collect(),
+                    shapes: elastic.iter().filter_map(|&i| s.shapes.get(i).cloned()).collect(),
+                });
+            }
             if let Some(m) = &r.modal {
                 if !(m.complete && m.accurate) {
                     return Err(Error::Verification(format!("{}: modal check failed", l.mesh)));
@@ -412,7 +506,7 @@ pub fn run_level(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>)> {
     } else {
         None
     };
-    Ok((value, dofs, time, mem))
+    Ok((value, dofs, time, mem, modes))
 }
 
 /// Richardson extrapolation of three values at h, h/2, h/4: `Some((limit, order))` when the
@@ -431,9 +525,11 @@ pub fn richardson(v: [f64; 3]) -> Option<(f64, f64)> {
 /// cheapest runs within 1 %, 0.1 % and 0.01 %.
 pub fn run_case(case: &Case, progress: &dyn Fn(&str)) -> Result<Convergence> {
     let mut raw = Vec::new();
+    let mut level_modes = Vec::new();
     for l in &case.levels {
-        let (value, dofs, time_s, mem) =
-            run_level(l).map_err(|e| invalid(format!("{} {}: {e}", l.formulation, l.mesh)))?;
+        let (value, dofs, time_s, mem, modes) =
+            run_level_modes(l).map_err(|e| invalid(format!("{} {}: {e}", l.formulation, l.mesh)))?;
+        level_modes.push(modes);
         progress(&format!(
             "{} {}: {value:.6e} {} ({dofs} DOFs, {time_s:.2} s)",
             l.formulation, l.mesh, case.unit
@@ -446,7 +542,25 @@ pub fn run_case(case: &Case, progress: &dyn Fn(&str)) -> Result<Convergence> {
             dofs,
             time_s,
             peak_memory_bytes: mem,
+            paired: None,
         });
+    }
+    // Pair modes across the levels of each formulation by MAC (modes reorder with refinement:
+    // in-plane and bending modes swap), and track the pair's frequency.
+    let mut forms: Vec<&str> = raw.iter().map(|r| r.formulation.as_str()).collect();
+    forms.dedup();
+    let forms: Vec<String> = forms.into_iter().map(str::to_string).collect();
+    for f in forms {
+        let idx: Vec<usize> = (0..raw.len()).filter(|&i| raw[i].formulation == f).collect();
+        let lm: Vec<Option<LevelModes>> = idx.iter().map(|&i| level_modes[i].clone()).collect();
+        for (&i, p) in idx.iter().zip(pair_by_mac(&lm)) {
+            if let (Some((k, m)), Some(l)) = (p, &level_modes[i]) {
+                if k > 0 {
+                    raw[i].value = l.freqs[k];
+                    raw[i].paired = Some((k + 1, m));
+                }
+            }
+        }
     }
     let refs: Vec<f64> = raw
         .iter()
@@ -535,6 +649,14 @@ pub fn table_markdown(c: &Convergence) -> String {
         ));
     }
     s.push('\n');
+    for r in c.rows.iter().filter(|r| r.paired.is_some()) {
+        let (k, m) = r.paired.unwrap_or_default();
+        s.push_str(&format!(
+            "- {} {}: the value is elastic mode {k}, paired by MAC ({m:.3}) with the finest level's first \
+             elastic mode (the modes reorder with refinement)\n",
+            r.formulation, r.mesh
+        ));
+    }
     for (tol, i) in &c.cheapest {
         match i {
             Some(i) => {

@@ -70,6 +70,7 @@ struct RawMesh {
     file: Option<String>,
     generator: Option<String>,
     length_unit: Option<String>,
+    hex8: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -275,6 +276,19 @@ pub struct SceneReport {
     pub notes: Vec<String>,
     /// Wall time of the whole scene, s.
     pub time_s: f64,
+    /// Mode shapes of the modal analysis at the mesh nodes (3 per node, one per mode of
+    /// `modal`), for callers that compare shapes (`converge`); not serialised.
+    #[serde(skip)]
+    pub mode_shapes: Option<ModeShapes>,
+}
+
+/// Mode shapes at mesh nodes.
+#[derive(Clone, Debug, Default)]
+pub struct ModeShapes {
+    /// Node coordinates (m).
+    pub points: Vec<[f64; 3]>,
+    /// Per mode, 3 displacement components per node.
+    pub shapes: Vec<Vec<f64>>,
 }
 
 impl SceneReport {
@@ -437,6 +451,15 @@ impl Scene {
                 (src, scale)
             }
         };
+        let hex8 = match raw
+            .mesh
+            .as_ref()
+            .and_then(|m| m.get_ref().hex8.as_ref().map(|h| (m, h)))
+        {
+            None => Default::default(),
+            Some((m, h)) => crate::element::incompatible::Hex8Formulation::parse(h)
+                .map_err(|e| ctx.error(ctx.line(m.span().start), format!("[mesh] 'hex8': {e}")))?,
+        };
 
         // Materials.
         let mut materials: Vec<(String, Material)> = Vec::new();
@@ -482,6 +505,7 @@ impl Scene {
         };
 
         let mut spec = ModelSpec::default();
+        spec.hex8 = hex8;
         let mut groups = Vec::new();
         let mut parts = Vec::new();
         let mut solid_groups = Vec::new();
@@ -999,6 +1023,7 @@ impl Scene {
                 &source,
             )?
         };
+        let mut mode_shapes = None;
         let modal = match &self.modal {
             None => None,
             Some((target, shift_hz, block)) => {
@@ -1044,6 +1069,10 @@ impl Scene {
                     }
                 }
                 notes.extend(run.report.notes.iter().cloned());
+                mode_shapes = Some(ModeShapes {
+                    points: mesh.nodes.clone(),
+                    shapes: std::mem::take(&mut run.shapes),
+                });
                 Some(run.report)
             }
         };
@@ -1090,6 +1119,7 @@ impl Scene {
             outputs,
             notes,
             time_s: t0.elapsed().as_secs_f64(),
+            mode_shapes,
         })
     }
 }

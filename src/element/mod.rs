@@ -9,6 +9,7 @@
 //! the [`crate::Error::InvertedElement`] it reports.
 //!
 //! - [`solid`]: isoparametric 3D solids (`Tet4/10`, `Hex8/20/27`, `Wedge6/15`).
+//! - [`incompatible`]: hex8 with condensed incompatible modes (Wilson–Taylor), chosen per model.
 //! - [`shell`]: MITC3/MITC4 flat shells (`Tri3`, `Quad4`).
 //! - [`beam`]: Timoshenko beams (`Line2`, `Line3`), optional warping DOF.
 //! - [`lumping`]: the [`MassLumping`] choice and the HRZ and row-sum lumping schemes.
@@ -51,6 +52,7 @@
 //! places (no `_ =>` arm hides one).
 
 pub mod beam;
+pub mod incompatible;
 pub mod lumping;
 pub mod shell;
 pub mod solid;

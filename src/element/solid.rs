@@ -31,6 +31,14 @@
 //! | `Wedge6` | triangle degree 2 × 2 Gauss | 6 | the same | 6 | degree ≤ 2 in `(u, v)` and in `w` |
 //! | `Wedge15` | triangle degree 4 × 3 Gauss | 18 | the same | 18 | degree ≤ 4 in `(u, v)` and in `w` |
 //!
+//! **Curved cells.** A quadratic cell whose mid-side nodes are off the straight positions
+//! ([`integration`]) has a non-constant Jacobian, and the rules above are no longer exact (on a
+//! coil's wire, h = 3 mm on a 20 mm radius, a tet10 stiffness is 0.4 % off). Such cells get
+//! higher rules ([`curved_stiffness_degree`], [`curved_mass_degree`]): tet10 24 points
+//! (degree 6) for stiffness and 125 (degree 7, exact) for mass; hexahedra 4 × 4 × 4 Gauss;
+//! wedge15 triangle degree 6 × 4 Gauss. Straight cells keep the table above, bit for bit.
+//! The model notes how many cells were curved and the rule used.
+//!
 //! Every rule is a full integration: a free element has exactly the 6 rigid-body modes as the
 //! null space of its stiffness (no hourglass modes).
 //!
@@ -112,7 +120,10 @@ struct Table {
 
 impl Table {
     fn new(kind: CellKind, degree: usize) -> Table {
-        let rule = quadrature::for_cell(kind, degree);
+        Table::from_rule(kind, quadrature::for_cell(kind, degree))
+    }
+
+    fn from_rule(kind: CellKind, rule: quadrature::Rule) -> Table {
         let (nn, nq) = (kind.n_nodes(), rule.len());
         let mut n = vec![0.0; nq * nn];
         let mut dn = vec![[0.0; 3]; nq * nn];
@@ -158,6 +169,8 @@ const NOT_A_SOLID: f64 = f64::NAN;
 
 static STIFFNESS_TABLES: [OnceLock<Table>; 7] = [const { OnceLock::new() }; 7];
 static MASS_TABLES: [OnceLock<Table>; 7] = [const { OnceLock::new() }; 7];
+static CURVED_STIFFNESS_TABLES: [OnceLock<Table>; 7] = [const { OnceLock::new() }; 7];
+static CURVED_MASS_TABLES: [OnceLock<Table>; 7] = [const { OnceLock::new() }; 7];
 
 fn stiffness_table(kind: CellKind) -> Result<&'static Table, f64> {
     let i = solid_index(kind).ok_or(NOT_A_SOLID)?;
@@ -167,6 +180,151 @@ fn stiffness_table(kind: CellKind) -> Result<&'static Table, f64> {
 fn mass_table(kind: CellKind) -> Result<&'static Table, f64> {
     let i = solid_index(kind).ok_or(NOT_A_SOLID)?;
     Ok(MASS_TABLES[i].get_or_init(|| Table::new(kind, mass_degree(kind))))
+}
+
+fn stiffness_table_for(kind: CellKind, integration: Integration) -> Result<&'static Table, f64> {
+    match integration {
+        Integration::Straight => stiffness_table(kind),
+        Integration::Curved => {
+            let i = solid_index(kind).ok_or(NOT_A_SOLID)?;
+            let d = curved_stiffness_degree(kind);
+            Ok(CURVED_STIFFNESS_TABLES[i].get_or_init(|| Table::new(kind, d)))
+        }
+    }
+}
+
+fn mass_table_for(kind: CellKind, integration: Integration) -> Result<&'static Table, f64> {
+    match integration {
+        Integration::Straight => mass_table(kind),
+        Integration::Curved => {
+            let i = solid_index(kind).ok_or(NOT_A_SOLID)?;
+            let d = curved_mass_degree(kind);
+            Ok(CURVED_MASS_TABLES[i].get_or_init(|| Table::new(kind, d)))
+        }
+    }
+}
+
+/// Which of a kind's two rule sets integrates a cell: the straight-sided one of the table in
+/// the module docs, or the higher-order one for a curved quadratic cell (see [`integration`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integration {
+    /// The rules of the module-docs table (exact on affine cells).
+    Straight,
+    /// The rules of [`curved_stiffness_degree`] and [`curved_mass_degree`].
+    Curved,
+}
+
+/// Relative distance (to the cell's largest vertex-to-vertex distance) beyond which a mid-side
+/// node counts as moved off its straight position. Below it the stiffness error of the
+/// straight rule is of the order of the square of the offset, far under rounding of input
+/// coordinates written with 8 or more significant digits.
+pub const CURVED_TOLERANCE: f64 = 1e-6;
+
+/// The linear kind whose vertices span a quadratic kind's straight geometry.
+fn linear_kind(kind: CellKind) -> Option<CellKind> {
+    match kind {
+        CellKind::Tet10 => Some(CellKind::Tet4),
+        CellKind::Hex20 | CellKind::Hex27 => Some(CellKind::Hex8),
+        CellKind::Wedge15 => Some(CellKind::Wedge6),
+        _ => None,
+    }
+}
+
+/// Whether a cell of `kind` with nodes `x` is curved: a quadratic solid (`Tet10`, `Hex20`,
+/// `Hex27`, `Wedge15`) one of whose mid-edge, mid-face or centre nodes lies farther than
+/// [`CURVED_TOLERANCE`] × (largest vertex distance) from the point the vertices alone place
+/// it at (the linear kind's map at the node's reference position: the edge midpoint of a
+/// tetrahedron, the trilinear point of a hexahedron). A straight tet10 is affine, a straight
+/// hex20/27 or wedge15 has the geometry of its hex8/wedge6; linear kinds are never curved.
+///
+/// ```
+/// use vibrofem::{element::solid::{self, Integration}, fe::shape, mesh::CellKind};
+/// let mut x: Vec<[f64; 3]> = shape::reference_nodes(CellKind::Tet10).to_vec();
+/// assert_eq!(solid::integration(CellKind::Tet10, &x), Integration::Straight);
+/// x[4][1] -= 0.05; // the mid-node of edge 0–1 pushed off the edge
+/// assert_eq!(solid::integration(CellKind::Tet10, &x), Integration::Curved);
+/// ```
+pub fn integration(kind: CellKind, x: &[[f64; 3]]) -> Integration {
+    let Some(lin) = linear_kind(kind) else {
+        return Integration::Straight;
+    };
+    let nv = lin.n_nodes();
+    if x.len() != kind.n_nodes() {
+        return Integration::Straight;
+    }
+    let mut h2: f64 = 0.0;
+    for a in 0..nv {
+        for b in a + 1..nv {
+            h2 = h2.max(dist2(x[a], x[b]));
+        }
+    }
+    let tol2 = CURVED_TOLERANCE * CURVED_TOLERANCE * h2;
+    let mut n = [0.0; 8];
+    for (a, &xi) in shape::reference_nodes(kind).iter().enumerate().skip(nv) {
+        shape::values(lin, xi, &mut n[..nv]);
+        let mut p = [0.0; 3];
+        for b in 0..nv {
+            for i in 0..3 {
+                p[i] += n[b] * x[b][i];
+            }
+        }
+        // Also true for a NaN coordinate: such a cell fails its Jacobian check either way.
+        if !(dist2(p, x[a]) <= tol2) {
+            return Integration::Curved;
+        }
+    }
+    Integration::Straight
+}
+
+fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)
+}
+
+/// Quadrature degree of the stiffness rule of a curved cell of `kind` (see [`integration`]).
+///
+/// A curved quadratic map makes `∇N_a·∇N_b det J` a rational function, which no rule
+/// integrates exactly; these degrees bring the stiffness error (Frobenius, relative) of a cell
+/// spanning 0.15–0.3 rad of an arc (mid-node offsets 2–4 % of the edge) to 3e-9 … 1e-6, from
+/// 5e-5 … 7.5e-3 with the straight rules, measured against degree-20 rules in
+/// `tests/unit/elements_15.rs`: tet10 the 24-point degree-6 rule (from
+/// 4 points), hexahedra 4 × 4 × 4 Gauss (from 3 × 3 × 3), wedge15 the triangle degree-6 rule
+/// × 4 Gauss points (from degree 4 × 3). Other kinds keep [`stiffness_degree`].
+pub fn curved_stiffness_degree(kind: CellKind) -> usize {
+    match kind {
+        CellKind::Tet10 | CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => 6,
+        _ => stiffness_degree(kind),
+    }
+}
+
+/// Quadrature degree of the mass (and volume) rule of a curved cell of `kind`: `N_a N_b det J`
+/// is a polynomial; tet10 degree 4 + 3 = 7 (exact, collapsed Gauss); hexahedra and wedge15
+/// the same rules as [`curved_stiffness_degree`]. Other kinds keep [`mass_degree`].
+pub fn curved_mass_degree(kind: CellKind) -> usize {
+    match kind {
+        CellKind::Tet10 => 7,
+        CellKind::Hex20 | CellKind::Hex27 | CellKind::Wedge15 => 6,
+        _ => mass_degree(kind),
+    }
+}
+
+/// A short description of the stiffness rule a cell of `kind` gets under `integration`, for
+/// the model's notes (e.g. `"24-point degree 6"`, `"4×4×4 Gauss"`).
+pub fn stiffness_rule_name(kind: CellKind, integration: Integration) -> String {
+    let t = match stiffness_table_for(kind, integration) {
+        Ok(t) => t,
+        Err(_) => return String::new(),
+    };
+    let d = match integration {
+        Integration::Straight => stiffness_degree(kind),
+        Integration::Curved => curved_stiffness_degree(kind),
+    };
+    match kind {
+        CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => {
+            let n = quadrature::gauss_points_for_degree(d);
+            format!("{n}×{n}×{n} Gauss")
+        }
+        _ => format!("{}-point degree {d}", t.nq),
+    }
 }
 
 /// The reference points of the stiffness rule of a solid `kind` (where
@@ -193,60 +351,103 @@ pub fn stiffness_points(kind: CellKind) -> &'static [[f64; 3]] {
 /// assert!((ke[0] - 1.0 / 3.0).abs() < 1e-15);
 /// ```
 pub fn stiffness(kind: CellKind, x: &[[f64; 3]], mat: &Material, ke: &mut [f64]) -> Result<(), f64> {
+    stiffness_with(kind, x, mat, integration(kind, x), ke)
+}
+
+/// [`stiffness`] with the rule set chosen by the caller rather than by [`integration`] (to
+/// compare the straight rule with the curved one on the same cell).
+pub fn stiffness_with(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    mat: &Material,
+    integration: Integration,
+    ke: &mut [f64],
+) -> Result<(), f64> {
+    let t = stiffness_table_for(kind, integration)?;
     // Monomorphised per (nodes, points) so the inner loops have constant trip counts and the
     // gradient buffers live on the stack at their exact size.
-    match kind {
-        CellKind::Tet4 => stiffness_impl::<4, 1>(kind, x, mat, ke),
-        CellKind::Tet10 => stiffness_impl::<10, 4>(kind, x, mat, ke),
-        CellKind::Hex8 => stiffness_impl::<8, 8>(kind, x, mat, ke),
-        CellKind::Hex20 => stiffness_impl::<20, 27>(kind, x, mat, ke),
-        CellKind::Hex27 => stiffness_impl::<27, 27>(kind, x, mat, ke),
-        CellKind::Wedge6 => stiffness_impl::<6, 6>(kind, x, mat, ke),
-        CellKind::Wedge15 => stiffness_impl::<15, 18>(kind, x, mat, ke),
-        CellKind::Point1
-        | CellKind::Line2
-        | CellKind::Line3
-        | CellKind::Tri3
-        | CellKind::Tri6
-        | CellKind::Quad4
-        | CellKind::Quad8
-        | CellKind::Quad9 => Err(NOT_A_SOLID),
+    match (kind, t.nq) {
+        (CellKind::Tet4, 1) => stiffness_impl::<4, 1>(t, x, mat, ke),
+        (CellKind::Tet10, 4) => stiffness_impl::<10, 4>(t, x, mat, ke),
+        (CellKind::Tet10, 24) => stiffness_impl::<10, 24>(t, x, mat, ke),
+        (CellKind::Hex8, 8) => stiffness_impl::<8, 8>(t, x, mat, ke),
+        (CellKind::Hex20, 27) => stiffness_impl::<20, 27>(t, x, mat, ke),
+        (CellKind::Hex20, 64) => stiffness_impl::<20, 64>(t, x, mat, ke),
+        (CellKind::Hex27, 27) => stiffness_impl::<27, 27>(t, x, mat, ke),
+        (CellKind::Hex27, 64) => stiffness_impl::<27, 64>(t, x, mat, ke),
+        (CellKind::Wedge6, 6) => stiffness_impl::<6, 6>(t, x, mat, ke),
+        (CellKind::Wedge15, 18) => stiffness_impl::<15, 18>(t, x, mat, ke),
+        (CellKind::Wedge15, 48) => stiffness_impl::<15, 48>(t, x, mat, ke),
+        _ => stiffness_dyn(t, x, mat, ke),
     }
 }
 
-fn stiffness_impl<const N: usize, const Q: usize>(
+/// [`stiffness`] integrated with an arbitrary `rule` on the reference cell of `kind` (a
+/// reference for convergence checks: a rule of much higher degree than either rule set).
+pub fn stiffness_with_rule(
     kind: CellKind,
+    x: &[[f64; 3]],
+    mat: &Material,
+    rule: &quadrature::Rule,
+    ke: &mut [f64],
+) -> Result<(), f64> {
+    solid_index(kind).ok_or(NOT_A_SOLID)?;
+    let t = Table::from_rule(kind, rule.clone());
+    stiffness_dyn(&t, x, mat, ke)
+}
+
+fn stiffness_dyn(t: &Table, x: &[[f64; 3]], mat: &Material, ke: &mut [f64]) -> Result<(), f64> {
+    let mut g = vec![[0.0; 3]; t.nn * t.nq];
+    let mut h = vec![[0.0; 3]; t.nn * t.nq];
+    stiffness_core(t, x, mat, ke, &mut g, &mut h)
+}
+
+fn stiffness_impl<const N: usize, const Q: usize>(
+    t: &Table,
     x: &[[f64; 3]],
     mat: &Material,
     ke: &mut [f64],
 ) -> Result<(), f64> {
-    let t = stiffness_table(kind)?;
-    debug_assert!(t.nn == N && t.nq == Q, "stiffness table size of {kind}");
-    assert_eq!(x.len(), N, "solid::stiffness: {kind} needs {N} node coordinates");
-    assert_eq!(ke.len(), 9 * N * N, "solid::stiffness: ke must be 3n × 3n");
-    let (lam, mu) = mat.lame();
-
+    debug_assert!(t.nn == N && t.nq == Q, "stiffness table size");
     // g[a][q] = ∇N_a at point q; h[a][q] = w_q det J_q ∇N_a.
     let mut g = [[[0.0; 3]; Q]; N];
     let mut h = [[[0.0; 3]; Q]; N];
-    for q in 0..Q {
-        let dn = &t.dn[q * N..(q + 1) * N];
+    stiffness_core(t, x, mat, ke, g.as_flattened_mut(), h.as_flattened_mut())
+}
+
+/// The stiffness of the module docs with the rule of `t`; `g` and `h` (length `n·nq`, index
+/// `a·nq + q`) are scratch for `∇N_a` and `w_q det J_q ∇N_a` at each point.
+fn stiffness_core(
+    t: &Table,
+    x: &[[f64; 3]],
+    mat: &Material,
+    ke: &mut [f64],
+    g: &mut [[f64; 3]],
+    h: &mut [[f64; 3]],
+) -> Result<(), f64> {
+    let (n, nq) = (t.nn, t.nq);
+    assert_eq!(x.len(), n, "solid::stiffness: {n} node coordinates needed");
+    assert_eq!(ke.len(), 9 * n * n, "solid::stiffness: ke must be 3n × 3n");
+    let (lam, mu) = mat.lame();
+
+    for q in 0..nq {
+        let dn = &t.dn[q * n..(q + 1) * n];
         let (det, inv) = volume_jacobian(x, dn)?;
         let c = t.w[q] * det;
-        for a in 0..N {
+        for a in 0..n {
             let ga = physical_gradient(&inv, dn[a]);
-            g[a][q] = ga;
-            h[a][q] = [c * ga[0], c * ga[1], c * ga[2]];
+            g[a * nq + q] = ga;
+            h[a * nq + q] = [c * ga[0], c * ga[1], c * ga[2]];
         }
     }
 
-    let nd = 3 * N;
-    for a in 0..N {
-        for b in a..N {
+    let nd = 3 * n;
+    for a in 0..n {
+        for b in a..n {
             // S_ab = Σ_q w det ∇N_a ∇N_bᵀ
             let mut s = [[0.0; 3]; 3];
-            for q in 0..Q {
-                let (ha, gb) = (h[a][q], g[b][q]);
+            for q in 0..nq {
+                let (ha, gb) = (h[a * nq + q], g[b * nq + q]);
                 for i in 0..3 {
                     for j in 0..3 {
                         s[i][j] += ha[i] * gb[j];
@@ -285,52 +486,81 @@ fn stiffness_impl<const N: usize, const Q: usize>(
 /// assert!((me[0] - 0.1).abs() < 1e-15 && (me[3] - 0.05).abs() < 1e-15 && me[1] == 0.0);
 /// ```
 pub fn mass(kind: CellKind, x: &[[f64; 3]], density: f64, lumping: MassLumping, me: &mut [f64]) -> Result<(), f64> {
-    match kind {
-        CellKind::Tet4 => mass_impl::<4, 4>(kind, x, density, lumping, me),
-        CellKind::Tet10 => mass_impl::<10, 14>(kind, x, density, lumping, me),
-        CellKind::Hex8 => mass_impl::<8, 8>(kind, x, density, lumping, me),
-        CellKind::Hex20 => mass_impl::<20, 27>(kind, x, density, lumping, me),
-        CellKind::Hex27 => mass_impl::<27, 27>(kind, x, density, lumping, me),
-        CellKind::Wedge6 => mass_impl::<6, 6>(kind, x, density, lumping, me),
-        CellKind::Wedge15 => mass_impl::<15, 18>(kind, x, density, lumping, me),
-        CellKind::Point1
-        | CellKind::Line2
-        | CellKind::Line3
-        | CellKind::Tri3
-        | CellKind::Tri6
-        | CellKind::Quad4
-        | CellKind::Quad8
-        | CellKind::Quad9 => Err(NOT_A_SOLID),
+    mass_with(kind, x, density, lumping, integration(kind, x), me)
+}
+
+/// [`mass`] with the rule set chosen by the caller rather than by [`integration`].
+pub fn mass_with(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    density: f64,
+    lumping: MassLumping,
+    integration: Integration,
+    me: &mut [f64],
+) -> Result<(), f64> {
+    let t = mass_table_for(kind, integration)?;
+    match (kind, t.nq) {
+        (CellKind::Tet4, 4) => mass_impl::<4, 4>(t, x, density, lumping, me),
+        (CellKind::Tet10, 14) => mass_impl::<10, 14>(t, x, density, lumping, me),
+        (CellKind::Hex8, 8) => mass_impl::<8, 8>(t, x, density, lumping, me),
+        (CellKind::Hex20, 27) => mass_impl::<20, 27>(t, x, density, lumping, me),
+        (CellKind::Hex27, 27) => mass_impl::<27, 27>(t, x, density, lumping, me),
+        (CellKind::Wedge6, 6) => mass_impl::<6, 6>(t, x, density, lumping, me),
+        (CellKind::Wedge15, 18) => mass_impl::<15, 18>(t, x, density, lumping, me),
+        (CellKind::Tet10, 125) => mass_impl::<10, 125>(t, x, density, lumping, me),
+        (CellKind::Hex20, 64) => mass_impl::<20, 64>(t, x, density, lumping, me),
+        (CellKind::Hex27, 64) => mass_impl::<27, 64>(t, x, density, lumping, me),
+        (CellKind::Wedge15, 48) => mass_impl::<15, 48>(t, x, density, lumping, me),
+        _ => {
+            let mut c = vec![0.0; t.nq];
+            let mut diag = vec![0.0; t.nn];
+            mass_core(t, x, density, lumping, me, &mut c, &mut diag)
+        }
     }
 }
 
 fn mass_impl<const N: usize, const Q: usize>(
-    kind: CellKind,
+    t: &Table,
     x: &[[f64; 3]],
     density: f64,
     lumping: MassLumping,
     me: &mut [f64],
 ) -> Result<(), f64> {
-    let t = mass_table(kind)?;
-    debug_assert!(t.nn == N && t.nq == Q, "mass table size of {kind}");
-    assert_eq!(x.len(), N, "solid::mass: {kind} needs {N} node coordinates");
-    assert_eq!(me.len(), 9 * N * N, "solid::mass: me must be 3n × 3n");
+    debug_assert!(t.nn == N && t.nq == Q, "mass table size");
+    let mut c = [0.0; Q];
+    let mut diag = [0.0; N];
+    mass_core(t, x, density, lumping, me, &mut c, &mut diag)
+}
+
+/// The mass of [`mass`] with the rule of `t`; `c` (length `nq`) and `diag` (length `n`) are
+/// scratch.
+fn mass_core(
+    t: &Table,
+    x: &[[f64; 3]],
+    density: f64,
+    lumping: MassLumping,
+    me: &mut [f64],
+    c: &mut [f64],
+    diag: &mut [f64],
+) -> Result<(), f64> {
+    let (n, nq) = (t.nn, t.nq);
+    assert_eq!(x.len(), n, "solid::mass: {n} node coordinates needed");
+    assert_eq!(me.len(), 9 * n * n, "solid::mass: me must be 3n × 3n");
 
     // c_q = ρ w_q det J_q
-    let mut c = [0.0; Q];
-    for q in 0..Q {
-        let (det, _) = volume_jacobian(x, &t.dn[q * N..(q + 1) * N])?;
+    for q in 0..nq {
+        let (det, _) = volume_jacobian(x, &t.dn[q * n..(q + 1) * n])?;
         c[q] = density * t.w[q] * det;
     }
-    let nd = 3 * N;
+    let nd = 3 * n;
     me.fill(0.0);
     match lumping {
         MassLumping::Consistent => {
-            for a in 0..N {
-                for b in a..N {
+            for a in 0..n {
+                for b in a..n {
                     let mut m = 0.0;
-                    for q in 0..Q {
-                        m += c[q] * t.n[q * N + a] * t.n[q * N + b];
+                    for q in 0..nq {
+                        m += c[q] * t.n[q * n + a] * t.n[q * n + b];
                     }
                     for i in 0..3 {
                         me[(3 * a + i) * nd + 3 * b + i] = m;
@@ -340,17 +570,17 @@ fn mass_impl<const N: usize, const Q: usize>(
             }
         }
         MassLumping::Lumped => {
-            let mut diag = [0.0; N];
+            diag.fill(0.0);
             let mut total = 0.0;
-            for q in 0..Q {
+            for q in 0..nq {
                 total += c[q];
-                for a in 0..N {
-                    let na = t.n[q * N + a];
+                for a in 0..n {
+                    let na = t.n[q * n + a];
                     diag[a] += c[q] * na * na;
                 }
             }
-            lumping::hrz(&mut diag, total);
-            for a in 0..N {
+            lumping::hrz(diag, total);
+            for a in 0..n {
                 for i in 0..3 {
                     let r = 3 * a + i;
                     me[r * nd + r] = diag[a];
@@ -371,7 +601,7 @@ fn mass_impl<const N: usize, const Q: usize>(
 /// assert!((solid::volume(CellKind::Hex20, &unit).unwrap() - 1.0).abs() < 1e-14);
 /// ```
 pub fn volume(kind: CellKind, x: &[[f64; 3]]) -> Result<f64, f64> {
-    let t = mass_table(kind)?;
+    let t = mass_table_for(kind, integration(kind, x))?;
     let n = t.nn;
     assert_eq!(x.len(), n, "solid::volume: {kind} needs {n} node coordinates");
     let mut v = 0.0;

@@ -33,6 +33,9 @@ pub struct ModelOptions {
     pub spring: Vec<String>,
     /// Mass matrix: consistent (default) or lumped (HRZ).
     pub mass: String,
+    /// Hex8 formulation: `standard` (default) or `incompatible` (Wilson–Taylor incompatible
+    /// modes, condensed: bends without locking).
+    pub hex8: String,
     /// Analyse only these volume groups as solids (default: every volume cell).
     pub solid: Vec<String>,
     /// Shell part: `GROUP=t` or `GROUP=t,offset` (m; the offset moves the mid-surface from the
@@ -57,6 +60,7 @@ impl Default for ModelOptions {
             point_mass: vec![],
             spring: vec![],
             mass: "consistent".into(),
+            hex8: "standard".into(),
             solid: vec![],
             shell: vec![],
             beam: vec![],
@@ -197,6 +201,7 @@ impl ModelOptions {
             spec.springs.push(SpringSpec { a, b, k });
         }
         spec.lumping = MassLumping::parse(&self.mass)?;
+        spec.hex8 = crate::element::incompatible::Hex8Formulation::parse(&self.hex8)?;
         if !self.solid.is_empty() {
             spec.solid_groups = Some(self.solid.clone());
         }

@@ -29,11 +29,12 @@ impl Model {
         let mesh_nodes: Nodes = Arc::new(mesh.nodes.clone());
         let mut solids = solid_parts(mesh, spec, &materials, &group_materials, &mesh_nodes)?;
         let mut shells = shell_parts(mesh, spec, &mesh_nodes)?;
+        let orientation_notes = super::orient::orient_shells(&mut shells)?;
         let mut beams = beam_parts(mesh, spec, &mesh_nodes)?;
         if solids.is_empty() && shells.is_empty() && beams.is_empty() {
             return Err(no_elements(mesh, source));
         }
-        let mut notes = Vec::new();
+        let mut notes = orientation_notes;
         let (references, coupled) = reference_nodes(mesh, spec)?;
         let mut all_nodes = mesh.nodes.clone();
         all_nodes.extend(references.iter().map(|r| r.position));
@@ -53,6 +54,7 @@ impl Model {
         couplings(mesh, spec, &active, &references, &coupled, &fixed_by, &nodes, &mut cons)?;
         prescribed(mesh, spec, &active, &references, &mut cons)?;
         notes.extend(lints(&solids, orphan_nodes));
+        notes.extend(singular_supports(mesh, spec, &solids, &shells, &beams));
         let dofs = DofMap::with_constraints(active, cons)?;
         Ok(Model {
             solids,
@@ -151,6 +153,7 @@ pub(crate) fn solid_parts(
             mat: keep.iter().map(|&i| matb[i]).collect(),
             materials: materials.to_vec(),
             lumping: spec.lumping,
+            hex8: spec.hex8,
             nodes: nodes.clone(),
         });
     }
@@ -659,18 +662,201 @@ pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
                 .map(|&i| set.materials[i as usize])
                 .find(|m| m.poisson > 0.49)
             {
+                let hint = if set.kind == CellKind::Hex8 && !set.incompatible() {
+                    ", or --hex8 incompatible (incompatible modes: far less locking in volume and in bending)"
+                } else {
+                    ""
+                };
                 notes.push(format!(
                     "material ν = {} is nearly incompressible: linear {} elements lock (frequencies and \
-                     stiffness too high); use tet10 or hex20",
+                     stiffness too high); use tet10 or hex20{hint}",
                     m.poisson, set.kind
                 ));
             }
         }
     }
+    notes.extend(curved_cells_note(solids));
+    notes.extend(solids.iter().filter_map(flat_linear_cells_note));
     if orphan_nodes > 0 {
         notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
     }
     notes
+}
+
+/// Step 7: a note per fixed group that is a line or a point of a solid (no shell or beam node in
+/// it): such a support is singular — its reaction concentrates on a line or point, the stress
+/// there is infinite in the continuum and grows with refinement, and displacements and
+/// frequencies depend on the mesh.
+fn singular_supports(
+    mesh: &Mesh,
+    spec: &ModelSpec,
+    solids: &[SolidSet],
+    shells: &[ShellSet],
+    beams: &[BeamSet],
+) -> Vec<String> {
+    use crate::element::ElementSet;
+    let n = mesh.n_nodes();
+    let (mut solid, mut structural) = (vec![false; n], vec![false; n]);
+    for s in solids {
+        s.conn
+            .iter()
+            .filter(|&&a| (a as usize) < n)
+            .for_each(|&a| solid[a as usize] = true);
+    }
+    let sets = shells
+        .iter()
+        .map(|s| s as &dyn ElementSet)
+        .chain(beams.iter().map(|s| s as &dyn ElementSet));
+    for s in sets {
+        for e in 0..s.len() {
+            s.nodes(e)
+                .iter()
+                .filter(|&&a| (a as usize) < n)
+                .for_each(|&a| structural[a as usize] = true);
+        }
+    }
+    let mut notes = Vec::new();
+    for (g, _) in &spec.fixes {
+        let Ok(grp) = mesh.group(g) else { continue };
+        if grp.dim > 1 {
+            continue;
+        }
+        let gn = mesh.group_nodes(grp);
+        if gn.iter().any(|&a| structural[a as usize]) || !gn.iter().any(|&a| solid[a as usize]) {
+            continue;
+        }
+        let what = if grp.dim == 0 { "a point" } else { "a line" };
+        notes.push(format!(
+            "support '{g}' is {what} of a solid: a line or point support is singular (the stress there \
+             grows without bound with refinement, and displacements and frequencies depend on the \
+             mesh); support a face, or for a hinge couple a strip of faces (--couple) and hold its \
+             reference node (--displace GROUP=0,0,0)"
+        ));
+    }
+    notes
+}
+
+/// Normalised aspect ratio beyond which a linear solid cell counts as flat or slender in
+/// [`flat_linear_cells_note`]. A one-layer plate of 20 × 20 mm cells 1 mm thick is 20 (hex8)
+/// to 25 (tet4).
+pub(crate) const FLAT_ASPECT: f64 = 10.0;
+
+/// Normalised aspect ratio of a linear solid cell: its diameter (largest vertex distance) over
+/// its thickness `V / A_max` (volume over the largest face area), divided by the same ratio of
+/// the regular cell of the kind (cube √3, regular tetrahedron 3√6/2, equilateral right wedge
+/// √2 · 4/√3), so a well-shaped cell is ≈ 1 and a cell 10 times wider than thick ≈ 10.
+/// `None` for kinds other than tet4, hex8 and wedge6 or a degenerate cell.
+pub(crate) fn linear_aspect(kind: CellKind, x: &[[f64; 3]]) -> Option<f64> {
+    let (faces, regular): (&[&[usize]], f64) = match kind {
+        CellKind::Tet4 => (&[&[0, 1, 2], &[0, 1, 3], &[0, 2, 3], &[1, 2, 3]], 1.5 * 6f64.sqrt()),
+        CellKind::Hex8 => (
+            &[
+                &[0, 1, 2, 3],
+                &[4, 5, 6, 7],
+                &[0, 1, 5, 4],
+                &[1, 2, 6, 5],
+                &[2, 3, 7, 6],
+                &[3, 0, 4, 7],
+            ],
+            3f64.sqrt(),
+        ),
+        CellKind::Wedge6 => (
+            &[&[0, 1, 2], &[3, 4, 5], &[0, 1, 4, 3], &[1, 2, 5, 4], &[2, 0, 3, 5]],
+            2f64.sqrt() * 4.0 / 3f64.sqrt(),
+        ),
+        _ => return None,
+    };
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let norm = |a: [f64; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+    let mut diam: f64 = 0.0;
+    for a in 0..x.len() {
+        for b in a + 1..x.len() {
+            diam = diam.max(norm(sub(x[a], x[b])));
+        }
+    }
+    // Face area: half the norm of the diagonals' cross product (exact for planar quads and
+    // triangles taken as (0, 1, 2) with the third diagonal collapsed).
+    let area = |f: &[usize]| match f.len() {
+        3 => 0.5 * norm(cross(sub(x[f[1]], x[f[0]]), sub(x[f[2]], x[f[0]]))),
+        _ => 0.5 * norm(cross(sub(x[f[2]], x[f[0]]), sub(x[f[3]], x[f[1]]))),
+    };
+    let amax = faces.iter().map(|f| area(f)).fold(0.0, f64::max);
+    let v = crate::element::solid::volume(kind, x).ok()?;
+    let r = diam * amax / v / regular;
+    r.is_finite().then_some(r)
+}
+
+/// Step 7: a note when linear solid cells (tet4, hex8 without incompatible modes, wedge6) are
+/// flat or slender ([`linear_aspect`] above [`FLAT_ASPECT`]): a thin part meshed that way
+/// locks in bending (a 1 mm plate of one layer of tet4 gave 33 times the shell frequency).
+fn flat_linear_cells_note(set: &SolidSet) -> Option<String> {
+    if !matches!(set.kind, CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6) || set.incompatible() {
+        return None;
+    }
+    let nn = set.kind.n_nodes();
+    let mut x = [[0.0; 3]; 8];
+    let (mut count, mut worst) = (0usize, 0.0f64);
+    for e in 0..set.tags.len() {
+        set.coords(e, &mut x[..nn]);
+        if let Some(r) = linear_aspect(set.kind, &x[..nn]).filter(|&r| r > FLAT_ASPECT) {
+            count += 1;
+            worst = worst.max(r);
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let hex8 = if set.kind == CellKind::Hex8 {
+        ", hex8 with --hex8 incompatible"
+    } else {
+        ""
+    };
+    Some(format!(
+        "{count} of {} {} cells are flat or slender (aspect ratio up to {worst:.0}; 1 = well shaped): linear \
+         solids lock in bending where a part is thin (frequencies and stiffness far too high); use \
+         shells (--shell), quadratic cells (tet10, hex20){hex8}, or several cells through the thickness",
+        set.tags.len(),
+        set.kind
+    ))
+}
+
+/// The note on curved quadratic cells ([`solid::integration`]): how many of each kind were
+/// curved and which rules integrate them and the straight ones; `None` when no cell is curved.
+fn curved_cells_note(solids: &[SolidSet]) -> Option<String> {
+    use crate::element::solid::{self, Integration};
+    let mut parts = Vec::new();
+    let mut x = [[0.0; 3]; 27];
+    for set in solids {
+        let nn = set.kind.n_nodes();
+        let curved = (0..set.tags.len())
+            .filter(|&e| {
+                set.coords(e, &mut x[..nn]);
+                solid::integration(set.kind, &x[..nn]) == Integration::Curved
+            })
+            .count();
+        if curved > 0 {
+            parts.push(format!(
+                "{curved} of {} {} (stiffness {} rule, straight cells {})",
+                set.tags.len(),
+                set.kind,
+                solid::stiffness_rule_name(set.kind, Integration::Curved),
+                solid::stiffness_rule_name(set.kind, Integration::Straight),
+            ));
+        }
+    }
+    (!parts.is_empty()).then(|| {
+        format!(
+            "curved quadratic cells (mid-side nodes off the straight edges) integrated with higher-order rules: {}",
+            parts.join("; ")
+        )
+    })
 }
 
 #[cfg(test)]

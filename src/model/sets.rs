@@ -2,6 +2,7 @@
 //! masses and springs. Each implements [`ElementSet`], the one interface assembly, mass
 //! properties and stress recovery use.
 
+use crate::element::incompatible::{self, Hex8Formulation};
 use crate::element::{ElementSet, MassLumping, beam, shell, solid};
 use crate::material::Material;
 use crate::mesh::CellKind;
@@ -358,6 +359,8 @@ pub struct SolidSet {
     pub materials: Vec<Material>,
     /// Mass form.
     pub lumping: MassLumping,
+    /// Formulation of hex8 cells (ignored for other kinds).
+    pub hex8: Hex8Formulation,
     /// Node coordinates (shared copy of the mesh's).
     pub(crate) nodes: Arc<Vec<[f64; 3]>>,
 }
@@ -373,8 +376,14 @@ impl SolidSet {
             mat: vec![0],
             materials: vec![material],
             lumping: MassLumping::Consistent,
+            hex8: Hex8Formulation::Standard,
             nodes: Arc::new(x),
         }
+    }
+
+    /// True if the cells are hex8 with incompatible modes ([`crate::element::incompatible`]).
+    pub fn incompatible(&self) -> bool {
+        self.kind == CellKind::Hex8 && self.hex8 == Hex8Formulation::Incompatible
     }
 
     /// Coordinates of cell `e`'s nodes, written to `out` (length `kind.n_nodes()`).
@@ -427,7 +436,11 @@ impl ElementSet for SolidSet {
         let nn = self.kind.n_nodes();
         self.coords(e, &mut x[..nn]);
         let mat = &self.materials[self.mat[e] as usize];
-        solid::stiffness(self.kind, &x[..nn], mat, ke).map_err(|det| self.inverted(e, det))?;
+        if self.incompatible() {
+            incompatible::stiffness(&x[..nn], mat, ke).map_err(|det| self.inverted(e, det))?;
+        } else {
+            solid::stiffness(self.kind, &x[..nn], mat, ke).map_err(|det| self.inverted(e, det))?;
+        }
         if want_mass {
             solid::mass(self.kind, &x[..nn], mat.density, self.lumping, me).map_err(|det| self.inverted(e, det))?;
         }
@@ -454,6 +467,10 @@ impl ElementSet for SolidSet {
         let nn = self.kind.n_nodes();
         self.coords(e, &mut x[..nn]);
         let mat = &self.materials[self.mat[e] as usize];
-        solid::stress_at(self.kind, &x[..nn], mat, ue, xi).map_err(|det| self.inverted(e, det))
+        if self.incompatible() {
+            incompatible::stress_at(&x[..nn], mat, ue, xi).map_err(|det| self.inverted(e, det))
+        } else {
+            solid::stress_at(self.kind, &x[..nn], mat, ue, xi).map_err(|det| self.inverted(e, det))
+        }
     }
 }

@@ -17,6 +17,8 @@ pub struct ModelSpec {
     pub fixes: Vec<(String, DofMask)>,
     /// Mass matrix form.
     pub lumping: MassLumping,
+    /// Formulation of hex8 cells (standard or with incompatible modes).
+    pub hex8: crate::element::incompatible::Hex8Formulation,
     /// Rigid couplings of groups to reference nodes.
     pub couplings: Vec<CouplingSpec>,
     /// Prescribed displacements per group: `(group, [ux, uy, uz, rx, ry, rz])`, `None` = free.
@@ -81,6 +83,7 @@ impl Default for ModelSpec {
             group_materials: vec![],
             fixes: vec![],
             lumping: MassLumping::Consistent,
+            hex8: Default::default(),
             couplings: vec![],
             prescribed: vec![],
             point_masses: vec![],

@@ -531,9 +531,8 @@ pub fn gauss_point_stress(solids: &[SolidSet], n_nodes: usize, u: &[f64]) -> Res
         out.element.reserve(total);
         for e in 0..set.len() {
             gather(set, e, n_nodes, u, &mut x[..nn], &mut ue[..3 * nn])?;
-            let mat = &set.materials[set.mat[e] as usize];
             for &p in &rule.points {
-                let s = solid::stress_at(kind, &x[..nn], mat, &ue[..3 * nn], p).map_err(|det| set.inverted(e, det))?;
+                let s = set.stress_at(e, &ue[..3 * nn], p)?;
                 shape::values(kind, p, &mut n[..nn]);
                 let mut xp = [0.0; 3];
                 for a in 0..nn {

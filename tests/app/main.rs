@@ -11,5 +11,6 @@ mod design;
 mod dynamics;
 mod export_engine;
 mod machines;
+mod numerics_15;
 mod scenes;
 mod sweep;

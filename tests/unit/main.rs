@@ -10,6 +10,7 @@ mod common;
 
 mod determinism;
 mod elements;
+mod elements_15;
 mod errors_audit;
 mod extremes;
 mod fuzz_regressions;
