@@ -35,17 +35,21 @@ pub fn fmt_sig(x: f64, sig: usize) -> String {
     }
 }
 
-/// A byte count in GiB with three significant digits, and in MiB or KiB as well when below a
-/// GiB (so a small limit never prints as "0.00 GiB").
+/// A byte count in the largest binary unit that keeps it at 1 or more (three significant
+/// digits): `1.00 KiB`, `1.49 MiB`, `4.00 GiB`; below a KiB, in bytes.
 pub fn fmt_bytes(b: u64) -> String {
-    let gib = b as f64 / 1073741824.0;
-    if b >= 1 << 30 {
-        format!("{} GiB", fmt_sig(gib, 3))
-    } else if b >= 1 << 20 {
-        format!("{} GiB ({} MiB)", fmt_sig(gib, 3), fmt_sig(b as f64 / 1048576.0, 3))
-    } else {
-        format!("{} GiB ({} KiB)", fmt_sig(gib, 3), fmt_sig(b as f64 / 1024.0, 3))
-    }
+    const KIB: u64 = 1 << 10;
+    const MIB: u64 = 1 << 20;
+    const GIB: u64 = 1 << 30;
+    const TIB: u64 = 1 << 40;
+    let (unit, name) = match b {
+        _ if b >= TIB => (TIB, "TiB"),
+        _ if b >= GIB => (GIB, "GiB"),
+        _ if b >= MIB => (MIB, "MiB"),
+        _ if b >= KIB => (KIB, "KiB"),
+        _ => return format!("{b} bytes"),
+    };
+    format!("{} {name}", fmt_sig(b as f64 / unit as f64, 3))
 }
 
 /// Write mode shapes (3 translation components per node, node-major, one vector per mode) as
