@@ -33,7 +33,7 @@ impl Model {
         if solids.is_empty() && shells.is_empty() && beams.is_empty() {
             return Err(no_elements(mesh, source));
         }
-        let mut notes = Vec::new();
+        let mut notes = mesh.notes.clone();
         let (references, coupled) = reference_nodes(mesh, spec)?;
         let mut all_nodes = mesh.nodes.clone();
         all_nodes.extend(references.iter().map(|r| r.position));

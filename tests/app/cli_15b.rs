@@ -111,3 +111,143 @@ fn batch_resume_is_keyed_by_content_and_path() {
     let dofs = |csv: &str| csv.lines().nth(1).unwrap().split(',').nth(3).unwrap().to_string();
     assert_ne!(dofs(&first), dofs(&second), "{first}\n{second}");
 }
+
+fn expect_error(args: &[&str], needles: &[&str]) {
+    let (code, out, err) = run(args);
+    assert_eq!(code, 1, "{args:?}: {out}{err}");
+    for n in needles {
+        assert!(err.contains(n), "{args:?}: '{n}' not in: {err}");
+    }
+}
+
+const ROD: &str = "box:0.2,0.02,0.02:10,1,1:hex8";
+
+/// Item 9: contradictory constraints are refused naming the group, node and DOF; consistent
+/// ones (zero on a fixed edge) pass.
+#[test]
+fn conflicting_constraints_are_refused() {
+    expect_error(
+        &["static", ROD, "--fix", "xmin", "--displace", "xmin=0.001,-,-"],
+        &["conflicting constraints", "'xmin'", "ux", "node ", "fixed by 'xmin'"],
+    );
+    expect_error(
+        &[
+            "static",
+            ROD,
+            "--fix",
+            "xmin",
+            "--couple",
+            "xmax:guided=z",
+            "--displace",
+            "xmax=-,-,0.001,0.01,-,-",
+        ],
+        &["rx", "reference node of 'xmax'", "guided along z"],
+    );
+    expect_error(
+        &["static", ROD, "--fix", "xmin", "--displace", "xmax=-,-,-,0.01,-,-"],
+        &["'xmax'", "rx = 0.01", "no rotations"],
+    );
+    expect_error(
+        &[
+            "static",
+            ROD,
+            "--fix",
+            "xmin",
+            "--couple",
+            "xmax:guided=z",
+            "--displace",
+            "xmax=-,-,0.001",
+            "--force",
+            "xmax=0,0,100",
+        ],
+        &[
+            "force on 'xmax'",
+            "z component",
+            "reference node of 'xmax' uz",
+            "prescribed displacement",
+        ],
+    );
+    expect_error(
+        &[
+            "static",
+            ROD,
+            "--fix",
+            "xmin",
+            "--displace",
+            "xmax=-,-,0.001",
+            "--force",
+            "xmax=0,0,100",
+        ],
+        &["force on 'xmax'", "uz", "prescribed displacement"],
+    );
+    // Consistent: a zero displacement where a support already holds zero; a force across the
+    // prescribed component; a zero rotation on a guided coupling.
+    for args in [
+        &["static", ROD, "--fix", "xmin", "--displace", "zmin=-,-,0"][..],
+        &[
+            "static",
+            ROD,
+            "--fix",
+            "xmin",
+            "--displace",
+            "xmax=-,-,0.001",
+            "--force",
+            "xmax=100,0,0",
+        ][..],
+        &[
+            "static",
+            ROD,
+            "--fix",
+            "xmin",
+            "--couple",
+            "xmax:guided=z",
+            "--displace",
+            "xmax=-,-,0.001,0,-,-",
+        ][..],
+    ] {
+        let (code, out, err) = run(args);
+        assert_eq!(code, 0, "{args:?}: {out}{err}");
+    }
+}
+
+/// Item 12: beam sections that cannot exist, a radial orientation without an axis and an
+/// indefinite point-mass inertia are refused at input, naming the option.
+#[test]
+fn impossible_sections_and_inertias_are_refused() {
+    let coil = "helix:0.032,0.01,6,12,line3";
+    for (beam, needle) in [
+        ("wire=circle:-0.006@radial:0,0,0,0,0,1", "d = -0.006"),
+        ("wire=tube:0.006,0.004@radial:0,0,0,0,0,1", "exceeds the radius"),
+        ("wire=i:0.01,0.01,0.001,0.006@radial:0,0,0,0,0,1", "fill the height"),
+        ("wire=circle:0.006@radial:0,0,0,0,0,0", "axis"),
+    ] {
+        expect_error(&["modes", coil, "--beam", beam, "--modes", "7"], &["--beam", needle]);
+    }
+    let (code, out, err) = run(&[
+        "modes",
+        coil,
+        "--beam",
+        "wire=tube:0.006,0.003@radial:0,0,0,0,0,1",
+        "--modes",
+        "7",
+    ]);
+    assert_eq!(code, 0, "a tube with wall d/2 is a solid circle: {out}{err}");
+    let cube = "box:0.1,0.1,0.1:2,2,2:hex8";
+    expect_error(
+        &["modes", cube, "--couple", "xmax", "--point-mass", "xmax=1,-1,1,1,0,0,0"],
+        &["point mass on 'xmax'", "positive semi-definite", "Ixx"],
+    );
+    expect_error(
+        &["modes", cube, "--couple", "xmax", "--point-mass", "xmax=1,1,1,1,5,0,0"],
+        &["positive semi-definite", "Ixy"],
+    );
+    let (code, out, err) = run(&[
+        "modes",
+        cube,
+        "--couple",
+        "xmax",
+        "--point-mass",
+        "xmax=1,1,1,1,0.1,0,0",
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+}
