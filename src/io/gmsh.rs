@@ -42,8 +42,66 @@ use cursor::{BinaryLayout, Cursor, shown};
 /// [`Error::EmptyModel`] for a file without elements, [`Error::InvalidInput`] for a
 /// non-positive `length_scale`.
 pub fn read(path: &Path, length_scale: f64) -> Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    read_bytes(&bytes, path, length_scale)
+    read_bytes(&read_file(path)?, path, length_scale)
+}
+
+/// The bytes of a mesh file, read only after its first bytes show a gmsh header: `/dev/zero`,
+/// a FIFO or a large file of another kind is refused at once instead of read until memory runs
+/// out. A stream without a known size is read up to the memory this process may use.
+fn read_file(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let size = f.metadata().ok().filter(|m| m.is_file()).map(|m| m.len());
+    // "$MeshFormat" after at most a little leading white space.
+    let mut head = Vec::new();
+    (&mut f)
+        .take(64)
+        .read_to_end(&mut head)
+        .map_err(|e| Error::io(path, e))?;
+    let start = head.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(head.len());
+    if !head[start..].starts_with(b"$MeshFormat") {
+        let shown: String = head[start..]
+            .iter()
+            .take(16)
+            .map(|&b| if b.is_ascii_graphic() { b as char } else { '.' })
+            .collect();
+        return Err(Error::MeshParse {
+            path: path.to_path_buf(),
+            section: "$MeshFormat".into(),
+            line: Some(1),
+            msg: if head.is_empty() {
+                "empty file: expected $MeshFormat".into()
+            } else {
+                format!("not a gmsh MSH file: it starts with '{shown}', not $MeshFormat")
+            },
+        });
+    }
+    let cap = match size {
+        Some(n) => n,
+        None => crate::system::available_memory().unwrap_or(u64::MAX) / 2,
+    };
+    let mut bytes = head;
+    if let Some(n) = size {
+        bytes
+            .try_reserve_exact((n as usize).saturating_sub(bytes.len()))
+            .map_err(|_| Error::out_of_memory(&format!("reading {}", path.display()), n))?;
+    }
+    (&mut f)
+        .take(cap.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if size.is_none() && bytes.len() as u64 > cap {
+        return Err(Error::MeshParse {
+            path: path.to_path_buf(),
+            section: "file".into(),
+            line: None,
+            msg: format!(
+                "the stream goes on beyond {}, half the memory available: not a mesh this machine can hold",
+                crate::io::fmt_bytes(cap)
+            ),
+        });
+    }
+    Ok(bytes)
 }
 
 /// Read a gmsh mesh from the bytes of a file; `path` is used in messages only.

@@ -90,3 +90,42 @@ pub fn write_mode_shapes(
     }
     Ok(written)
 }
+
+/// Check, before a run, that `path` can be written as an output file: its folder exists (it
+/// is created if missing) and a file can be created there. A file that did not exist is not
+/// left behind. The error names the path ([`Error::Io`], exit 1), so a bad `--vtu` or `-o`
+/// is reported in a second rather than after the whole analysis.
+pub fn check_writable_file(path: &std::path::Path) -> crate::Result<()> {
+    if path.is_dir() {
+        return Err(crate::Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a folder, an output file was expected",
+            ),
+        ));
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+    }
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| crate::Error::io(path, e))?;
+    if !existed {
+        let _ = std::fs::remove_file(path);
+    }
+    Ok(())
+}
+
+/// Check, before a run, that `dir` can take output files: created if missing, and a probe
+/// file written and removed in it. The error names the folder ([`Error::Io`], exit 1).
+pub fn check_writable_dir(dir: &std::path::Path) -> crate::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+    let probe = dir.join(format!(".vibrofem-write-check-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| crate::Error::io(dir, e))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}

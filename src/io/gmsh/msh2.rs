@@ -76,6 +76,9 @@ struct Elements {
     /// The elementary entity of each cell, to tell gmsh's repeats of an element for several
     /// physical groups (same entity) from other duplicates.
     entity_of: std::collections::HashMap<CellRef, i64>,
+    /// (cell, physical tag) pairs read: a repeat for a group the cell is already in is a
+    /// duplicate, not gmsh's repeat for another group.
+    groups_of: std::collections::HashSet<(CellRef, i64)>,
     /// Scratch: tags and dense node indices of the current record.
     tags: Vec<i64>,
     nodes: Vec<u32>,
@@ -87,6 +90,7 @@ fn read_elements(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<(
     let n = section_count(cur, header, "elements", 8, 8)?;
     let mut st = Elements {
         entity_of: std::collections::HashMap::new(),
+        groups_of: std::collections::HashSet::new(),
         tags: Vec::new(),
         nodes: Vec::new(),
     };
@@ -159,8 +163,9 @@ fn record(cur: &mut Cursor, b: &mut Builder, st: &mut Elements, tag: u64, gmsh_t
     // A cell read before (same kind and nodes) is merged: gmsh's repeat of an element for
     // another physical group (same entity) silently, any other duplicate with a note.
     let (cell, merged) = b.add_cell(cur, kind, tag, &st.nodes)?;
+    let new_group = st.groups_of.insert((cell, phys));
     if merged {
-        let gmsh_repeat = matches!(st.entity_of.get(&cell), Some(&e) if e == entity && phys != 0);
+        let gmsh_repeat = new_group && matches!(st.entity_of.get(&cell), Some(&e) if e == entity && phys != 0);
         if !gmsh_repeat {
             b.note_merged(cell, tag);
         }

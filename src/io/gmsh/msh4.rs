@@ -177,6 +177,13 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
         let entity = cur.int("entity tag")?;
         let gmsh_type = cur.int("element type")?;
         let n = cur.size("number of elements in the block")?;
+        if let Some(kind) = CellKind::from_gmsh_type(gmsh_type).filter(|k| k.dim() != dim as usize) {
+            return Err(cur.err(format!(
+                "a block of entity {dim}:{entity} (dimension {dim}) holds {} elements of dimension {}",
+                kind.name(),
+                kind.dim()
+            )));
+        }
         let phys = match entities.phys.get(&(dim, entity)) {
             Some(p) => p,
             None if entities.read => {
@@ -195,13 +202,6 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
             };
             return Err(b.unsupported(cur.path(), gmsh_type, group));
         };
-        if kind.dim() != dim as usize {
-            return Err(cur.err(format!(
-                "a block of entity {dim}:{entity} (dimension {dim}) holds {} elements of dimension {}",
-                kind.name(),
-                kind.dim()
-            )));
-        }
         let nn = kind.n_nodes();
         let n = cur.check_count(n, "elements in the block", (1 + nn) * s)?;
         for _ in 0..n {
