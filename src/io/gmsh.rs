@@ -63,7 +63,13 @@ fn read_file(path: &Path) -> Result<Vec<u8>> {
         let shown: String = head[start..]
             .iter()
             .take(16)
-            .map(|&b| if b.is_ascii_graphic() { b as char } else { '.' })
+            .map(|&b| {
+                if b.is_ascii_graphic() || b == b' ' {
+                    b as char
+                } else {
+                    '.'
+                }
+            })
             .collect();
         return Err(Error::MeshParse {
             path: path.to_path_buf(),

@@ -51,6 +51,7 @@ impl Model {
         let mut cons = Constraints::new(nodes.len());
         let fixed_by = fixes(mesh, spec, &active, &mut cons)?;
         couplings(mesh, spec, &active, &references, &coupled, &fixed_by, &nodes, &mut cons)?;
+        notes.extend(pinned_references(&active, &references, &coupled, &nodes, &mut cons));
         prescribed(mesh, spec, &active, &references, &mut cons)?;
         notes.extend(lints(&solids, orphan_nodes));
         let dofs = DofMap::with_constraints(active, cons)?;
@@ -637,6 +638,44 @@ pub(crate) fn couplings(
         }
     }
     Ok(())
+}
+
+/// Step 6b': a coupling whose nodes carry no rotations and all sit at the reference point (a
+/// one-node group, the usual case) gives the reference node's rotations nothing to act on: a
+/// solid node carries no moment. They are held fixed, with a note, rather than left singular
+/// (a zero pivot); the reference node then moves with the node.
+pub(crate) fn pinned_references(
+    active: &[DofMask],
+    references: &[ReferenceNode],
+    coupled: &[Vec<u32>],
+    nodes: &[[f64; 3]],
+    cons: &mut Constraints,
+) -> Vec<String> {
+    const ROTATIONS: DofMask = ALL6 & !TRANSLATIONS;
+    let mut notes = Vec::new();
+    for (r, gn) in references.iter().zip(coupled) {
+        if gn.is_empty() || gn.iter().any(|&s| active[s as usize] & ROTATIONS != 0) {
+            continue;
+        }
+        let xr = r.position;
+        let scale = xr.iter().map(|x| x.abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let at_reference = gn.iter().all(|&s| {
+            let x = nodes[s as usize];
+            (0..3).all(|d| (x[d] - xr[d]).abs() <= 1e-12 * scale)
+        });
+        let free = ROTATIONS & !cons.fixed[r.node];
+        if at_reference && free != 0 {
+            cons.fixed[r.node] |= free;
+            notes.push(format!(
+                "coupling '{}': its {} at the reference point and carr{} no rotations, so the reference \
+                 node's rotations are held fixed (a moment or rotary inertia there has no effect)",
+                r.group,
+                if gn.len() == 1 { "node is" } else { "nodes are" },
+                if gn.len() == 1 { "ies" } else { "y" }
+            ));
+        }
+    }
+    notes
 }
 
 /// Step 6c: prescribed displacement values (on a coupled group: its reference node).

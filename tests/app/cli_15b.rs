@@ -251,3 +251,89 @@ fn impossible_sections_and_inertias_are_refused() {
     ]);
     assert_eq!(code, 0, "{out}{err}");
 }
+
+/// Item 12: an output path that cannot be written is refused before the run, naming it; a
+/// missing folder is created.
+#[test]
+fn output_paths_are_checked_before_the_run() {
+    let cube = "box:0.1,0.1,0.1:2,2,2:hex8";
+    expect_error(&["modes", cube, "--vtu", "/proc/no/such/x.vtu"], &["/proc/no"]);
+    let d = tmp("outputs");
+    expect_error(&["modes", cube, "--vtu", d.to_str().unwrap()], &["is a folder"]);
+    expect_error(
+        &["static", cube, "--fix", "xmin", "--msh-out", "/proc/no/x.msh"],
+        &["/proc/no"],
+    );
+    expect_error(
+        &["run", "scenes/s3_leaf_stiffness.toml", "-o", "/proc/no/run"],
+        &["/proc/no/run"],
+    );
+    let f = d.join("new/folder/m.vtu");
+    let (code, out, err) = run(&["modes", cube, "--modes", "7", "--vtu", f.to_str().unwrap()]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(f.is_file());
+}
+
+/// Item 12: a file that is not a gmsh mesh (`/dev/zero`, text) is refused from its first
+/// bytes, not read until memory runs out.
+#[test]
+fn non_mesh_files_are_refused_at_once() {
+    expect_error(&["modes", "/dev/zero"], &["/dev/zero", "not a gmsh MSH file"]);
+    let d = tmp("notmesh");
+    let f = d.join("a.msh");
+    std::fs::write(&f, "solid cube\nfacet normal 0 0 1\n").unwrap();
+    expect_error(
+        &["mesh-info", f.to_str().unwrap()],
+        &["a.msh", "not a gmsh MSH file", "solid cube"],
+    );
+}
+
+/// Item 12: mesh-info's bounding box covers the nodes the cells use, and says how many are
+/// unused.
+#[test]
+fn mesh_info_bounding_box_skips_unused_nodes() {
+    let d = tmp("bbox");
+    let f = d.join("stray.msh");
+    std::fs::write(
+        &f,
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 100 100 100\n$EndNodes\n\
+         $Elements\n1\n1 4 2 1 1 1 2 3 4\n$EndElements\n",
+    )
+    .unwrap();
+    let (code, out, err) = run(&["mesh-info", f.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("1 belong to no element"), "{out}");
+    assert!(out.contains("size    1.000000 x 1.000000 x 1.000000 m"), "{out}");
+}
+
+/// Item 13: a coupling on a one-node group of a solid works: the reference node's rotations,
+/// which nothing can hold, are fixed with a note (it was a zero pivot).
+#[test]
+fn one_node_coupling_on_a_solid_is_solved() {
+    let d = tmp("onenode");
+    let f = d.join("pt.msh");
+    std::fs::write(
+        &f,
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n0 3 \"pt\"\n3 1 \"body\"\n$EndPhysicalNames\n\
+         $Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n\
+         $Elements\n3\n1 4 2 1 1 1 2 3 4\n2 4 2 1 1 2 3 4 5\n3 15 2 3 1 5\n$EndElements\n",
+    )
+    .unwrap();
+    let (code, out, err) = run(&["modes", f.to_str().unwrap(), "--couple", "pt", "--modes", "3"]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        err.contains("coupling 'pt'") && err.contains("rotations are held fixed"),
+        "{err}"
+    );
+    let (code, out, err) = run(&[
+        "static",
+        f.to_str().unwrap(),
+        "--fix",
+        "body:ux",
+        "--couple",
+        "pt",
+        "--spring",
+        "pt=1e6,1e6,1e6,0,0,0",
+    ]);
+    assert!(code == 0 || !err.contains("ZeroPivot"), "{out}{err}");
+}
