@@ -29,29 +29,69 @@ impl NodeGraph {
     /// constraints, an element also couples the nodes its nodes depend on (`dofs.deps`, e.g.
     /// the reference node of a rigid coupling).
     pub fn build(n_nodes: usize, sets: &[&dyn ElementSet], dofs: Option<&DofMap>) -> NodeGraph {
-        // One packed (a, b) key per ordered node pair of each element; sort and dedup.
-        let mut keys: Vec<u64> = sets
-            .iter()
-            .flat_map(|s| {
-                (0..s.len())
-                    .into_par_iter()
-                    .flat_map_iter(move |e| {
-                        let mut nodes: Vec<u32> = s.nodes(e).to_vec();
-                        if let Some(d) = dofs {
-                            for &a in s.nodes(e) {
-                                nodes.extend_from_slice(&d.deps[a as usize]);
-                            }
-                        }
-                        let nodes2 = nodes.clone();
-                        nodes.into_iter().flat_map(move |a| {
-                            let v: Vec<u64> = nodes2.iter().map(|&b| ((a as u64) << 32) | b as u64).collect();
-                            v.into_iter()
-                        })
-                    })
-                    .collect::<Vec<u64>>()
-            })
-            .collect();
-        // Every node couples with itself, and a constrained node with what it depends on.
+        let mut keys = Vec::with_capacity(Self::key_count(n_nodes, sets, dofs));
+        Self::fill_keys(&mut keys, n_nodes, sets, dofs);
+        let adj_len = Self::sort_keys(&mut keys);
+        let mut adj = Vec::with_capacity(adj_len);
+        Self::from_keys(&keys, n_nodes, &mut adj)
+    }
+
+    /// As [`NodeGraph::build`], but an allocation failure is an error naming the memory the
+    /// graph needed (8 bytes per node pair of each element, before duplicates are removed)
+    /// instead of an abort.
+    pub fn try_build(n_nodes: usize, sets: &[&dyn ElementSet], dofs: Option<&DofMap>) -> Result<NodeGraph> {
+        let count = Self::key_count(n_nodes, sets, dofs);
+        let mut keys: Vec<u64> = Vec::new();
+        keys.try_reserve_exact(count)
+            .map_err(|_| crate::Error::out_of_memory("the node graph", 8 * count as u64))?;
+        Self::fill_keys(&mut keys, n_nodes, sets, dofs);
+        let adj_len = Self::sort_keys(&mut keys);
+        let mut adj = Vec::new();
+        adj.try_reserve_exact(adj_len)
+            .map_err(|_| crate::Error::out_of_memory("the node graph", 4 * adj_len as u64))?;
+        Ok(Self::from_keys(&keys, n_nodes, &mut adj))
+    }
+
+    /// Node-pair keys [`NodeGraph::build`] sorts (with repeats): its working memory, 8 bytes each.
+    pub fn key_count(n_nodes: usize, sets: &[&dyn ElementSet], dofs: Option<&DofMap>) -> usize {
+        let mut count = n_nodes;
+        for s in sets {
+            for e in 0..s.len() {
+                let mut k = s.nodes(e).len();
+                if let Some(d) = dofs {
+                    k += s.nodes(e).iter().map(|&a| d.deps[a as usize].len()).sum::<usize>();
+                }
+                count += k * k;
+            }
+        }
+        if let Some(d) = dofs {
+            count += d
+                .deps
+                .iter()
+                .map(|deps| 2 * deps.len() + deps.len() * deps.len())
+                .sum::<usize>();
+        }
+        count
+    }
+
+    /// One packed (a, b) key per ordered node pair of each element, every node with itself,
+    /// and a constrained node with what it depends on.
+    fn fill_keys(keys: &mut Vec<u64>, n_nodes: usize, sets: &[&dyn ElementSet], dofs: Option<&DofMap>) {
+        let mut nodes: Vec<u32> = Vec::new();
+        for s in sets {
+            for e in 0..s.len() {
+                nodes.clear();
+                nodes.extend_from_slice(s.nodes(e));
+                if let Some(d) = dofs {
+                    for &a in s.nodes(e) {
+                        nodes.extend_from_slice(&d.deps[a as usize]);
+                    }
+                }
+                for &a in &nodes {
+                    keys.extend(nodes.iter().map(|&b| ((a as u64) << 32) | b as u64));
+                }
+            }
+        }
         keys.extend((0..n_nodes as u64).map(|a| (a << 32) | a));
         if let Some(d) = dofs {
             for (a, deps) in d.deps.iter().enumerate() {
@@ -64,17 +104,28 @@ impl NodeGraph {
                 }
             }
         }
+    }
+
+    /// Sort and deduplicate in place; the number of distinct keys.
+    fn sort_keys(keys: &mut Vec<u64>) -> usize {
         keys.par_sort_unstable();
         keys.dedup();
+        keys.len()
+    }
+
+    fn from_keys(keys: &[u64], n_nodes: usize, adj: &mut Vec<u32>) -> NodeGraph {
         let mut ptr = vec![0usize; n_nodes + 1];
-        for &k in &keys {
+        for &k in keys {
             ptr[(k >> 32) as usize + 1] += 1;
         }
         for a in 0..n_nodes {
             ptr[a + 1] += ptr[a];
         }
-        let adj = keys.iter().map(|&k| (k & 0xffff_ffff) as u32).collect();
-        NodeGraph { ptr, adj }
+        adj.extend(keys.iter().map(|&k| (k & 0xffff_ffff) as u32));
+        NodeGraph {
+            ptr,
+            adj: std::mem::take(adj),
+        }
     }
 
     /// Neighbours of node `a` (including `a`).
@@ -83,8 +134,24 @@ impl NodeGraph {
     }
 }
 
-/// Build the full (both triangles) DOF pattern from the node graph and DOF map.
-pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Pattern {
+/// Entries of the DOF pattern [`dof_pattern`] builds (both triangles), without building it.
+pub fn pattern_nnz(graph: &NodeGraph, dofs: &DofMap) -> usize {
+    (0..dofs.n_nodes())
+        .into_par_iter()
+        .map(|b| {
+            let ncol = dofs.first[b + 1] - dofs.first[b];
+            ncol * graph
+                .neighbours(b)
+                .iter()
+                .map(|&a| dofs.first[a as usize + 1] - dofs.first[a as usize])
+                .sum::<usize>()
+        })
+        .sum()
+}
+
+/// Build the full (both triangles) DOF pattern from the node graph and DOF map. An allocation
+/// failure is an error ([`crate::Error::out_of_memory`]), not an abort.
+pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Result<Pattern> {
     let n_nodes = dofs.n_nodes();
     // Column counts first, then fill: each column of node b lists the free DOFs of all
     // neighbours a in node order, which is equation order.
@@ -108,7 +175,11 @@ pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Pattern {
         }
     }
     let nnz = *col_ptr.last().unwrap_or(&0);
-    let mut row_idx = vec![0usize; nnz];
+    let mut row_idx: Vec<usize> = Vec::new();
+    row_idx
+        .try_reserve_exact(nnz)
+        .map_err(|_| crate::Error::out_of_memory("the sparsity pattern", 8 * nnz as u64))?;
+    row_idx.resize(nnz, 0);
     // Fill per node in parallel: the columns of node b are a contiguous slice of row_idx.
     let mut slices: Vec<&mut [usize]> = Vec::with_capacity(n_nodes);
     let mut rest = row_idx.as_mut_slice();
@@ -134,14 +205,14 @@ pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Pattern {
             }
         }
     });
-    Pattern { n, col_ptr, row_idx }
+    Ok(Pattern { n, col_ptr, row_idx })
 }
 
 /// Assembled stiffness and mass on one shared pattern.
 pub struct Assembled {
     /// Stiffness.
     pub k: SymMatrix,
-    /// Mass (all zero if not requested).
+    /// Mass (no values if not requested).
     pub m: SymMatrix,
 }
 
@@ -150,8 +221,16 @@ pub struct Assembled {
 /// Elements are processed in chunks: each chunk's element matrices are computed in
 /// parallel, then scattered in element order. Fixed DOFs are skipped (eliminated).
 pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], want_mass: bool) -> Result<Assembled> {
-    let mut k = SymMatrix::zeros(pattern.clone());
-    let mut m = SymMatrix::zeros(pattern.clone());
+    let mut k = SymMatrix::try_zeros(pattern.clone(), "the stiffness matrix")?;
+    // Without mass, M keeps the pattern but no values (nothing is scattered into it).
+    let mut m = if want_mass {
+        SymMatrix::try_zeros(pattern.clone(), "the mass matrix")?
+    } else {
+        SymMatrix {
+            pattern: pattern.clone(),
+            values: Vec::new(),
+        }
+    };
     const CHUNK: usize = 2048;
     // Element matrices of one chunk, back to back (element e at offs[e - start]); reused.
     let mut kbuf: Vec<f64> = Vec::new();

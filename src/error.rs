@@ -181,6 +181,16 @@ impl Error {
         }
     }
 
+    /// An allocation of `bytes` for `what` failed: a model too large for the memory this
+    /// process may use (an input error, exit 1, like a refusal by the memory estimate).
+    pub fn out_of_memory(what: &str, bytes: u64) -> Self {
+        Error::InvalidInput(format!(
+            "cannot allocate {} for {what}: not enough memory for this model (a coarser mesh, or \
+             more memory: --max-memory, ulimit -v and cgroup limits are honoured)",
+            crate::io::fmt_bytes(bytes)
+        ))
+    }
+
     /// Name the equation of a [`Error::Singular`] in the user's terms with `describe` (an
     /// equation → "node 1234 uz" map, e.g. [`crate::system::System::describe_equation`]);
     /// other errors pass through.

@@ -304,6 +304,17 @@ macro_rules! outln {
     ($($t:tt)*) => { emit(&format!("{}\n", format_args!($($t)*)))? };
 }
 
+/// Refuse, before any work, output files and folders that cannot be written (named, exit 1).
+fn check_outputs(files: &[Option<&std::path::Path>], dir: Option<&std::path::Path>) -> Result<()> {
+    for f in files.iter().flatten() {
+        io::check_writable_file(f)?;
+    }
+    if let Some(d) = dir {
+        io::check_writable_dir(d)?;
+    }
+    Ok(())
+}
+
 fn parse_bytes(s: &str) -> Result<u64> {
     let t = s.trim();
     let (num, mult) = match t.chars().last() {
@@ -350,6 +361,7 @@ fn modes(a: &ModesArgs) -> Result<i32> {
         max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
         max_applications: a.max_applications,
     };
+    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref()], None)?;
     let t = std::time::Instant::now();
     let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
@@ -426,6 +438,7 @@ fn design_cmd(a: &DesignArgs) -> Result<i32> {
         Some(f) => vibrofem::app::design::Design::from_toml(f)?,
         None => vibrofem::app::design::Design::paper(),
     };
+    check_outputs(&[], Some(&a.out))?;
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new_spinner();
         b.enable_steady_tick(std::time::Duration::from_millis(120));
@@ -465,6 +478,7 @@ report: {}/report.md (plots and mode shapes beside it)",
 fn static_cmd(a: &StaticArgs) -> Result<i32> {
     let mut spec = a.model.spec()?;
     let loads = a.loads.apply(&mut spec)?;
+    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref()], None)?;
     let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let opts = vibrofem::analysis::statics::StaticOptions {
         spec,
@@ -541,6 +555,9 @@ fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     let mat = Material::parse(&a.material)?;
     mat.validate("--material")?;
     let mut info = vibrofem::app::report::mesh_info(&mesh, &a.mesh, &mat)?;
+    for n in &mesh.notes {
+        eprintln!("note: {n}");
+    }
     if !a.shell.is_empty() || !a.beam.is_empty() {
         // Volume and mass of the model the parts describe (shells t·A, beams A·L, solids).
         let opts = vibrofem::input::options::ModelOptions {
@@ -567,7 +584,7 @@ fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
 
 fn run_cmd(a: &RunArgs) -> Result<i32> {
     let scene = vibrofem::app::scene::Scene::load(&a.scene)?;
-    std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
+    check_outputs(&[], Some(&a.out))?;
     let report = scene.run(Some((&a.out, "")))?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?;
     let path = a.out.join("summary.json");
@@ -592,6 +609,7 @@ fn run_cmd(a: &RunArgs) -> Result<i32> {
 
 fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     use std::io::IsTerminal;
+    check_outputs(&[], Some(&a.out))?;
     let opts = vibrofem::app::scene::BatchOptions {
         pattern: a.pattern.clone(),
         template: a.scene.clone(),
@@ -664,6 +682,7 @@ fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
     if let Some(n) = a.check {
         study.check.designs = n;
     }
+    check_outputs(&[], Some(&a.out))?;
     let o = sweep::run_sweep(
         &study,
         &sweep::SweepOptions {
@@ -684,6 +703,7 @@ fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
     } else {
         converge::builtin(&a.case)?
     };
+    check_outputs(&[], Some(&a.out))?;
     let c = converge::run_case(&case, &|l| eprintln!("{l}"))?;
     converge::write_outputs(&c, &a.out)?;
     out!("{}", converge::table_markdown(&c));
@@ -692,6 +712,7 @@ fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
 }
 
 fn merge_cmd(a: &MergeArgs) -> Result<i32> {
+    check_outputs(&[], Some(&a.out))?;
     let s = vibrofem::app::sweep::merge(&a.dirs, Some(&a.out))?;
     outln!(
         "{} cases ({} failed) merged from {} folders into {}",

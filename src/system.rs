@@ -18,10 +18,10 @@
 //! # Ok::<(), vibrofem::Error>(())
 //! ```
 
-use crate::assembly::{NodeGraph, assemble, dof_pattern};
+use crate::assembly::{NodeGraph, assemble, dof_pattern, pattern_nnz};
 use crate::dof::{DofMap, NCOMP};
 use crate::linalg::factor::SymbolicFactor;
-use crate::linalg::ordering::{Ordering, nested_dissection};
+use crate::linalg::ordering::{Ordering, expand_node_order, factor_entries, node_nested_dissection};
 use crate::linalg::sparse::{Pattern, SymMatrix};
 use crate::model::Model;
 use crate::{Error, Result};
@@ -79,12 +79,46 @@ impl System {
     /// factorisation would not fit in memory ([`SystemOptions::max_memory`]).
     pub fn build(model: Model, opts: &SystemOptions, source: &str) -> Result<System> {
         let t = Instant::now();
+        // Size every large buffer before allocating it, so a model too large for the memory is
+        // refused with the estimate in seconds rather than killed (or aborted) in assembly.
+        let budget = memory_budget(opts.max_memory);
         let sets = model.element_sets();
-        let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
-        let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
+        let n_nodes = model.dofs.n_nodes();
+        let keys = NodeGraph::key_count(n_nodes, &sets, Some(&model.dofs)) as u64;
+        check_estimate(source, &budget, 8 * keys, || format!("node graph, {keys} node pairs"))?;
+        let graph = NodeGraph::try_build(n_nodes, &sets, Some(&model.dofs))?;
+        let nnz = pattern_nnz(&graph, &model.dofs) as u64;
+        let mats = if opts.mass { 4 } else { 3 };
+        let detail = |factor: u64| {
+            move || {
+                format!(
+                    "factor ≥ {factor} entries, K{} {nnz} entries",
+                    if opts.mass { " and M" } else { "" }
+                )
+            }
+        };
+        // The factor holds at least the lower triangle of K: a bound before the ordering ...
+        let mut factor = (nnz + model.dofs.n_free as u64) / 2;
+        check_estimate(source, &budget, 8 * factor + mats * 16 * nnz, detail(factor))?;
+        let t_nd = Instant::now();
+        let node_order = match opts.ordering {
+            Ordering::Metis => Some(node_nested_dissection(&graph, &model.dofs)?),
+            Ordering::Amd | Ordering::Natural => None,
+        };
+        let ordering_time = t_nd.elapsed().as_secs_f64();
+        // ... and with a node ordering, its size up to supernode padding, from the elimination tree.
+        if let Some(order) = &node_order {
+            // Stop counting once the budget is exceeded: the refusal then says "at least".
+            let cap = budget
+                .as_ref()
+                .map_or(u64::MAX, |b| (b.bytes.saturating_sub(mats * 16 * nnz)) / 8);
+            factor = factor_entries(&graph, &model.dofs, order, cap);
+            check_estimate(source, &budget, 8 * factor + mats * 16 * nnz, detail(factor))?;
+        }
+        let pattern = Arc::new(dof_pattern(&graph, &model.dofs)?);
         let km = assemble(pattern.clone(), &model.dofs, &sets, opts.mass)?;
         drop(sets);
-        let t_assemble = t.elapsed().as_secs_f64();
+        let t_assemble = t.elapsed().as_secs_f64() - ordering_time;
         if model.dofs.n_free == 0 {
             return Err(Error::InvalidInput(format!(
                 "{source}: every degree of freedom is fixed or constrained; nothing to solve"
@@ -93,7 +127,8 @@ impl System {
         let t = Instant::now();
         let symbolic = match opts.ordering {
             Ordering::Metis => {
-                let (fwd, inv) = nested_dissection(&graph, &model.dofs)?;
+                let order = node_order.as_deref().unwrap_or(&[]);
+                let (fwd, inv) = expand_node_order(order, &model.dofs);
                 SymbolicFactor::new(&pattern, Some((&fwd, &inv)))?
             }
             Ordering::Amd => SymbolicFactor::new(&pattern, None)?,
@@ -103,7 +138,11 @@ impl System {
             }
         };
         drop(graph);
-        let t_order = t.elapsed().as_secs_f64();
+        let t_order = t.elapsed().as_secs_f64() + ordering_time;
+        log::debug!(
+            "{source}: factor entries estimated {factor} before assembly, {} from the symbolic analysis",
+            symbolic.nnz_l
+        );
         check_memory(source, &symbolic, &pattern, opts.max_memory)?;
         Ok(System {
             model: Arc::new(model),
@@ -125,9 +164,16 @@ impl System {
     /// memory need is not this machine's. [`System::symbolic`] is then an error.
     pub fn assemble_only(model: Model, source: &str) -> Result<System> {
         let t = Instant::now();
+        // The graph, K and M must fit here (the factor is another machine's concern).
+        let budget = memory_budget(None);
         let sets = model.element_sets();
-        let graph = NodeGraph::build(model.dofs.n_nodes(), &sets, Some(&model.dofs));
-        let pattern = Arc::new(dof_pattern(&graph, &model.dofs));
+        let n_nodes = model.dofs.n_nodes();
+        let keys = NodeGraph::key_count(n_nodes, &sets, Some(&model.dofs)) as u64;
+        check_estimate(source, &budget, 8 * keys, || format!("node graph, {keys} node pairs"))?;
+        let graph = NodeGraph::try_build(n_nodes, &sets, Some(&model.dofs))?;
+        let nnz = pattern_nnz(&graph, &model.dofs) as u64;
+        check_estimate(source, &budget, 2 * 16 * nnz, || format!("K and M, {nnz} entries each"))?;
+        let pattern = Arc::new(dof_pattern(&graph, &model.dofs)?);
         drop(graph);
         let km = assemble(pattern.clone(), &model.dofs, &sets, true)?;
         drop(sets);
@@ -244,18 +290,135 @@ pub fn describe_equation(model: &Model, eq: usize) -> String {
     }
 }
 
+/// The memory a model may use: `--max-memory` when given, otherwise what the system has
+/// available ([`memory_budget`] without a limit); with a description for messages.
+pub struct MemoryBudget {
+    /// Bytes.
+    pub bytes: u64,
+    /// Where the figure comes from, e.g. "--max-memory is" or "ulimit -v leaves".
+    pub what: String,
+}
+
+/// The memory budget: the smallest of `limit` (else MemAvailable), the cgroup's memory limit
+/// less its usage, and the address-space and data limits (`ulimit -v`, `ulimit -d`) less what
+/// the process already uses. `None` when nothing is known.
+pub fn memory_budget(limit: Option<u64>) -> Option<MemoryBudget> {
+    // An explicit limit replaces MemAvailable (which swap or reclaim may exceed), but the hard
+    // limits of ulimit and the cgroup still apply: beyond them an allocation fails for sure.
+    let mut sources = memory_sources();
+    if let Some(l) = limit {
+        sources.retain(|(_, what)| *what != MEMINFO);
+        sources.push((l, "--max-memory is"));
+    }
+    sources
+        .into_iter()
+        .min_by_key(|(b, _)| *b)
+        .map(|(bytes, what)| MemoryBudget {
+            bytes,
+            what: what.into(),
+        })
+}
+
+const MEMINFO: &str = "the system has available";
+
+/// Every memory limit that applies to this process: (bytes still usable, description).
+fn memory_sources() -> Vec<(u64, &'static str)> {
+    let mut out = Vec::new();
+    if let Some(a) = meminfo_available() {
+        out.push((a, MEMINFO));
+    }
+    if let Some(c) = cgroup_available() {
+        out.push((c, "the cgroup memory limit leaves"));
+    }
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let status_kb = |key: &str| -> u64 {
+        status
+            .lines()
+            .find(|l| l.starts_with(key))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse::<u64>().ok())
+            .unwrap_or(0)
+            * 1024
+    };
+    if let Ok(limits) = std::fs::read_to_string("/proc/self/limits") {
+        // "Max address space   unlimited   unlimited   bytes": the soft limit is the first value.
+        let soft = |name: &str| -> Option<u64> {
+            let l = limits.lines().find(|l| l.starts_with(name))?;
+            l[name.len()..].split_whitespace().next()?.parse().ok()
+        };
+        if let Some(l) = soft("Max address space") {
+            out.push((l.saturating_sub(status_kb("VmSize:")), "ulimit -v leaves"));
+        }
+        if let Some(l) = soft("Max data size") {
+            out.push((l.saturating_sub(status_kb("VmData:")), "ulimit -d leaves"));
+        }
+    }
+    out
+}
+
+/// The cgroup (v2, else v1) memory limit of this process less its current usage, if limited.
+fn cgroup_available() -> Option<u64> {
+    let read = |p: &str| {
+        std::fs::read_to_string(p)
+            .ok()
+            .and_then(|s| s.trim().parse::<u64>().ok())
+    };
+    let cg = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    let mut dirs = Vec::new();
+    for line in cg.lines() {
+        let mut parts = line.splitn(3, ':');
+        let (id, ctrl, path) = (parts.next()?, parts.next()?, parts.next()?);
+        if id == "0" && ctrl.is_empty() {
+            dirs.push((format!("/sys/fs/cgroup{path}"), "memory.max", "memory.current"));
+        } else if ctrl.split(',').any(|c| c == "memory") {
+            dirs.push((
+                format!("/sys/fs/cgroup/memory{path}"),
+                "memory.limit_in_bytes",
+                "memory.usage_in_bytes",
+            ));
+        }
+    }
+    dirs.push(("/sys/fs/cgroup".into(), "memory.max", "memory.current"));
+    dirs.push((
+        "/sys/fs/cgroup/memory".into(),
+        "memory.limit_in_bytes",
+        "memory.usage_in_bytes",
+    ));
+    for (dir, max, cur) in dirs {
+        // v2 writes "max" when unlimited (not a number: skipped); v1 a huge number.
+        if let Some(limit) = read(&format!("{dir}/{max}")) {
+            if limit >= 1 << 60 {
+                continue;
+            }
+            let used = read(&format!("{dir}/{cur}")).unwrap_or(0);
+            return Some(limit.saturating_sub(used));
+        }
+    }
+    None
+}
+
+/// Refuse before allocating: `bytes` (an estimate, described by `detail`) against the budget.
+fn check_estimate(source: &str, budget: &Option<MemoryBudget>, bytes: u64, detail: impl Fn() -> String) -> Result<()> {
+    match budget {
+        Some(b) if bytes > b.bytes => Err(Error::InvalidInput(format!(
+            "{source}: the model needs at least {} ({}) but {} {}",
+            crate::io::fmt_bytes(bytes),
+            detail(),
+            b.what,
+            crate::io::fmt_bytes(b.bytes)
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// Refuse, before factorising, a model whose factor (estimated from the symbolic analysis) plus
 /// the matrices would not fit in `limit` bytes (`--max-memory`) or, without a limit, in the memory
 /// the system has available — a clear error with the estimate instead of being killed.
 pub fn check_memory(source: &str, sym: &SymbolicFactor, pattern: &Pattern, limit: Option<u64>) -> Result<()> {
     // Factor values, K, M, the shifted copy and faer's permuted copy (values + indices).
     let need = sym.factor_bytes() as u64 + 4 * 16 * pattern.nnz() as u64;
-    let (lim, what) = match limit {
-        Some(l) => (l, "--max-memory is"),
-        None => match available_memory() {
-            Some(a) => (a, "the system has available"),
-            None => return Ok(()),
-        },
+    let Some(MemoryBudget { bytes: lim, what }) = memory_budget(limit) else {
+        return Ok(());
     };
     if need > lim {
         return Err(Error::InvalidInput(format!(
@@ -277,8 +440,14 @@ pub fn peak_memory() -> Option<u64> {
     Some(kb * 1024)
 }
 
-/// Memory the operating system can still give this process (Linux MemAvailable), bytes.
+/// Memory this process can still use, bytes: the smallest of Linux MemAvailable, the cgroup
+/// limit less its usage, and `ulimit -v`/`-d` less the process's size ([`memory_budget`]).
 pub fn available_memory() -> Option<u64> {
+    memory_budget(None).map(|b| b.bytes)
+}
+
+/// Linux MemAvailable, bytes.
+fn meminfo_available() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

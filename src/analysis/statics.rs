@@ -196,12 +196,14 @@ fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<Vec<f64>> {
                     )));
                 }
                 if let Some(r) = model.references.iter().find(|r| &r.group == group) {
+                    force_on_constraints(model, group, force, &[r.node as u32])?;
                     for d in 0..3 {
                         f[NCOMP * r.node + d] += force[d];
                     }
                     continue;
                 }
                 let g = mesh.group(group)?;
+                force_on_constraints(model, group, force, &mesh.group_nodes(g))?;
                 if g.dim == 2 {
                     let (w, area, _) = surface_weights(mesh, group)?;
                     for (a, wa) in w {
@@ -267,6 +269,42 @@ fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<Vec<f64>> {
         }
     }
     Ok(f)
+}
+
+/// Refuse a force component that would act only on held DOFs: every node it is spread over has
+/// that translation prescribed or fixed, so it would go straight into a reaction and the run
+/// would answer another question (a force and a displacement on the same DOF).
+fn force_on_constraints(model: &Model, group: &str, force: &[f64; 3], nodes: &[u32]) -> Result<()> {
+    let dofs = &model.dofs;
+    for (d, &fd) in force.iter().enumerate() {
+        let held = |a: u32| dofs.fixed[a as usize] & (1 << d) != 0 && dofs.active[a as usize] & (1 << d) != 0;
+        if fd == 0.0 || nodes.is_empty() || !nodes.iter().all(|&a| held(a)) {
+            continue;
+        }
+        let a = nodes[0] as usize;
+        let how = if dofs.value.contains_key(&(NCOMP * a + d)) {
+            "has a prescribed displacement"
+        } else {
+            "is fixed"
+        };
+        let first = if a < model.n_mesh_nodes {
+            format!("node {}", model.node_tags.get(a).copied().unwrap_or(a as u64))
+        } else {
+            format!("the reference node of '{group}'")
+        };
+        return Err(Error::InvalidInput(format!(
+            "force on '{group}': its {} component acts only on held degrees of freedom ({first} {} {how}{}); \
+             it would go into the reaction unused: give a force or a displacement, not both",
+            ["x", "y", "z"][d],
+            crate::dof::COMPONENT_NAMES[d],
+            if nodes.len() > 1 {
+                ", as every node of the group"
+            } else {
+                ""
+            }
+        )));
+    }
+    Ok(())
 }
 
 /// +1 if the accumulated area vectors point out of the solid, −1 otherwise.

@@ -112,7 +112,9 @@ pub struct MeshInfo {
     pub cells: Vec<(String, usize)>,
     /// Physical groups.
     pub groups: Vec<GroupInfo>,
-    /// Bounding box min, m.
+    /// Nodes that belong to no cell (left out of the bounding box).
+    pub unused_nodes: usize,
+    /// Bounding box of the nodes used by cells, min, m.
     pub bbox_min: [f64; 3],
     /// Bounding box max, m.
     pub bbox_max: [f64; 3],
@@ -126,7 +128,30 @@ pub struct MeshInfo {
 
 /// Summarise a mesh.
 pub fn mesh_info(mesh: &Mesh, source: &str, mat: &Material) -> Result<MeshInfo> {
-    let (lo, hi) = mesh.bounding_box();
+    // The bounding box of the nodes the cells use: a stray node far away (a construction
+    // point, a node left from a deleted part) is not part of the model.
+    let mut used = vec![false; mesh.n_nodes()];
+    for b in &mesh.blocks {
+        for e in 0..b.len() {
+            for &a in b.cell(e) {
+                used[a as usize] = true;
+            }
+        }
+    }
+    let unused_nodes = used.iter().filter(|u| !**u).count();
+    let (lo, hi) = if unused_nodes == 0 || unused_nodes == used.len() {
+        mesh.bounding_box()
+    } else {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for (x, _) in mesh.nodes.iter().zip(&used).filter(|(_, u)| **u) {
+            for d in 0..3 {
+                lo[d] = lo[d].min(x[d]);
+                hi[d] = hi[d].max(x[d]);
+            }
+        }
+        (lo, hi)
+    };
     let mut volume = 0.0;
     let mut x = [[0.0; 3]; 27];
     for b in mesh.blocks.iter().filter(|b| b.kind.dim() == 3) {
@@ -161,6 +186,7 @@ pub fn mesh_info(mesh: &Mesh, source: &str, mat: &Material) -> Result<MeshInfo> 
                 nodes: mesh.group_nodes(g).len(),
             })
             .collect(),
+        unused_nodes,
         bbox_min: lo,
         bbox_max: hi,
         volume_m3: volume,
@@ -173,7 +199,15 @@ pub fn mesh_info(mesh: &Mesh, source: &str, mat: &Material) -> Result<MeshInfo> 
 pub fn mesh_info_text(i: &MeshInfo) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "mesh    {}", i.mesh);
-    let _ = writeln!(s, "nodes   {}", i.nodes);
+    if i.unused_nodes > 0 {
+        let _ = writeln!(
+            s,
+            "nodes   {} ({} belong to no element: left out of the bounding box and the model)",
+            i.nodes, i.unused_nodes
+        );
+    } else {
+        let _ = writeln!(s, "nodes   {}", i.nodes);
+    }
     for (k, n) in &i.cells {
         let _ = writeln!(s, "cells   {n:>10} {k}");
     }

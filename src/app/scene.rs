@@ -1405,21 +1405,74 @@ pub fn summary_csv(rows: &[BatchRow]) -> String {
     s
 }
 
-fn run_case(template: &Scene, file: &Path, out: &Path, force: bool) -> BatchRow {
+/// FNV-1a, 64 bits: a stable content hash (the same on every machine and Rust version).
+fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+    bytes
+        .iter()
+        .fold(h, |h, &b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// What a batch result was computed from: the mesh's full path, and a hash of the mesh bytes,
+/// the template scene's text and the program version. A result file is resumed only when both
+/// match, so an edited template or mesh, or another mesh of the same name, is rerun.
+fn case_key(template_text: &[u8], file: &Path) -> serde_json::Value {
+    let path = std::fs::canonicalize(file).unwrap_or_else(|_| file.to_path_buf());
+    let mut h = fnv1a(0xcbf2_9ce4_8422_2325, env!("CARGO_PKG_VERSION").as_bytes());
+    h = fnv1a(h, &(template_text.len() as u64).to_le_bytes());
+    h = fnv1a(h, template_text);
+    match std::fs::read(file) {
+        Ok(bytes) => h = fnv1a(h, &bytes),
+        // Unreadable: a key that matches nothing (the run reports the error).
+        Err(_) => h = fnv1a(h, b"\0unreadable"),
+    }
+    serde_json::json!({ "path": path.display().to_string(), "hash": format!("{h:016x}") })
+}
+
+/// Result-file names of the cases: the file stem, or the whole file name where two meshes of
+/// the batch share a stem (`m.msh` and `m.msh2`), so no case overwrites or resumes another.
+fn case_names(files: &[PathBuf]) -> Vec<String> {
+    let stem = |f: &PathBuf| {
+        f.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let stems: Vec<String> = files.iter().map(stem).collect();
+    files
+        .iter()
+        .zip(&stems)
+        .map(|(f, s)| {
+            if stems.iter().filter(|t| *t == s).count() > 1 {
+                f.file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| s.clone())
+            } else {
+                s.clone()
+            }
+        })
+        .collect()
+}
+
+fn run_case(template: &Scene, template_text: &[u8], file: &Path, stem: &str, out: &Path, force: bool) -> BatchRow {
     let name = file.display().to_string();
-    let stem = file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
     let result = out.join(format!("{stem}.json"));
+    let key = case_key(template_text, file);
     if !force && result.is_file() {
-        let row = std::fs::read_to_string(&result)
+        let doc = std::fs::read_to_string(&result)
             .ok()
-            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        let row = doc
+            .as_ref()
+            .filter(|d| d.get("key") == Some(&key))
             .and_then(|v| serde_json::from_value::<BatchRow>(v.get("row")?.clone()).ok());
         if let Some(mut row) = row {
             row.status = "resumed".into();
             return row;
+        }
+        if doc.is_some() {
+            eprintln!(
+                "note: {}: computed from another mesh, template or version; rerunning {name}",
+                result.display()
+            );
         }
     }
     let t = Instant::now();
@@ -1431,7 +1484,7 @@ fn run_case(template: &Scene, file: &Path, out: &Path, force: bool) -> BatchRow 
         Ok(Ok(rep)) => {
             let row = BatchRow::from_report(&name, &rep);
             if !row.is_failure() {
-                let doc = serde_json::json!({ "row": row, "report": rep });
+                let doc = serde_json::json!({ "key": key, "row": row, "report": rep });
                 if let Ok(text) = serde_json::to_string_pretty(&doc) {
                     let tmp = out.join(format!("{stem}.json.part"));
                     if std::fs::write(&tmp, text).is_ok() {
@@ -1458,6 +1511,7 @@ fn run_case(template: &Scene, file: &Path, out: &Path, force: bool) -> BatchRow 
 pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
     use rayon::prelude::*;
     let template = Scene::load(&opts.template)?;
+    let template_text = std::fs::read(&opts.template).map_err(|e| Error::io(&opts.template, e))?;
     let mut files = glob_files(&opts.pattern)?;
     if files.is_empty() {
         return Err(Error::InvalidInput(format!(
@@ -1496,9 +1550,11 @@ pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
     };
     let done = std::sync::atomic::AtomicUsize::new(0);
     let total = files.len();
-    let one = |f: &PathBuf| -> BatchRow {
+    let names = case_names(&files);
+    let cases: Vec<(&PathBuf, &String)> = files.iter().zip(&names).collect();
+    let one = |&(f, stem): &(&PathBuf, &String)| -> BatchRow {
         let got = budget.acquire(estimate_case_memory(f));
-        let row = run_case(&template, f, &opts.out, opts.force);
+        let row = run_case(&template, &template_text, f, stem, &opts.out, opts.force);
         budget.release(got);
         let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
         let line = format!(
@@ -1517,13 +1573,13 @@ pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
         row
     };
     let rows: Vec<BatchRow> = if jobs == 1 {
-        files.iter().map(one).collect()
+        cases.iter().map(one).collect()
     } else {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
             .build()
             .map_err(|e| Error::InvalidInput(format!("batch: cannot start {jobs} workers: {e}")))?;
-        pool.install(|| files.par_iter().map(one).collect())
+        pool.install(|| cases.par_iter().map(one).collect())
     };
     if let Some(b) = &bar {
         b.finish_and_clear();

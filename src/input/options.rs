@@ -334,6 +334,43 @@ pub fn parse_section(sec: &str) -> Result<BeamSection> {
             )))
         }
     };
+    // Dimensions of the shape sections: positive and finite, and a shape that exists (a
+    // squared or fourth-power formula would take a negative diameter silently).
+    if matches!(name, "rect" | "circle" | "tube" | "i" | "channel") {
+        let labels: &[&str] = match name {
+            "rect" => &["b", "h"],
+            "circle" => &["d"],
+            "tube" => &["d", "wall"],
+            _ => &["h", "b", "s", "t"],
+        };
+        for (l, x) in labels.iter().zip(&v) {
+            if !(x.is_finite() && *x > 0.0) {
+                return Err(Error::InvalidInput(format!(
+                    "section '{sec}': {l} = {x} m must be positive and finite"
+                )));
+            }
+        }
+        if name == "tube" && v.len() == 2 && v[1] > v[0] / 2.0 {
+            return Err(Error::InvalidInput(format!(
+                "section '{sec}': wall {} m exceeds the radius {} m (at most d/2: a solid circle)",
+                v[1],
+                v[0] / 2.0
+            )));
+        }
+        if matches!(name, "i" | "channel") && v.len() == 4 {
+            let (h, b, s, t) = (v[0], v[1], v[2], v[3]);
+            if 2.0 * t >= h {
+                return Err(Error::InvalidInput(format!(
+                    "section '{sec}': two flanges of t = {t} m fill the height h = {h} m (2t must be below h)"
+                )));
+            }
+            if s > b {
+                return Err(Error::InvalidInput(format!(
+                    "section '{sec}': web s = {s} m is wider than the flanges b = {b} m"
+                )));
+            }
+        }
+    }
     let section = match name {
         "rect" => {
             need(2)?;
@@ -385,6 +422,11 @@ pub fn parse_orientation(orient: &str) -> Result<Orientation> {
             return Err(Error::InvalidInput(
                 "radial orientation needs cx,cy,cz,ax,ay,az".to_string(),
             ));
+        }
+        if v[3..].iter().all(|x| *x == 0.0) {
+            return Err(Error::InvalidInput(format!(
+                "radial orientation '{orient}': the axis ax,ay,az must be a non-zero vector"
+            )));
         }
         Ok(Orientation::Radial {
             centre: [v[0], v[1], v[2]],

@@ -42,8 +42,72 @@ use cursor::{BinaryLayout, Cursor, shown};
 /// [`Error::EmptyModel`] for a file without elements, [`Error::InvalidInput`] for a
 /// non-positive `length_scale`.
 pub fn read(path: &Path, length_scale: f64) -> Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    read_bytes(&bytes, path, length_scale)
+    read_bytes(&read_file(path)?, path, length_scale)
+}
+
+/// The bytes of a mesh file, read only after its first bytes show a gmsh header: `/dev/zero`,
+/// a FIFO or a large file of another kind is refused at once instead of read until memory runs
+/// out. A stream without a known size is read up to the memory this process may use.
+fn read_file(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let size = f.metadata().ok().filter(|m| m.is_file()).map(|m| m.len());
+    // "$MeshFormat" after at most a little leading white space.
+    let mut head = Vec::new();
+    (&mut f)
+        .take(64)
+        .read_to_end(&mut head)
+        .map_err(|e| Error::io(path, e))?;
+    let start = head.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(head.len());
+    if !head[start..].starts_with(b"$MeshFormat") {
+        let shown: String = head[start..]
+            .iter()
+            .take(16)
+            .map(|&b| {
+                if b.is_ascii_graphic() || b == b' ' {
+                    b as char
+                } else {
+                    '.'
+                }
+            })
+            .collect();
+        return Err(Error::MeshParse {
+            path: path.to_path_buf(),
+            section: "$MeshFormat".into(),
+            line: Some(1),
+            msg: if head.is_empty() {
+                "empty file: expected $MeshFormat".into()
+            } else {
+                format!("not a gmsh MSH file: it starts with '{shown}', not $MeshFormat")
+            },
+        });
+    }
+    let cap = match size {
+        Some(n) => n,
+        None => crate::system::available_memory().unwrap_or(u64::MAX) / 2,
+    };
+    let mut bytes = head;
+    if let Some(n) = size {
+        bytes
+            .try_reserve_exact((n as usize).saturating_sub(bytes.len()))
+            .map_err(|_| Error::out_of_memory(&format!("reading {}", path.display()), n))?;
+    }
+    (&mut f)
+        .take(cap.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if size.is_none() && bytes.len() as u64 > cap {
+        return Err(Error::MeshParse {
+            path: path.to_path_buf(),
+            section: "file".into(),
+            line: None,
+            msg: format!(
+                "the stream goes on beyond {}, half the memory available: not a mesh this machine can hold",
+                crate::io::fmt_bytes(cap)
+            ),
+        });
+    }
+    Ok(bytes)
 }
 
 /// Read a gmsh mesh from the bytes of a file; `path` is used in messages only.
@@ -147,7 +211,24 @@ fn read_physical_names(cur: &mut Cursor, b: &mut Builder) -> Result<()> {
         if name.is_empty() {
             return Err(cur.err(format!("physical group {dim}:{tag} has an empty name")));
         }
-        b.names.insert((dim, tag), String::from_utf8_lossy(name).into_owned());
+        let name = String::from_utf8_lossy(name).into_owned();
+        // The same group named twice, or one name for two groups of a dimension: which one a
+        // command means would be a guess.
+        if let Some(old) = b.names.get(&(dim, tag)) {
+            if *old != name {
+                return Err(cur.err(format!(
+                    "physical group {dim}:{tag} is named twice ('{old}' and '{name}')"
+                )));
+            }
+            continue;
+        }
+        if let Some(((_, other), _)) = b.names.iter().find(|((d, _), n)| *d == dim && **n == name) {
+            return Err(cur.err(format!(
+                "the name '{name}' is given to two physical groups of dimension {dim} (tags {other} and {tag}); \
+                 give them one tag or two names"
+            )));
+        }
+        b.names.insert((dim, tag), name);
     }
     cur.expect("$EndPhysicalNames")
 }
@@ -184,6 +265,12 @@ struct Builder {
     names: HashMap<(u8, i32), String>,
     /// Physical group (dim, tag) → its cells.
     members: BTreeMap<(u8, i32), Vec<CellRef>>,
+    /// (kind, sorted nodes) → the cell: an element written twice is one cell.
+    cell_by_nodes: HashMap<(CellKind, Box<[u32]>), (CellRef, u64)>,
+    /// Element tag → the cell.
+    cell_by_tag: HashMap<u64, CellRef>,
+    /// Duplicates merged that are not gmsh's own repeats: (first tag, repeated tag).
+    merged: Vec<(u64, u64)>,
 }
 
 impl Builder {
@@ -214,17 +301,47 @@ impl Builder {
             .ok_or_else(|| cur.err(format!("element {elem} references node {tag}, which is not in $Nodes")))
     }
 
-    /// Append a cell of `kind` with dense node indices `nodes`.
-    fn add_cell(&mut self, cur: &Cursor, kind: CellKind, tag: u64, nodes: &[u32]) -> Result<CellRef> {
+    /// Append a cell of `kind` with dense node indices `nodes`, or return the cell already read
+    /// with the same kind and nodes (in any order: the same element written twice, e.g. once
+    /// per physical group) with `true`. An element tag used for two different cells is an error.
+    fn add_cell(&mut self, cur: &Cursor, kind: CellKind, tag: u64, nodes: &[u32]) -> Result<(CellRef, bool)> {
+        let mut key: Box<[u32]> = nodes.into();
+        key.sort_unstable();
+        if let Some(&(cell, first_tag)) = self.cell_by_nodes.get(&(kind, key.clone())) {
+            match self.cell_by_tag.get(&tag) {
+                Some(&c) if c != cell => {
+                    return Err(cur.err(format!("element tag {tag} is used for two different elements")));
+                }
+                Some(_) => {}
+                None => {
+                    self.cell_by_tag.insert(tag, cell);
+                }
+            }
+            let _ = first_tag;
+            return Ok((cell, true));
+        }
+        if self.cell_by_tag.contains_key(&tag) {
+            return Err(cur.err(format!("element tag {tag} is used for two different elements")));
+        }
         let block = self.mesh.block_index_mut(kind);
         let blk = &mut self.mesh.blocks[block];
         let index =
             u32::try_from(blk.len()).map_err(|_| cur.err("more than 2^32 - 1 cells of one kind are not supported"))?;
         blk.push(nodes, tag);
-        Ok(CellRef {
+        let cell = CellRef {
             block: block as u32,
             index,
-        })
+        };
+        self.cell_by_nodes.insert((kind, key), (cell, tag));
+        self.cell_by_tag.insert(tag, cell);
+        Ok((cell, false))
+    }
+
+    /// Note that element `tag` repeats the cell first read as `cell` (not a gmsh repeat for
+    /// another physical group): it is counted once.
+    fn note_merged(&mut self, cell: CellRef, tag: u64) {
+        let first = self.mesh.blocks[cell.block as usize].tags[cell.index as usize];
+        self.merged.push((first, tag));
     }
 
     /// Record that `cell` belongs to physical group (`dim`, `tag`).
@@ -256,8 +373,29 @@ impl Builder {
             mut mesh,
             names,
             mut members,
+            merged,
             ..
         } = self;
+        if !merged.is_empty() {
+            let shown: Vec<String> = merged
+                .iter()
+                .take(5)
+                .map(|(a, b)| {
+                    if a == b {
+                        format!("element {a} twice")
+                    } else {
+                        format!("element {b} = element {a}")
+                    }
+                })
+                .collect();
+            mesh.notes.push(format!(
+                "{}: {} elements repeat another (same type and nodes) and are counted once: {}{}",
+                path.display(),
+                merged.len(),
+                shown.join(", "),
+                if merged.len() > 5 { ", ..." } else { "" }
+            ));
+        }
         if mesh.blocks.iter().all(|b| b.is_empty()) {
             return Err(Error::EmptyModel {
                 what: format!("{}: the mesh file contains no elements", path.display()),

@@ -36,17 +36,21 @@ pub fn fmt_sig(x: f64, sig: usize) -> String {
     }
 }
 
-/// A byte count in GiB with three significant digits, and in MiB or KiB as well when below a
-/// GiB (so a small limit never prints as "0.00 GiB").
+/// A byte count in the largest binary unit that keeps it at 1 or more (three significant
+/// digits): `1.00 KiB`, `1.49 MiB`, `4.00 GiB`; below a KiB, in bytes.
 pub fn fmt_bytes(b: u64) -> String {
-    let gib = b as f64 / 1073741824.0;
-    if b >= 1 << 30 {
-        format!("{} GiB", fmt_sig(gib, 3))
-    } else if b >= 1 << 20 {
-        format!("{} GiB ({} MiB)", fmt_sig(gib, 3), fmt_sig(b as f64 / 1048576.0, 3))
-    } else {
-        format!("{} GiB ({} KiB)", fmt_sig(gib, 3), fmt_sig(b as f64 / 1024.0, 3))
-    }
+    const KIB: u64 = 1 << 10;
+    const MIB: u64 = 1 << 20;
+    const GIB: u64 = 1 << 30;
+    const TIB: u64 = 1 << 40;
+    let (unit, name) = match b {
+        _ if b >= TIB => (TIB, "TiB"),
+        _ if b >= GIB => (GIB, "GiB"),
+        _ if b >= MIB => (MIB, "MiB"),
+        _ if b >= KIB => (KIB, "KiB"),
+        _ => return format!("{b} bytes"),
+    };
+    format!("{} {name}", fmt_sig(b as f64 / unit as f64, 3))
 }
 
 /// Write mode shapes (3 translation components per node, node-major, one vector per mode) as
@@ -86,4 +90,43 @@ pub fn write_mode_shapes(
         written.push(p.to_path_buf());
     }
     Ok(written)
+}
+
+/// Check, before a run, that `path` can be written as an output file: its folder exists (it
+/// is created if missing) and a file can be created there. A file that did not exist is not
+/// left behind. The error names the path ([`Error::Io`], exit 1), so a bad `--vtu` or `-o`
+/// is reported in a second rather than after the whole analysis.
+pub fn check_writable_file(path: &std::path::Path) -> crate::Result<()> {
+    if path.is_dir() {
+        return Err(crate::Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a folder, an output file was expected",
+            ),
+        ));
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+    }
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| crate::Error::io(path, e))?;
+    if !existed {
+        let _ = std::fs::remove_file(path);
+    }
+    Ok(())
+}
+
+/// Check, before a run, that `dir` can take output files: created if missing, and a probe
+/// file written and removed in it. The error names the folder ([`Error::Io`], exit 1).
+pub fn check_writable_dir(dir: &std::path::Path) -> crate::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+    let probe = dir.join(format!(".vibrofem-write-check-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| crate::Error::io(dir, e))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }

@@ -22,6 +22,11 @@ pub enum Ordering {
 
 /// A DOF permutation `perm[new] = old` (faer's forward array) and its inverse.
 pub fn nested_dissection(graph: &NodeGraph, dofs: &DofMap) -> Result<(Vec<usize>, Vec<usize>)> {
+    Ok(expand_node_order(&node_nested_dissection(graph, dofs)?, dofs))
+}
+
+/// The nodes with free DOFs in METIS nested-dissection elimination order.
+pub fn node_nested_dissection(graph: &NodeGraph, dofs: &DofMap) -> Result<Vec<usize>> {
     let n_nodes = dofs.n_nodes();
     // Compress: vertices are the nodes with at least one free DOF.
     let mut vertex_of = vec![u32::MAX; n_nodes];
@@ -73,15 +78,82 @@ pub fn nested_dissection(graph: &NodeGraph, dofs: &DofMap) -> Result<(Vec<usize>
             return Err(Error::Factorization(format!("METIS_NodeND failed with status {ret}")));
         }
     }
-    // METIS: perm[new] = old vertex. Expand each node to its consecutive free DOFs.
+    // METIS: perm[new] = old vertex.
+    Ok(node_perm.iter().map(|&v| node_of[v as usize]).collect())
+}
+
+/// The DOF permutation (forward, inverse) of a node elimination order: each node's free DOFs
+/// stay consecutive.
+pub fn expand_node_order(order: &[usize], dofs: &DofMap) -> (Vec<usize>, Vec<usize>) {
     let mut fwd = Vec::with_capacity(dofs.n_free);
-    for &v in &node_perm {
-        let a = node_of[v as usize];
+    for &a in order {
         fwd.extend(dofs.first[a]..dofs.first[a + 1]);
     }
     let mut inv = vec![0usize; fwd.len()];
     for (new, &old) in fwd.iter().enumerate() {
         inv[old] = new;
     }
-    Ok((fwd, inv))
+    (fwd, inv)
+}
+
+/// Entries of the LDLᵀ factor's lower triangle (diagonal included) when the DOFs are
+/// eliminated node by node in `order` (nodes with free DOFs, as from
+/// [`node_nested_dissection`]): the elimination tree and row subtrees of the node graph, each
+/// node pair weighted by the product of their free-DOF counts. Exact for the node-blocked
+/// structure; faer's supernodes add a little padding, so this is a lower bound of the factor
+/// the symbolic analysis will report. Time O(entries of the node factor), memory O(nodes):
+/// it sizes the factor before anything large is allocated. The count stops once it exceeds
+/// `cap` (the answer is then a number above `cap`, not the total).
+pub fn factor_entries(graph: &NodeGraph, dofs: &DofMap, order: &[usize], cap: u64) -> u64 {
+    const NONE: usize = usize::MAX;
+    let n_nodes = dofs.n_nodes();
+    let nv = order.len();
+    let mut pos = vec![NONE; n_nodes];
+    for (k, &a) in order.iter().enumerate() {
+        pos[a] = k;
+    }
+    let d = |k: usize| (dofs.first[order[k] + 1] - dofs.first[order[k]]) as u64;
+    // Elimination tree (Liu, with path compression through `anc`).
+    let mut parent = vec![NONE; nv];
+    let mut anc = vec![NONE; nv];
+    for k in 0..nv {
+        for &b in graph.neighbours(order[k]) {
+            let mut r = pos[b as usize];
+            if r == NONE || r >= k {
+                continue;
+            }
+            while r != NONE && r != k {
+                let next = anc[r];
+                anc[r] = k;
+                if next == NONE {
+                    parent[r] = k;
+                }
+                r = next;
+            }
+        }
+    }
+    drop(anc);
+    // Row k of L: the union of the tree paths from its lower neighbours up to k.
+    let mut mark = vec![NONE; nv];
+    let mut entries = 0u64;
+    for k in 0..nv {
+        if entries > cap {
+            break;
+        }
+        let dk = d(k);
+        entries += dk * (dk + 1) / 2;
+        mark[k] = k;
+        for &b in graph.neighbours(order[k]) {
+            let mut r = pos[b as usize];
+            if r == NONE || r >= k {
+                continue;
+            }
+            while r != NONE && mark[r] != k {
+                mark[r] = k;
+                entries += dk * d(r);
+                r = parent[r];
+            }
+        }
+    }
+    entries
 }

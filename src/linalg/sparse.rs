@@ -74,6 +74,17 @@ impl SymMatrix {
             values: vec![0.0; nnz],
         }
     }
+    /// Zero matrix on `pattern`; an allocation failure is an error naming `what` and the
+    /// bytes it needed ([`crate::Error::out_of_memory`]) instead of an abort.
+    pub fn try_zeros(pattern: Arc<Pattern>, what: &str) -> crate::Result<Self> {
+        let nnz = pattern.nnz();
+        let mut values = Vec::new();
+        values
+            .try_reserve_exact(nnz)
+            .map_err(|_| crate::Error::out_of_memory(what, 8 * nnz as u64))?;
+        values.resize(nnz, 0.0);
+        Ok(SymMatrix { pattern, values })
+    }
     /// Dimension.
     pub fn n(&self) -> usize {
         self.pattern.n

@@ -84,6 +84,8 @@ pub struct Mesh {
     pub blocks: Vec<CellBlock>,
     /// Physical groups.
     pub groups: Vec<Group>,
+    /// What the reader merged or repaired (repeated elements), for the user to read.
+    pub notes: Vec<String>,
 }
 
 impl Mesh {

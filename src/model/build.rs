@@ -12,7 +12,7 @@
 use super::Model;
 use super::sets::{BeamSet, DiscreteSet, ReferenceNode, ShellSet, SolidSet};
 use super::spec::{ModelSpec, Orientation};
-use crate::dof::{ALL6, Constraints, DofMap, DofMask, NCOMP, TRANSLATIONS, WARPING};
+use crate::dof::{ALL6, COMPONENT_NAMES, Constraints, DofMap, DofMask, NCOMP, TRANSLATIONS, WARPING};
 use crate::material::Material;
 use crate::mesh::{CellKind, Group, Mesh};
 use crate::{Error, Result};
@@ -34,7 +34,8 @@ impl Model {
         if solids.is_empty() && shells.is_empty() && beams.is_empty() {
             return Err(no_elements(mesh, source));
         }
-        let mut notes = orientation_notes;
+        let mut notes = mesh.notes.clone();
+        notes.extend(orientation_notes);
         let (references, coupled) = reference_nodes(mesh, spec)?;
         let mut all_nodes = mesh.nodes.clone();
         all_nodes.extend(references.iter().map(|r| r.position));
@@ -52,6 +53,7 @@ impl Model {
         let mut cons = Constraints::new(nodes.len());
         let fixed_by = fixes(mesh, spec, &active, &mut cons)?;
         couplings(mesh, spec, &active, &references, &coupled, &fixed_by, &nodes, &mut cons)?;
+        notes.extend(pinned_references(&active, &references, &coupled, &nodes, &mut cons));
         prescribed(mesh, spec, &active, &references, &mut cons)?;
         notes.extend(lints(&solids, orphan_nodes));
         notes.extend(singular_supports(mesh, spec, &solids, &shells, &beams));
@@ -374,6 +376,39 @@ pub(crate) fn point_masses(
             )));
         }
         let rotary = pm.inertia.iter().any(|&v| v != 0.0);
+        if rotary {
+            // The inertia tensor must be positive semi-definite (every principal minor ≥ 0, to
+            // rounding): a negative or indefinite one makes M indefinite and the solve fails.
+            let [ixx, iyy, izz, ixy, iyz, ixz] = pm.inertia;
+            let scale = ixx
+                .abs()
+                .max(iyy.abs())
+                .max(izz.abs())
+                .max(ixy.abs())
+                .max(iyz.abs())
+                .max(ixz.abs());
+            let tol = 1e-12 * scale;
+            let minors = [
+                ("Ixx", ixx, tol),
+                ("Iyy", iyy, tol),
+                ("Izz", izz, tol),
+                ("Ixx·Iyy − Ixy²", ixx * iyy - ixy * ixy, tol * scale),
+                ("Iyy·Izz − Iyz²", iyy * izz - iyz * iyz, tol * scale),
+                ("Ixx·Izz − Ixz²", ixx * izz - ixz * ixz, tol * scale),
+                (
+                    "det",
+                    ixx * (iyy * izz - iyz * iyz) - ixy * (ixy * izz - iyz * ixz) + ixz * (ixy * iyz - iyy * ixz),
+                    tol * scale * scale,
+                ),
+            ];
+            if let Some((what, v, _)) = minors.iter().find(|(_, v, t)| *v < -t) {
+                return Err(Error::InvalidInput(format!(
+                    "point mass on '{}': the inertia tensor (Ixx,Iyy,Izz,Ixy,Iyz,Ixz = {:?} kg·m²) is not \
+                     positive semi-definite ({what} = {v:.3e} < 0)",
+                    pm.group, pm.inertia
+                )));
+            }
+        }
         let single = references.iter().any(|r| r.group == pm.group)
             || mesh.group(&pm.group).map(|g| mesh.group_nodes(g).len() == 1)?;
         if single {
@@ -609,6 +644,44 @@ pub(crate) fn couplings(
     Ok(())
 }
 
+/// Step 6b': a coupling whose nodes carry no rotations and all sit at the reference point (a
+/// one-node group, the usual case) gives the reference node's rotations nothing to act on: a
+/// solid node carries no moment. They are held fixed, with a note, rather than left singular
+/// (a zero pivot); the reference node then moves with the node.
+pub(crate) fn pinned_references(
+    active: &[DofMask],
+    references: &[ReferenceNode],
+    coupled: &[Vec<u32>],
+    nodes: &[[f64; 3]],
+    cons: &mut Constraints,
+) -> Vec<String> {
+    const ROTATIONS: DofMask = ALL6 & !TRANSLATIONS;
+    let mut notes = Vec::new();
+    for (r, gn) in references.iter().zip(coupled) {
+        if gn.is_empty() || gn.iter().any(|&s| active[s as usize] & ROTATIONS != 0) {
+            continue;
+        }
+        let xr = r.position;
+        let scale = xr.iter().map(|x| x.abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+        let at_reference = gn.iter().all(|&s| {
+            let x = nodes[s as usize];
+            (0..3).all(|d| (x[d] - xr[d]).abs() <= 1e-12 * scale)
+        });
+        let free = ROTATIONS & !cons.fixed[r.node];
+        if at_reference && free != 0 {
+            cons.fixed[r.node] |= free;
+            notes.push(format!(
+                "coupling '{}': its {} at the reference point and carr{} no rotations, so the reference \
+                 node's rotations are held fixed (a moment or rotary inertia there has no effect)",
+                r.group,
+                if gn.len() == 1 { "node is" } else { "nodes are" },
+                if gn.len() == 1 { "ies" } else { "y" }
+            ));
+        }
+    }
+    notes
+}
+
 /// Step 6c: prescribed displacement values (on a coupled group: its reference node).
 pub(crate) fn prescribed(
     mesh: &Mesh,
@@ -626,21 +699,80 @@ pub(crate) fn prescribed(
                 .map(|a| a as usize)
                 .collect(),
         };
-        for a in targets {
+        let reference = references.iter().find(|r| &r.group == g);
+        let name = |a: usize| match reference {
+            Some(r) if r.node == a => format!("the reference node of '{g}'"),
+            _ => format!("node {}", mesh.node_tags.get(a).copied().unwrap_or(a as u64)),
+        };
+        for (c, v) in vals.iter().enumerate() {
+            let Some(v) = v else { continue };
+            if !v.is_finite() {
+                return Err(Error::InvalidInput(format!(
+                    "prescribed displacement on '{g}' is not finite"
+                )));
+            }
+            // A non-zero value on a component no node of the group has (a rotation of solid
+            // nodes) would be dropped: the run would answer another question.
+            if *v != 0.0 && !targets.iter().any(|&a| active[a] & (1 << c) != 0) {
+                return Err(Error::InvalidInput(format!(
+                    "prescribed displacement on '{g}': {} = {v} but no node of the group has that degree of \
+                     freedom ({}); prescribe it on a coupled group (--couple {g}) or on shell or beam nodes",
+                    COMPONENT_NAMES[c],
+                    if c >= 3 {
+                        "solid nodes have no rotations"
+                    } else {
+                        "it belongs to no element"
+                    }
+                )));
+            }
+        }
+        for &a in &targets {
             for (c, v) in vals.iter().enumerate() {
                 let Some(v) = v else { continue };
-                if !v.is_finite() {
-                    return Err(Error::InvalidInput(format!(
-                        "prescribed displacement on '{g}' is not finite"
-                    )));
-                }
                 if active[a] & (1 << c) == 0 {
                     continue;
                 }
+                let comp = COMPONENT_NAMES[c];
                 if cons.mpc.contains_key(&(NCOMP * a + c)) {
                     return Err(Error::InvalidInput(format!(
-                        "conflicting constraints: '{g}' prescribes a coupled node; prescribe the coupled group instead"
+                        "conflicting constraints: '{g}' prescribes {comp} of {}, which is coupled; prescribe \
+                         the coupled group instead",
+                        name(a)
                     )));
+                }
+                match cons.value.get(&(NCOMP * a + c)) {
+                    Some(old) if old != v => {
+                        return Err(Error::InvalidInput(format!(
+                            "conflicting constraints: {comp} of {} is prescribed twice ({old} and {v}, the \
+                             second by '{g}')",
+                            name(a)
+                        )));
+                    }
+                    Some(_) => {}
+                    // Held at zero already: prescribing zero agrees (a support sharing an edge).
+                    None if cons.fixed[a] & (1 << c) != 0 && *v == 0.0 => continue,
+                    None if cons.fixed[a] & (1 << c) != 0 => {
+                        let by = match reference {
+                            Some(r) if r.node == a && r.guided.is_some() => format!(
+                                "the coupling of '{g}' is guided along {} and holds its other components",
+                                ["x", "y", "z"][r.guided.unwrap_or(0)]
+                            ),
+                            _ => spec
+                                .fixes
+                                .iter()
+                                .find(|(f, m)| {
+                                    m & (1 << c) != 0
+                                        && mesh.group(f).is_ok_and(|fg| mesh.group_nodes(fg).contains(&(a as u32)))
+                                })
+                                .map(|(f, _)| format!("it is fixed by '{f}'"))
+                                .unwrap_or_else(|| "it is already fixed".into()),
+                        };
+                        return Err(Error::InvalidInput(format!(
+                            "conflicting constraints: '{g}' prescribes {comp} = {v} of {}, but {by}",
+                            name(a)
+                        )));
+                    }
+                    None => {}
                 }
                 cons.fixed[a] |= 1 << c;
                 cons.value.insert(NCOMP * a + c, *v);

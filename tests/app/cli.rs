@@ -194,7 +194,7 @@ fn eigen_iteration_that_cannot_converge_is_a_numerical_failure() {
 
 #[test]
 fn too_little_memory_is_refused_with_the_estimate() {
-    expect_error(&["modes", &plate(), "--max-memory", "1M"], 1, &["GiB", "--max-memory"]);
+    expect_error(&["modes", &plate(), "--max-memory", "1M"], 1, &["MiB", "--max-memory"]);
 }
 
 #[test]

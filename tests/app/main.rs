@@ -7,6 +7,7 @@ mod common;
 
 mod cli;
 mod cli_15;
+mod cli_15b;
 mod design;
 mod dynamics;
 mod export_engine;

@@ -14,6 +14,7 @@ mod elements_15;
 mod errors_audit;
 mod extremes;
 mod fuzz_regressions;
+mod inputs_15;
 mod mesh_io;
 mod parametric;
 mod regressions_15;

@@ -73,9 +73,12 @@ fn read_nodes(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<()> 
 
 /// State shared by the records of `$Elements`.
 struct Elements {
-    /// The last cell added and its elementary entity, to merge the repeats gmsh writes for
-    /// elements in several physical groups.
-    last: Option<(CellRef, i64)>,
+    /// The elementary entity of each cell, to tell gmsh's repeats of an element for several
+    /// physical groups (same entity) from other duplicates.
+    entity_of: std::collections::HashMap<CellRef, i64>,
+    /// (cell, physical tag) pairs read: a repeat for a group the cell is already in is a
+    /// duplicate, not gmsh's repeat for another group.
+    groups_of: std::collections::HashSet<(CellRef, i64)>,
     /// Scratch: tags and dense node indices of the current record.
     tags: Vec<i64>,
     nodes: Vec<u32>,
@@ -86,7 +89,8 @@ fn read_elements(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<(
     // ASCII: tag type numTags node, 2 bytes each; binary: a record is at least tag + node.
     let n = section_count(cur, header, "elements", 8, 8)?;
     let mut st = Elements {
-        last: None,
+        entity_of: std::collections::HashMap::new(),
+        groups_of: std::collections::HashSet::new(),
         tags: Vec::new(),
         nodes: Vec::new(),
     };
@@ -156,15 +160,18 @@ fn record(cur: &mut Cursor, b: &mut Builder, st: &mut Elements, tag: u64, gmsh_t
         let node = cur.int_tag("node tag")?;
         st.nodes.push(b.node(cur, tag, node)?);
     }
-    let repeat = st.last.filter(|&(c, e)| {
-        let blk = &b.mesh.blocks[c.block as usize];
-        e == entity && blk.kind == kind && blk.cell(c.index as usize) == st.nodes.as_slice()
-    });
-    let cell = match repeat {
-        Some((c, _)) => c,
-        None => b.add_cell(cur, kind, tag, &st.nodes)?,
-    };
-    st.last = Some((cell, entity));
+    // A cell read before (same kind and nodes) is merged: gmsh's repeat of an element for
+    // another physical group (same entity) silently, any other duplicate with a note.
+    let (cell, merged) = b.add_cell(cur, kind, tag, &st.nodes)?;
+    let new_group = st.groups_of.insert((cell, phys));
+    if merged {
+        let gmsh_repeat = new_group && matches!(st.entity_of.get(&cell), Some(&e) if e == entity && phys != 0);
+        if !gmsh_repeat {
+            b.note_merged(cell, tag);
+        }
+    } else {
+        st.entity_of.insert(cell, entity);
+    }
     if phys != 0 {
         let p = i32::try_from(phys).map_err(|_| cur.err(format!("physical tag {phys} out of range")))?;
         b.add_to_group(kind.dim() as u8, p, cell);

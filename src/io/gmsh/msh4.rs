@@ -29,12 +29,17 @@ use super::{Builder, Cursor, Header, check_dim, read_physical_names, shown};
 use crate::Result;
 use crate::mesh::CellKind;
 
-/// Physical tags of each entity `(dim, tag)`, from `$Entities`.
-type EntityGroups = HashMap<(u8, i32), Vec<i32>>;
+/// Physical tags of each entity `(dim, tag)`, from `$Entities` (every entity listed, with or
+/// without groups); `read` is false while no `$Entities` section was read.
+#[derive(Default)]
+struct EntityGroups {
+    read: bool,
+    phys: HashMap<(u8, i32), Vec<i32>>,
+}
 
 /// Read the sections after `$MeshFormat`.
 pub(super) fn read(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<()> {
-    let mut entities = EntityGroups::new();
+    let mut entities = EntityGroups::default();
     loop {
         cur.set_section("file");
         let Some(tok) = cur.next_token() else { break };
@@ -83,6 +88,7 @@ fn read_entities(cur: &mut Cursor, entities: &mut EntityGroups) -> Result<()> {
     let n_curves = cur.count("curve entities", other_bytes)?;
     let n_surfaces = cur.count("surface entities", other_bytes)?;
     let n_volumes = cur.count("volume entities", other_bytes)?;
+    entities.read = true;
     for (dim, n) in [(0u8, n_points), (1, n_curves), (2, n_surfaces), (3, n_volumes)] {
         for _ in 0..n {
             let tag = cur.int("entity tag")?;
@@ -102,8 +108,8 @@ fn read_entities(cur: &mut Cursor, entities: &mut EntityGroups) -> Result<()> {
                     cur.int("bounding entity tag")?;
                 }
             }
-            if !phys.is_empty() {
-                entities.insert((dim, tag), phys);
+            if entities.phys.insert((dim, tag), phys).is_some() {
+                return Err(cur.err(format!("entity {dim}:{tag} is listed twice")));
             }
         }
     }
@@ -171,7 +177,22 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
         let entity = cur.int("entity tag")?;
         let gmsh_type = cur.int("element type")?;
         let n = cur.size("number of elements in the block")?;
-        let phys = entities.get(&(dim, entity)).unwrap_or(&no_groups);
+        if let Some(kind) = CellKind::from_gmsh_type(gmsh_type).filter(|k| k.dim() != dim as usize) {
+            return Err(cur.err(format!(
+                "a block of entity {dim}:{entity} (dimension {dim}) holds {} elements of dimension {}",
+                kind.name(),
+                kind.dim()
+            )));
+        }
+        let phys = match entities.phys.get(&(dim, entity)) {
+            Some(p) => p,
+            None if entities.read => {
+                return Err(cur.err(format!(
+                    "a block of elements belongs to entity {dim}:{entity}, which $Entities does not list"
+                )));
+            }
+            None => &no_groups,
+        };
         let Some(kind) = CellKind::from_gmsh_type(gmsh_type) else {
             let group = if phys.is_empty() {
                 format!("entity {dim}:{entity}")
@@ -190,7 +211,12 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
                 let node = cur.size("node tag")?;
                 nodes.push(b.node(cur, tag, node)?);
             }
-            let cell = b.add_cell(cur, kind, tag, &nodes)?;
+            // Within 4.1 an element in several groups is written once (its entity carries the
+            // groups): any repeat is a duplicate, counted once, with a note.
+            let (cell, merged) = b.add_cell(cur, kind, tag, &nodes)?;
+            if merged {
+                b.note_merged(cell, tag);
+            }
             for &p in phys {
                 b.add_to_group(dim, p, cell);
             }
