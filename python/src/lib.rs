@@ -235,7 +235,7 @@ impl PyModel {
     #[new]
     #[pyo3(signature = (mesh, material = "steel".to_string(), group_material = vec![], fix = vec![],
         couple = vec![], point_mass = vec![], spring = vec![], mass = "consistent".to_string(),
-        solid = vec![], shell = vec![], beam = vec![]))]
+        solid = vec![], shell = vec![], beam = vec![], hex8 = "standard".to_string()))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         mesh: &PyMesh,
@@ -249,6 +249,7 @@ impl PyModel {
         solid: Vec<String>,
         shell: Vec<String>,
         beam: Vec<String>,
+        hex8: String,
     ) -> PyResult<Self> {
         let options = ModelOptions {
             material,
@@ -261,6 +262,7 @@ impl PyModel {
             solid,
             shell,
             beam,
+            hex8,
             length_unit: "m".into(),
         };
         // Check the grammar now (a bad option fails at construction, as on the command line).

@@ -28,6 +28,7 @@ shell          ``{"top": 0.02}`` or ``{"top": (t, offset)}`` ``--shell top=0.02`
 beam           ``{"coil": "circle:0.006@radial:0,0,0,0,0,1"}`` ``--beam coil=…``
 solid          ``["body"]``                                 ``--solid body``
 mass           ``"consistent"`` or ``"lumped"``              ``--mass``
+hex8           ``"standard"`` or ``"incompatible"``          ``--hex8``
 ============== ============================================ =====================================
 
 Errors raise :class:`VibrofemError` subclasses (:class:`InputError`, :class:`NumericalError`,
@@ -284,6 +285,7 @@ class Model:
         solid=None,
         shell=None,
         beam=None,
+        hex8="standard",
     ):
         if isinstance(mesh, (str, bytes)):
             mesh = read_mesh(mesh)
@@ -303,6 +305,7 @@ class Model:
             solid=_names(solid),
             shell=_group_values(shell, "shell"),
             beam=_group_values(beam, "beam"),
+            hex8=hex8,
         )
         self._kwargs = dict(
             material=material,
@@ -315,6 +318,7 @@ class Model:
             solid=solid,
             shell=shell,
             beam=beam,
+            hex8=hex8,
         )
 
     def assemble(self):
