@@ -1138,16 +1138,7 @@ pub fn verdict_text(r: &DesignReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "design: {}\n", r.name);
-    let failed = r.checks.iter().filter(|c| !c.ok).count();
-    let _ = writeln!(
-        s,
-        "checks: {}",
-        if failed == 0 {
-            "all passed".to_string()
-        } else {
-            format!("{failed} of {} FAILED", r.checks.len())
-        }
-    );
+    let _ = writeln!(s, "checks: {}", checks_summary(r, "FAILED"));
     for c in &r.checks {
         let _ = writeln!(
             s,
@@ -1193,6 +1184,16 @@ pub fn verdict_text(r: &DesignReport) -> String {
     s
 }
 
+/// "all passed" or "2 of 6 failed" (with `failed` spelt as given).
+fn checks_summary(r: &DesignReport, failed_word: &str) -> String {
+    let failed = r.checks.iter().filter(|c| !c.ok).count();
+    if failed == 0 {
+        "all passed".to_string()
+    } else {
+        format!("{failed} of {} {failed_word}", r.checks.len())
+    }
+}
+
 /// A reported number: four significant digits, plain or with an exponent (184.2, 4.990e6).
 fn sig(x: f64) -> String {
     crate::io::fmt_sig(x, 4)
@@ -1233,15 +1234,10 @@ pub fn report_html(r: &DesignReport, dir: &std::path::Path) -> String {
         html_escape(&r.name),
         html_escape(&r.name)
     );
-    let failed = r.checks.iter().filter(|c| !c.ok).count();
     let _ = writeln!(
         s,
         "<h2>Checks: {}</h2>\n<table><tr><th>check</th><th>value</th><th>limit</th><th>margin</th><th>verdict</th></tr>",
-        if failed == 0 {
-            "all passed".to_string()
-        } else {
-            format!("{failed} of {} failed", r.checks.len())
-        }
+        checks_summary(r, "failed")
     );
     for c in &r.checks {
         let _ = writeln!(
@@ -1319,15 +1315,10 @@ pub fn report_markdown(r: &DesignReport) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "# Design report: {}\n", r.name);
-    let failed = r.checks.iter().filter(|c| !c.ok).count();
     let _ = writeln!(
         s,
         "## Checks: {}\n\n| check | value | limit | margin | verdict |\n|---|---:|---:|---:|---|",
-        if failed == 0 {
-            "all passed".to_string()
-        } else {
-            format!("{failed} of {} failed", r.checks.len())
-        }
+        checks_summary(r, "failed")
     );
     for c in &r.checks {
         let _ = writeln!(

@@ -23,12 +23,24 @@ pub fn to_dense(a: &SymMatrix) -> DMatrix<f64> {
 }
 
 /// All finite eigenpairs of K x = λ M x, ascending, eigenvectors M-orthonormal.
-pub fn eigen_all(k: &SymMatrix, m: &SymMatrix, sigma: f64) -> Result<(Vec<f64>, Mat<f64>)> {
+///
+/// Two reductions to a standard symmetric problem: through the Cholesky factor of K − σM
+/// (shift-and-invert: the low modes, which the eigenvalues 1/(λ − σ) dominate, to full relative
+/// accuracy; the high ones only to about ε·λ_max/λ_low) or, with `upper`, through the Cholesky
+/// factor of M (every pair backward stable with respect to K, so the upper spectrum too). A
+/// request for most of the spectrum asks for `upper`; either falls back to the other when its
+/// matrix is not positive definite.
+pub fn eigen_all(k: &SymMatrix, m: &SymMatrix, sigma: f64, upper: bool) -> Result<(Vec<f64>, Mat<f64>)> {
     let kd = to_dense(k);
     let md = to_dense(m);
     let n = kd.nrows();
     let a = &kd - &md * sigma;
-    let (mut pairs, l) = if let Some(ch) = a.clone().cholesky() {
+    let shifted = if upper && md.clone().cholesky().is_some() {
+        None
+    } else {
+        a.clone().cholesky()
+    };
+    let (mut pairs, l) = if let Some(ch) = shifted {
         let l = ch.l();
         let linv = l
             .clone()

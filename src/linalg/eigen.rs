@@ -394,7 +394,8 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             lz.set_want(want);
         }
         let (lambda, x) = if dense {
-            let (l, x) = super::dense::eigen_all(k, m, sigma)?;
+            // Most of the spectrum: reduce through M, which keeps the upper modes accurate.
+            let (l, x) = super::dense::eigen_all(k, m, sigma, 2 * want > n)?;
             lz.last_theta = l.iter().map(|l| 1.0 / (l - sigma)).collect();
             (l, x)
         } else {

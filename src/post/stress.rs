@@ -424,42 +424,46 @@ pub fn nodal_stress_with<S: ElementSet>(
             };
             let nn = kind.n_nodes();
             let xi_nodes = shape::reference_nodes(kind);
-            let extra = match recovery {
-                Recovery::Direct => None,
-                Recovery::Extrapolated => {
-                    let i = match tables.iter().position(|(k, _)| *k == kind) {
-                        Some(i) => i,
-                        None => {
-                            tables.push((kind, extrapolation(kind)?));
-                            tables.len() - 1
-                        }
-                    };
-                    Some(&tables[i].1)
-                }
-            };
             gather_u(set, e, n_nodes, u, &mut ue[..3 * nn])?;
             let eval = |xi: [f64; 3]| set.stress_at(e, &ue[..3 * nn], xi);
-            match extra {
-                None => {
-                    for (a, &xi) in xi_nodes.iter().enumerate() {
-                        node_stress[a] = eval(xi)?;
+            let mut extrapolate = recovery == Recovery::Extrapolated;
+            if !extrapolate {
+                for (a, &xi) in xi_nodes.iter().enumerate() {
+                    match eval(xi) {
+                        Ok(st) => node_stress[a] = st,
+                        // A Jacobian that vanishes at a node but not at the integration points
+                        // (a quarter-point tet10 at its crack tip): the element is valid, the
+                        // same test as assembly's; recover its nodal stresses from the points.
+                        Err(Error::InvertedElement { .. }) => {
+                            extrapolate = true;
+                            break;
+                        }
+                        Err(err) => return Err(err),
                     }
                 }
-                Some((pts, ex)) => {
-                    let np = pts.len();
-                    for (q, &p) in pts.iter().enumerate() {
-                        point_stress[q] = eval(p)?;
+            }
+            if extrapolate {
+                let i = match tables.iter().position(|(k, _)| *k == kind) {
+                    Some(i) => i,
+                    None => {
+                        tables.push((kind, extrapolation(kind)?));
+                        tables.len() - 1
                     }
-                    for a in 0..nn {
-                        let mut s = [0.0; 6];
-                        for q in 0..np {
-                            let w = ex[a * np + q];
-                            for c in 0..6 {
-                                s[c] += w * point_stress[q][c];
-                            }
+                };
+                let (pts, ex) = &tables[i].1;
+                let np = pts.len();
+                for (q, &p) in pts.iter().enumerate() {
+                    point_stress[q] = eval(p)?;
+                }
+                for a in 0..nn {
+                    let mut st = [0.0; 6];
+                    for q in 0..np {
+                        let w = ex[a * np + q];
+                        for c in 0..6 {
+                            st[c] += w * point_stress[q][c];
                         }
-                        node_stress[a] = s;
                     }
+                    node_stress[a] = st;
                 }
             }
             for (a, &g) in set.nodes(e).iter().enumerate() {

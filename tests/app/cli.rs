@@ -1,14 +1,10 @@
 //! The command-line program: outputs, and a clear one-line error with a documented exit
 //! code for each kind of bad input (1: input error, 2: numerical failure).
 
+use crate::common::run;
 use std::path::PathBuf;
-use std::process::Command;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_vibrofem"))
-}
 
 fn tmp(name: &str, content: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("vibrofem-cli-{}", std::process::id()));
@@ -16,16 +12,6 @@ fn tmp(name: &str, content: &str) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, content).unwrap();
     p
-}
-
-/// Run and return (exit code, stdout, stderr).
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = bin().args(args).output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
 }
 
 fn plate() -> String {

@@ -1,22 +1,10 @@
 //! Command-line regressions of issue 15: exit codes of usage errors, negative numbers, shift
 //! validation, output to a closed pipe or a full disk, and the thread-count bound.
 
-use std::process::{Command, Stdio};
+use crate::common::{bin, run};
+use std::process::Stdio;
 
 const BAR: &str = "box:0.5,0.1,0.1:6,1,1:hex20";
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_vibrofem"))
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = bin().args(args).output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
 
 /// Item 11: usage errors are input errors (1), not the numerical-failure code 2; help is 0.
 #[test]

@@ -1,20 +1,8 @@
 //! Command-line regressions of issue 15 (items 9, 12, 13, 14, 15): memory refusals before
 //! assembly and under `ulimit -v`, conflicting options, output paths checked up front.
 
+use crate::common::{bin, run};
 use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_vibrofem"))
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = bin().args(args).output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
 
 /// Item 14: a model far beyond `--max-memory` is refused from the estimate (exit 1, the
 /// estimate and the limit in the message), not aborted in assembly.

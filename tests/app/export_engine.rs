@@ -3,25 +3,12 @@
 //! names the packages, never a hang. (The 2-rank SLEPc solve itself is checked against the
 //! native solver by `validation/slepc_check.sh` in CI, after the packages are installed.)
 
-use std::process::Command;
+use crate::common::{bin, run_cmd as run};
 use vibrofem::input::source;
 use vibrofem::model::{Model, ModelSpec};
 use vibrofem::system::System;
 
 const PLATE: &str = "box:0.3,0.1,0.02:6,2,1:tet10";
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_vibrofem"))
-}
-
-fn run(cmd: &mut Command) -> (i32, String, String) {
-    let o = cmd.output().unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
 
 fn tmp(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("vibrofem-export-{}-{name}", std::process::id()));

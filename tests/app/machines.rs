@@ -6,9 +6,8 @@
 //! is justified where it is used.
 
 use std::f64::consts::{PI, TAU};
-use std::process::Command;
 
-use crate::common::rel;
+use crate::common::{bin, rel};
 use vibrofem::Error;
 use vibrofem::app::dynamics::autobalancer::{
     self, BALANCED_RESIDUAL, Cutting, Grinder, SimOptions, SpeedProfile, mean_projection, mean_projection_numeric,
@@ -654,10 +653,6 @@ fn bad_csv_rows_named_by_line() {
 
 // =============================================================================================
 // Command line
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_vibrofem"))
-}
 
 fn tmpdir(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("vibrofem-machines-{}-{name}", std::process::id()));

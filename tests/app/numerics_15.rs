@@ -1,21 +1,9 @@
 //! Command-line checks of issue 15's numerics: the curved-cell note and the incompatible-mode
 //! hex8 (`--hex8`).
 
-use std::process::Command;
+use crate::common::run;
 use vibrofem::mesh::CellKind;
 use vibrofem::mesh::generate::box_mesh;
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_vibrofem"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
-}
 
 fn json(out: &str) -> serde_json::Value {
     serde_json::from_str(out).unwrap_or_else(|e| panic!("{e}: {out}"))

@@ -531,6 +531,7 @@ fn quad_mesh(nodes: Vec<[f64; 3]>, quads: Vec<[u32; 4]>) -> Mesh {
             tag: 1,
             cells: (0..n as u32).map(|index| CellRef { block: 0, index }).collect(),
         }],
+        ..Default::default()
     }
 }
 

@@ -36,7 +36,7 @@ fn factor_estimate_before_assembly_bounds_the_symbolic_count() {
         assert!(capped > est / 10 && capped < est, "{src}: capped {capped} of {est}");
         drop(sets);
         let sys = System::build(model, &SystemOptions::default(), src).unwrap();
-        let nnz_l = sys.symbolic().nnz_l as u64;
+        let nnz_l = sys.symbolic().unwrap().nnz_l as u64;
         assert!(est <= nnz_l, "{src}: estimate {est} above the symbolic count {nnz_l}");
         assert!(
             est as f64 >= 0.9 * nnz_l as f64,

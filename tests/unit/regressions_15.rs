@@ -401,3 +401,100 @@ fn coupling_grammar() {
     assert!(parse_coupling("top:free").is_err());
     assert!(parse_coupling("top@1,2").is_err());
 }
+
+/// The tet10 cells around the corner node at the origin of a `box:` mesh, with the mid-edge
+/// nodes of every edge from that corner moved to `frac` of the edge (¼: quarter-point cells, a
+/// crack-tip rosette; negative: past the corner, an inverted cell).
+fn tet10_with_corner_edges_at(frac: f64) -> Mesh {
+    let mut mesh = source::load("box:0.1,0.02,0.02:10,2,2:tet10", 1.0).unwrap();
+    let corner = mesh
+        .nodes
+        .iter()
+        .position(|x| x.iter().all(|c| c.abs() < 1e-12))
+        .unwrap() as u32;
+    let b = mesh
+        .blocks
+        .iter()
+        .find(|b| b.kind == vibrofem::mesh::CellKind::Tet10)
+        .unwrap();
+    // gmsh tet10 edges: node 4 on (0,1), 5 (1,2), 6 (2,0), 7 (3,0), 8 (3,2), 9 (3,1).
+    const EDGES: [(usize, usize); 6] = [(0, 1), (1, 2), (2, 0), (3, 0), (3, 2), (3, 1)];
+    let mut moves = Vec::new();
+    for e in 0..b.len() {
+        let c = b.cell(e);
+        for (k, &(p, q)) in EDGES.iter().enumerate() {
+            let (a, o) = if c[p] == corner {
+                (c[p], c[q])
+            } else if c[q] == corner {
+                (c[q], c[p])
+            } else {
+                continue;
+            };
+            let (xa, xo) = (mesh.nodes[a as usize], mesh.nodes[o as usize]);
+            moves.push((c[4 + k] as usize, [0, 1, 2].map(|i| xa[i] + frac * (xo[i] - xa[i]))));
+        }
+    }
+    assert!(!moves.is_empty(), "the corner belongs to no tet10");
+    for (n, x) in moves {
+        mesh.nodes[n] = x;
+    }
+    mesh
+}
+
+/// Item 12: one Jacobian test for modes and statics. Quarter-point tet10 cells (Jacobian zero
+/// at the corner node, positive at the integration points) are legitimate: both analyses run,
+/// and the stresses at that node come from the integration points. Cells turned inside out by a
+/// mid-edge node past the corner are refused by both, naming the element.
+#[test]
+fn quarter_point_tet10_is_accepted_by_modes_and_statics_and_inverted_by_neither() {
+    use vibrofem::analysis::statics::{Load, StaticOptions, run_static};
+    let quarter = tet10_with_corner_edges_at(0.25);
+    let r = run(&quarter, &["xmax"], ModalTarget::Modes(3), None);
+    verified("quarter-point tet10", &r);
+    let cases = vec![vec![Load::Force {
+        group: "xmin".into(),
+        force: [0.0, 0.0, 100.0],
+    }]];
+    let opts = StaticOptions {
+        spec: spec(&["xmax"]),
+        cases,
+    };
+    let st = run_static(&quarter, "quarter", &opts).unwrap();
+    let n = st.model.n_mesh_nodes;
+    let u: Vec<f64> = (0..n)
+        .flat_map(|a| (0..3).map(move |c| (a, c)))
+        .map(|(a, c)| st.u[0][7 * a + c])
+        .collect();
+    let ns = vibrofem::post::stress::nodal_stress(&st.model.solids, n, &u).unwrap();
+    assert!(ns.von_mises.iter().all(|v| v.is_finite()) && ns.von_mises.iter().any(|&v| v > 0.0));
+
+    let inverted = tet10_with_corner_edges_at(-0.3);
+    let e = Model::build(&inverted, &spec(&["xmax"]), "inverted")
+        .and_then(|m| System::build(m, &SystemOptions::default(), "inverted"))
+        .err()
+        .expect("modes must refuse an inverted tet10");
+    assert!(matches!(e, vibrofem::Error::InvertedElement { .. }), "{e}");
+    let e = run_static(
+        &inverted,
+        "inverted",
+        &StaticOptions {
+            spec: spec(&["xmax"]),
+            cases: vec![vec![]],
+        },
+    )
+    .err()
+    .expect("statics must refuse an inverted tet10");
+    assert!(matches!(e, vibrofem::Error::InvertedElement { .. }), "{e}");
+}
+
+/// Item 15: a request for most of the spectrum (1000 of 1092 DOFs) is solved densely and must
+/// verify: the reduction through M's Cholesky factor keeps the upper modes backward stable
+/// (through K − σM they reached a backward error of 1.1e-10 and the run exited 2).
+#[test]
+fn most_of_the_spectrum_is_solved_densely_and_verified() {
+    let mesh = source::load("box:0.2,0.1,0.05:12,6,3:hex8", 1.0).unwrap();
+    let r = run(&mesh, &[], ModalTarget::Modes(1000), None);
+    verified("1000 of 1092 modes", &r);
+    assert_eq!(r.frequencies_hz.len(), 1000);
+    assert!(r.notes.iter().any(|n| n.contains("solved densely")), "{:?}", r.notes);
+}
