@@ -93,6 +93,9 @@ struct SweepArgs {
     /// Re-run the N best designs on a finer shell mesh and as hex20 solids.
     #[arg(long)]
     check: Option<usize>,
+    /// Start a study of more than 1000 designs (refused otherwise, with its size).
+    #[arg(long)]
+    yes: bool,
 }
 
 #[derive(clap::Args)]
@@ -161,6 +164,9 @@ struct DesignArgs {
     /// Print the JSON report on stdout instead of the table.
     #[arg(long)]
     json: bool,
+    /// Run a design whose models exceed 300 000 DOFs (refused otherwise, with the estimate).
+    #[arg(long)]
+    yes: bool,
 }
 
 #[derive(clap::Args)]
@@ -438,6 +444,18 @@ fn design_cmd(a: &DesignArgs) -> Result<i32> {
         Some(f) => vibrofem::app::design::Design::from_toml(f)?,
         None => vibrofem::app::design::Design::paper(),
     };
+    if !a.yes {
+        // A design file's sizes are all valid alone, yet a 5 mm element size or a 10 m plate
+        // makes minutes of work: say so before starting.
+        let dofs = vibrofem::app::design::estimate_dofs(&d)?;
+        if dofs > vibrofem::app::design::LARGE_DESIGN_DOFS {
+            return Err(Error::InvalidInput(format!(
+                "the design's FE models have about {dofs} DOFs (more than {}): minutes to hours of work; \
+                 rerun with --yes to start it, or coarsen the mesh sizes",
+                vibrofem::app::design::LARGE_DESIGN_DOFS
+            )));
+        }
+    }
     check_outputs(&[], Some(&a.out))?;
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new_spinner();
@@ -689,6 +707,7 @@ fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
             out: Some(a.out.clone()),
             jobs: a.jobs,
             progress: true,
+            yes: a.yes,
         },
     )?;
     out!("{}", sweep::table_text(&o));

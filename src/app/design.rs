@@ -662,6 +662,19 @@ fn q(id: &str, name: &str, unit: &str, value: f64, published: Option<f64>, note:
     }
 }
 
+/// Designs whose FE models exceed this many DOFs start only when asked for explicitly (`--yes`).
+pub const LARGE_DESIGN_DOFS: usize = 300_000;
+
+/// The DOFs of the design's FE models (work table as shells, one leaf as hex20), from their
+/// meshes, before any analysis: what `vibrofem design` checks against [`LARGE_DESIGN_DOFS`].
+pub fn estimate_dofs(d: &Design) -> Result<usize> {
+    d.validate()?;
+    let (table, _) = sandwich_clear_webs(&d.sandwich())?;
+    let l = &d.leaf;
+    let leaf = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, l.thickness], l.divisions)?;
+    Ok(6 * table.n_nodes() + 3 * leaf.n_nodes())
+}
+
 /// Run the whole chain; `progress` is told the name of each step as it starts. Plots and
 /// the markdown report go to `out_dir` if given.
 pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn Fn(&str)) -> Result<DesignReport> {

@@ -640,7 +640,14 @@ pub struct SweepOptions {
     pub jobs: usize,
     /// Print one line per design on stderr.
     pub progress: bool,
+    /// Start a study larger than [`LARGE_SWEEP`] designs (`--yes`); without it such a study is
+    /// refused with its size, before any analysis.
+    pub yes: bool,
 }
+
+/// Studies with more designs than this start only when asked for explicitly (`--yes`): at a
+/// second or more per design they run for a quarter of an hour or more.
+pub const LARGE_SWEEP: usize = 1000;
 
 /// Run a study: validate every combination, analyse each, mark feasibility and the Pareto front,
 /// check the best designs (`[check] designs`), and write the outputs.
@@ -654,6 +661,18 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     }
     let solid = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size);
     let total = designs.len();
+    if total > LARGE_SWEEP && !opts.yes {
+        // The size of one design's model, from its mesh (no analysis).
+        let p = &designs[0].2;
+        let dofs = match solid {
+            None => 6 * sandwich_table(p)?.n_nodes(),
+            Some(h) => 3 * sandwich_table_solid(p, h, CellKind::Hex20)?.n_nodes(),
+        };
+        return Err(invalid(format!(
+            "the study has {total} designs (more than {LARGE_SWEEP}) of about {dofs} DOFs each: that is hours of work; \
+             rerun with --yes to start it, or narrow the ranges (--set)"
+        )));
+    }
     let done = std::sync::atomic::AtomicUsize::new(0);
     let one = |(i, (vals, _t, p)): (usize, &(Vec<f64>, TableSpec, SandwichParams))| -> Result<SweepRow> {
         let r = analyse(p, study.material, solid)

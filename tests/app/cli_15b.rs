@@ -324,3 +324,40 @@ fn one_node_coupling_on_a_solid_is_solved() {
     ]);
     assert_eq!(code, 0, "{out}{err}");
 }
+
+/// Item 12: design-file values within range that make minutes of work, and studies of tens of
+/// thousands of designs, are refused with their size before any analysis unless `--yes`.
+#[test]
+fn large_designs_and_studies_need_yes() {
+    let dir = std::env::temp_dir().join(format!("vibrofem-yes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = crate::common::root();
+    let text = std::fs::read_to_string(root.join("scenes/designs/s8_transverse_webs.toml")).unwrap();
+    assert!(text.contains("element_size = 0.025"));
+    let big = dir.join("big.toml");
+    std::fs::write(&big, text.replace("element_size = 0.025", "element_size = 0.004")).unwrap();
+    let (code, _, err) = run(&["design", big.to_str().unwrap(), "-o", dir.join("d").to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("DOFs") && err.contains("--yes"), "{err}");
+    // The estimate is the models' size from their meshes: the built-in design is far below it.
+    let paper = vibrofem::app::design::Design::paper();
+    let n = vibrofem::app::design::estimate_dofs(&paper).unwrap();
+    assert!(n > 1000 && n < vibrofem::app::design::LARGE_DESIGN_DOFS, "{n}");
+    let study = root.join("scenes/studies/study_s7_table.toml");
+    let (code, _, err) = run(&[
+        "sweep",
+        study.to_str().unwrap(),
+        "--set",
+        "top_thickness=0.01:0.03:0.0005",
+        "--set",
+        "bottom_thickness=0.005:0.02:0.0005",
+        "-o",
+        dir.join("s").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("designs (more than 1000)") && err.contains("--yes"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

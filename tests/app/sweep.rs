@@ -38,6 +38,7 @@ fn two_by_two_sweep_has_four_rows_and_monotone_mass() {
             out: Some(out.clone()),
             jobs: 1,
             progress: false,
+            yes: false,
         },
     )
     .unwrap();
@@ -74,6 +75,7 @@ fn out_of_range_values_fail_before_meshing_naming_the_key() {
             out: None,
             jobs: 1,
             progress: false,
+            yes: false,
         },
     )
     .unwrap_err()
