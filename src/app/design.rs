@@ -325,6 +325,18 @@ impl Design {
                 format!("design: 'tune' must be none, leaf or mass, got '{}'", self.tune),
             ));
         }
+        // Checks of the parts' own builders, here so that the message names the design key.
+        let [young, poisson, density] = self.steel;
+        Material {
+            young,
+            poisson,
+            density,
+        }
+        .validate("'steel'")
+        .map_err(|e| crate::app::toml_file::bad_value("steel", e))?;
+        self.sandwich()
+            .validate()
+            .map_err(|e| crate::app::toml_file::bad_value("table", e))?;
         Ok(())
     }
 

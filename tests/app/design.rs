@@ -120,6 +120,20 @@ fn design_files_are_strict() {
     // A value error found after parsing names the file, the line and the key like a syntax error.
     assert!(e.to_string().contains("neg.toml, line 3, key 'masses.reactive'"), "{e}");
     assert!(matches!(e, vibrofem::Error::Input { line: Some(3), .. }), "{e:?}");
+    // Errors of the parts' own builders also name the file and the design key (issue 15,
+    // item 12): a table too narrow for its webs, an impossible Poisson's ratio.
+    let e = Design::from_toml(&write("narrow.toml", "version = 1\n[table]\ntop_width = 0.1\n")).unwrap_err();
+    assert!(
+        e.to_string().contains("narrow.toml")
+            && e.to_string().contains("key 'table'")
+            && e.to_string().contains("top_width"),
+        "{e}"
+    );
+    let e = Design::from_toml(&write("nu.toml", "version = 1\nsteel = [2.1e11, 0.6, 7850.0]\n")).unwrap_err();
+    assert!(
+        e.to_string().contains("nu.toml, line 2, key 'steel'") && e.to_string().contains("Poisson"),
+        "{e}"
+    );
     let e = Design::from_toml(&write("z.toml", "version = 1\ntarget_detuning = 0.0\n")).unwrap_err();
     assert!(e.to_string().contains("target_detuning"), "{e}");
     let e = Design::from_toml(&write("v.toml", "version = 7\n")).unwrap_err();
