@@ -61,6 +61,12 @@ pub fn node_nested_dissection(graph: &NodeGraph, dofs: &DofMap) -> Result<Vec<us
         // SAFETY: METIS_SetDefaultOptions fills the options array of the documented length.
         unsafe { metis_sys::METIS_SetDefaultOptions(options.as_mut_ptr()) };
         options[metis_sys::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+        // METIS reseeds one process-wide random generator at each call and draws from it while
+        // partitioning: two calls at once (parallel tests, batch or sweep jobs) interleave their
+        // draws and give orderings that differ from run to run. One call at a time keeps every
+        // ordering, and so every factorisation, reproducible.
+        static METIS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+        let _one_at_a_time = METIS.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         // SAFETY: xadj has nv+1 entries, adjncy xadj[nv] entries, perm/iperm nv entries;
         // METIS does not retain the pointers after returning.
         let ret = unsafe {
