@@ -119,26 +119,12 @@ fn gradients(x: &[[f64; 3]], xi: [f64; 3]) -> Result<([[f64; 3]; 8], [[f64; 3]; 
     Ok((g, gi, det))
 }
 
-/// `D b` for the isotropic material (Lamé `lam`, `mu`) and a Voigt strain `b`.
-fn d_times(lam: f64, mu: f64, b: &[f64; 6]) -> [f64; 6] {
-    let p = lam * (b[0] + b[1] + b[2]);
-    [
-        p + 2.0 * mu * b[0],
-        p + 2.0 * mu * b[1],
-        p + 2.0 * mu * b[2],
-        mu * b[3],
-        mu * b[4],
-        mu * b[5],
-    ]
-}
-
 fn dot6(a: &[f64; 6], b: &[f64; 6]) -> f64 {
     a.iter().zip(b).map(|(p, q)| p * q).sum()
 }
 
 /// The blocks `K_cc` (into `kcc`, 24 × 24 row-major), `K_ic` and `K_ii`.
 fn blocks(x: &[[f64; 3]], mat: &Material, kcc: &mut [f64]) -> Result<(Kic, Kii), f64> {
-    let (lam, mu) = mat.lame();
     let rule = quadrature::hex(2);
     kcc.fill(0.0);
     let mut kic = Kic::zeros();
@@ -159,7 +145,7 @@ fn blocks(x: &[[f64; 3]], mat: &Material, kcc: &mut [f64]) -> Result<(Kic, Kii),
             }
         }
         for r in 0..NC {
-            let db = d_times(lam, mu, &bc[r]);
+            let db = mat.stress(&bc[r]);
             for s in 0..NC {
                 kcc[r * NC + s] += c * dot6(&db, &bc[s]);
             }
@@ -168,7 +154,7 @@ fn blocks(x: &[[f64; 3]], mat: &Material, kcc: &mut [f64]) -> Result<(Kic, Kii),
             }
         }
         for r in 0..NI {
-            let db = d_times(lam, mu, &bi[r]);
+            let db = mat.stress(&bi[r]);
             for s in 0..NI {
                 kii[(r, s)] += c * dot6(&db, &bi[s]);
             }
