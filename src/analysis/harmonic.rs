@@ -283,7 +283,21 @@ pub fn direct(sys: &System, load: &[c64], omega: f64, damping: &Damping) -> Resu
     })?;
     let mut x = faer::Mat::from_fn(n, 1, |i, _| load[i]);
     lu.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
-    let u: Vec<c64> = (0..n).map(|i| x[(i, 0)]).collect();
+    let mut u: Vec<c64> = (0..n).map(|i| x[(i, 0)]).collect();
+    // Two steps of iterative refinement with the residual F − A u (A applied through K and M):
+    // near a lightly damped resonance A is ill-conditioned and one LU solve alone loses digits.
+    for _ in 0..2 {
+        let re: Vec<f64> = u.iter().map(|v| v.re).collect();
+        let im: Vec<f64> = u.iter().map(|v| v.im).collect();
+        let (kr, ki, mr, mi) = (k.mul_vec(&re), k.mul_vec(&im), m.mul_vec(&re), m.mul_vec(&im));
+        let mut r = faer::Mat::from_fn(n, 1, |i, _| {
+            load[i] - (ck * c64::new(kr[i], ki[i]) - cm * c64::new(mr[i], mi[i]))
+        });
+        lu.solve_in_place_with_conj(faer::Conj::No, r.as_mut());
+        for (i, v) in u.iter_mut().enumerate() {
+            *v += r[(i, 0)];
+        }
+    }
     if u.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
         return Err(Error::Singular {
             equation: None,
