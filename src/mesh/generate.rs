@@ -63,7 +63,7 @@ const BRICK_WEDGES: [[usize; 6]; 2] = [[0, 1, 2, 4, 5, 6], [0, 2, 3, 4, 6, 7]];
 
 /// Faces of each linear solid as lists of its corners, ordered so that the right-hand normal
 /// points out of a positively oriented cell.
-fn faces(kind: CellKind) -> &'static [&'static [usize]] {
+pub(crate) fn faces(kind: CellKind) -> &'static [&'static [usize]] {
     match kind {
         CellKind::Tet4 | CellKind::Tet10 => &[&[0, 2, 1], &[0, 1, 3], &[0, 3, 2], &[1, 2, 3]],
         CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27 => &[

@@ -880,7 +880,59 @@ pub(crate) fn lints(solids: &[SolidSet], orphan_nodes: usize) -> Vec<String> {
     if orphan_nodes > 0 {
         notes.push(format!("{orphan_nodes} nodes belong to no element and are ignored"));
     }
+    notes.extend(
+        solids
+            .iter()
+            .filter(|s| flat_linear_cells_note(s).is_none())
+            .filter_map(one_layer_note),
+    );
     notes
+}
+
+/// Linear solids (without incompatible modes) whose every node lies on the part's surface: the
+/// part is one cell thick (a plate of one layer of hex8, however well shaped the cells), and such
+/// a layer locks in bending: the cell's linear displacement cannot bend, so bending frequencies
+/// and stiffness come out far too high. `None` below 8 cells (a single brick is a test, not a
+/// part) or when some node is inside.
+fn one_layer_note(set: &SolidSet) -> Option<String> {
+    if !matches!(set.kind, CellKind::Tet4 | CellKind::Hex8 | CellKind::Wedge6) || set.incompatible() {
+        return None;
+    }
+    let n_cells = set.tags.len();
+    if n_cells < 8 {
+        return None;
+    }
+    let nn = set.kind.n_nodes();
+    let faces = crate::mesh::generate::faces(set.kind);
+    let mut count: std::collections::HashMap<Vec<u32>, u32> = std::collections::HashMap::new();
+    for e in 0..n_cells {
+        let cell = &set.conn[e * nn..(e + 1) * nn];
+        for f in faces {
+            let mut key: Vec<u32> = f.iter().map(|&i| cell[i]).collect();
+            key.sort_unstable();
+            *count.entry(key).or_insert(0) += 1;
+        }
+    }
+    let mut surface = std::collections::HashSet::new();
+    for (k, c) in &count {
+        if *c == 1 {
+            surface.extend(k.iter().copied());
+        }
+    }
+    if !set.conn.iter().all(|a| surface.contains(a)) {
+        return None;
+    }
+    let hex8 = if set.kind == CellKind::Hex8 {
+        " or --hex8 incompatible"
+    } else {
+        ""
+    };
+    Some(format!(
+        "every node of the {n_cells} {} cells lies on the surface: the part is one cell thick, and one layer of \
+         linear solids locks in bending (bending frequencies and stiffness far too high); use shells (--shell), \
+         quadratic cells (tet10, hex20){hex8}, or several cells through the thickness",
+        set.kind
+    ))
 }
 
 /// Step 7: a note per fixed group that is a line or a point of a solid (no shell or beam node in

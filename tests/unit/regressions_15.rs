@@ -639,3 +639,25 @@ fn couplings_of_a_point_or_a_line_of_solid_nodes() {
         assert!(rel(*a, *b) < 1e-9, "{:?} vs {:?}", d1.frequencies_hz, d2.frequencies_hz);
     }
 }
+
+/// Item 9: a plate of one layer of well-shaped (cubic) plain hex8 cells passed without a word,
+/// although one linear layer cannot bend (its first bending frequency is far too high). It is
+/// now named; a chunky block with interior nodes and the incompatible-mode hex8 are not.
+#[test]
+fn one_layer_of_linear_solids_is_named() {
+    let notes = |spec: &str, hex8: &str| {
+        let mesh = source::load(spec, 1.0).unwrap();
+        let opts = ModelOptions {
+            hex8: hex8.into(),
+            ..Default::default()
+        };
+        Model::build(&mesh, &opts.spec().unwrap(), "test").unwrap().notes
+    };
+    let plate = notes("box:0.1,0.1,0.01:10,10,1:hex8", "standard");
+    assert!(plate.iter().any(|n| n.contains("one cell thick")), "{plate:?}");
+    assert!(plate.iter().any(|n| n.contains("--hex8 incompatible")), "{plate:?}");
+    let block = notes("box:0.4,0.4,0.4:4,4,4:hex8", "standard");
+    assert!(!block.iter().any(|n| n.contains("one cell thick")), "{block:?}");
+    let inc = notes("box:0.1,0.1,0.01:10,10,1:hex8", "incompatible");
+    assert!(!inc.iter().any(|n| n.contains("one cell thick")), "{inc:?}");
+}
