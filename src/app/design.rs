@@ -229,6 +229,9 @@ impl Default for DampingDesign {
     }
 }
 
+/// Longest start-up transient a design file may ask for (s of machine time).
+pub const MAX_TRANSIENT_S: f64 = 30.0;
+
 impl Design {
     /// The paper's 100 Hz table (S3–S8 of docs/spec/scenes.md), with the S7 table reconstruction.
     pub fn paper() -> Design {
@@ -284,6 +287,20 @@ impl Design {
         pos("coil.shear_modulus", self.coil.shear_modulus)?;
         pos("drive.pull", self.drive.pull)?;
         pos("drive.efficiency", self.drive.efficiency)?;
+        pos("drive.transient_s", self.drive.transient_s)?;
+        if self.drive.transient_s > MAX_TRANSIENT_S {
+            // The start-up settles within about 0.4 s; a run of hours of machine time takes the
+            // integrator millions of steps (it used to stop with "more than max_steps" after minutes).
+            return Err(crate::app::toml_file::bad_value(
+                "drive.transient_s",
+                format!(
+                    "design: 'drive.transient_s' = {} s is longer than {MAX_TRANSIENT_S} s (the start-up settles \
+                     within a second; {MAX_TRANSIENT_S} s is {} periods of the excitation)",
+                    self.drive.transient_s,
+                    (MAX_TRANSIENT_S * self.excitation_hz).round()
+                ),
+            ));
+        }
         if self.leaf.divisions.contains(&0) || self.leaf.divisions.iter().product::<usize>() > 200_000 {
             return Err(crate::app::toml_file::bad_value(
                 "leaf.divisions",

@@ -119,6 +119,13 @@ fn design_files_are_strict() {
     assert!(e.to_string().contains("masses.reactive"), "{e}");
     // A value error found after parsing names the file, the line and the key like a syntax error.
     assert!(e.to_string().contains("neg.toml, line 3, key 'masses.reactive'"), "{e}");
+    // Issue 15 item 12: a transient of hours used to run for minutes and stop with "ode: more
+    // than max_steps"; it is refused at once, naming the key.
+    let e = Design::from_toml(&write("long.toml", "version = 1\n[drive]\ntransient_s = 1e4\n")).unwrap_err();
+    assert!(
+        e.to_string().contains("long.toml, line 3, key 'drive.transient_s'") && e.to_string().contains("30 s"),
+        "{e}"
+    );
     assert!(matches!(e, vibrofem::Error::Input { line: Some(3), .. }), "{e:?}");
     // Errors of the parts' own builders also name the file and the design key (issue 15,
     // item 12): a table too narrow for its webs, an impossible Poisson's ratio.
