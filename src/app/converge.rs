@@ -16,7 +16,6 @@
 
 use crate::analysis::modal::ModalTarget;
 use crate::app::scene::{MeshSource, Scene};
-use crate::app::sweep::analyse;
 use crate::mesh::parametric::SandwichParams;
 use crate::{Error, Result};
 use serde::Serialize;
@@ -496,7 +495,20 @@ pub fn run_level_modes(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>, O
             if !solid {
                 p.elem_size = *h;
             }
-            let r = analyse(&p, crate::material::Material::steel(), solid.then_some(*h))?;
+            let (r, run, mesh) = crate::app::sweep::analyse_modes(
+                &p,
+                crate::material::Material::steel(),
+                solid.then_some(*h),
+                10 + PAIRING_EXTRA,
+            )?;
+            let elastic: Vec<usize> = (0..run.report.modes.len())
+                .filter(|&i| run.report.modes[i].kind == "elastic")
+                .collect();
+            modes = Some(LevelModes {
+                points: mesh.nodes.clone(),
+                freqs: elastic.iter().map(|&i| run.report.modes[i].frequency_hz).collect(),
+                shapes: elastic.iter().filter_map(|&i| run.shapes.get(i).cloned()).collect(),
+            });
             (r.f1_hz, r.dofs)
         }
     };

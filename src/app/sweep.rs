@@ -528,6 +528,17 @@ pub struct DesignResult {
 
 /// Free–free modal analysis of one table: shells (`solid_size = None`) or hex20 solids of size h.
 pub fn analyse(p: &SandwichParams, material: Material, solid_size: Option<f64>) -> Result<DesignResult> {
+    analyse_modes(p, material, solid_size, 10).map(|(r, _, _)| r)
+}
+
+/// [`analyse`] with the `n_modes` lowest modes (rigid-body ones included) and the mesh, for
+/// callers that look at the shapes (mode pairing in `converge`).
+pub fn analyse_modes(
+    p: &SandwichParams,
+    material: Material,
+    solid_size: Option<f64>,
+    n_modes: usize,
+) -> Result<(DesignResult, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
     let t = Instant::now();
     let (mesh, spec) = match solid_size {
         None => {
@@ -562,7 +573,7 @@ pub fn analyse(p: &SandwichParams, material: Material, solid_size: Option<f64>) 
         "sandwich table",
         &ModalOptions {
             spec,
-            target: ModalTarget::Modes(10),
+            target: ModalTarget::Modes(n_modes),
             ..Default::default()
         },
         0.0,
@@ -578,13 +589,14 @@ pub fn analyse(p: &SandwichParams, material: Material, solid_size: Option<f64>) 
             "sandwich table: no elastic mode among the lowest 10".into(),
         ));
     }
-    Ok(DesignResult {
+    let r = DesignResult {
         model_mass_kg: run.report.mass_kg,
         f1_hz: el[0],
         f2_hz: el.get(1).copied().unwrap_or(f64::NAN),
         dofs: run.report.dofs,
         time_s: t.elapsed().as_secs_f64(),
-    })
+    };
+    Ok((r, run, mesh))
 }
 
 /// Mark the Pareto front (minimum mass, maximum f1) of `rows`.

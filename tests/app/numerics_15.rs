@@ -129,3 +129,35 @@ fn converge_pairs_modes_by_mac_across_reordering() {
     assert_eq!(mac(&[1.0, 0.0], &[0.0, 2.0]), 0.0);
     assert!((mac(&[1.0, 2.0], &[-2.0, -4.0]) - 1.0).abs() < 1e-15);
 }
+
+/// Item 8: MAC pairing used to apply only to scene levels; the built-in S7 table levels (shell
+/// and hex20 runners) returned no shapes, so a mode swap there went unnoticed. They now hand
+/// back their elastic modes: two shell refinements of the table pair their first elastic mode
+/// with the finest level's first (the same plate mode; a MAC near 1 shows the shapes are
+/// sampled at the same points and consistently normalised).
+#[test]
+fn converge_table_levels_return_shapes_for_pairing() {
+    use vibrofem::app::converge::{LevelSpec, Runner, pair_by_mac, run_level_modes};
+    let levels: Vec<_> = [0.1, 0.05]
+        .iter()
+        .map(|&h| {
+            let (value, _, _, _, modes) = run_level_modes(&LevelSpec {
+                formulation: "shell".into(),
+                mesh: format!("{h}"),
+                runner: Runner::TableShell(h),
+            })
+            .unwrap();
+            let m = modes.expect("table levels return their modes");
+            assert!(m.freqs.len() >= 4 && m.shapes.len() == m.freqs.len(), "{:?}", m.freqs);
+            assert_eq!(m.freqs[0], value);
+            assert_eq!(m.shapes[0].len(), 3 * m.points.len());
+            Some(m)
+        })
+        .collect();
+    let p = pair_by_mac(&levels);
+    for (i, x) in p.iter().enumerate() {
+        let (k, m) = x.unwrap();
+        assert_eq!(k, 0, "level {i}: paired with elastic mode {}", k + 1);
+        assert!(m > 0.95, "level {i}: MAC {m}");
+    }
+}
