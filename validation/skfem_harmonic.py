@@ -18,7 +18,7 @@ vibrofem spreads a group force on a surface group.
 JSON schema::
 
     {"case", "mesh", "element", "material", "fixed": [groups], "forces": [{"group", "force",
-     "phase_deg"}], "rayleigh": {"alpha", "beta"}, "frequencies_hz": [...],
+     "phase_deg"}], "rayleigh": {"alpha", "beta"}, "excitation_hz": [...],
      "node_tags": [...file order...],
      "displacement": [[[Re ux, Re uy, Re uz, Im ux, Im uy, Im uz] per node] per frequency],
      "solve_rel_residual": [...], "versions"}
@@ -124,7 +124,7 @@ def run_case(c: Case) -> dict:
         "case": c.case, "mesh": c.mesh, "element": g.kind, "skfem_element": elem_cls.__name__,
         "material": mat, "fixed": c.fixed,
         "forces": [{"group": n, "force": fo, "phase_deg": p} for n, fo, p in c.forces],
-        "rayleigh": {"alpha": c.alpha, "beta": c.beta}, "frequencies_hz": c.freqs,
+        "rayleigh": {"alpha": c.alpha, "beta": c.beta}, "excitation_hz": c.freqs,
         "n_nodes": int(len(ftags)), "dofs_total": int(ndof), "dofs_constrained": int(len(fixed)),
         "solve_rel_residual": res,
         "solver": "(1 + i w beta) K - (w^2 - i w alpha) M, SuperLU (complex) + 2 refinement steps",
@@ -136,7 +136,7 @@ def run_case(c: Case) -> dict:
 
 def compare(new: dict, old: dict, rel: float = 1e-9) -> list:
     errs = []
-    for key in ("element", "n_nodes", "dofs_total", "dofs_constrained", "node_tags", "frequencies_hz"):
+    for key in ("element", "n_nodes", "dofs_total", "dofs_constrained", "node_tags", "excitation_hz"):
         if new.get(key) != old.get(key):
             errs.append(f"{key} differs")
     a, b = np.array(new["displacement"]), np.array(old["displacement"])

@@ -87,7 +87,7 @@ fn direct_solve_matches_scikit_fem_on_the_same_meshes() {
             alpha: r["rayleigh"]["alpha"].as_f64().unwrap(),
             beta: r["rayleigh"]["beta"].as_f64().unwrap(),
         };
-        for (k, fz) in r["frequencies_hz"].as_array().unwrap().iter().enumerate() {
+        for (k, fz) in r["excitation_hz"].as_array().unwrap().iter().enumerate() {
             let fz = fz.as_f64().unwrap();
             let u = harmonic::direct(&sys, &load, TAU * fz, &damping).unwrap();
             let nodal = harmonic::expand(&sys, &u);
