@@ -65,6 +65,8 @@ pub struct Design {
     pub drive: DriveDesign,
     /// Viscous damping, N·s/m.
     pub damping: DampingDesign,
+    /// The 3D machine: layout of leaves, magnets and isolators, and its limits.
+    pub machine: crate::app::machine3d::MachineDesign,
 }
 
 /// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
@@ -246,6 +248,7 @@ impl Design {
             coil: CoilDesign::default(),
             drive: DriveDesign::default(),
             damping: DampingDesign::default(),
+            machine: Default::default(),
         }
     }
 
@@ -337,10 +340,12 @@ impl Design {
         self.sandwich()
             .validate()
             .map_err(|e| crate::app::toml_file::bad_value("table", e))?;
+        self.machine.validate(self)?;
         Ok(())
     }
 
-    fn sandwich(&self) -> SandwichParams {
+    /// The table generator's parameters (quad4 shells).
+    pub(crate) fn sandwich(&self) -> SandwichParams {
         SandwichParams {
             shell_kind: CellKind::Quad4,
             ..self.table.clone()
@@ -420,6 +425,8 @@ pub struct DesignReport {
     pub table_frequencies_hz: Vec<f64>,
     /// Leaf thicknesses tried while tuning (m) and the detuning each gave.
     pub leaf_iterations: Vec<(f64, f64)>,
+    /// Modes of the 3D machine up to `machine.mode_range` × the excitation.
+    pub machine_modes: Vec<crate::app::machine3d::MachineMode>,
     /// Wall time per step (s).
     pub timings_s: Vec<(String, f64)>,
     /// Notes.
@@ -784,6 +791,11 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     let trs = tr.summary(10)?;
     timings.push(("two-mass model and transient".to_string(), t.elapsed().as_secs_f64()));
 
+    progress("3D machine: modes and forced response");
+    let t = Instant::now();
+    let mach = crate::app::machine3d::analyse(d, h)?;
+    timings.push(("3D machine".to_string(), t.elapsed().as_secs_f64()));
+
     // Stresses.
     let sigma_leaf = stress_per_m * rel;
     let q_static = m_total * 9.81 / d.coil.count as f64;
@@ -989,6 +1001,81 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "K from C = D/d",
         ),
     ];
+    let working_hz = mach.working.map_or(f64::NAN, |i| mach.modes[i].frequency_hz);
+    quantities.extend([
+        q(
+            "machine_working_hz",
+            "3D machine: working mode",
+            "Hz",
+            working_hz,
+            Some(103.09),
+            &format!("two-mass model {w2:.2} Hz; table as {}", d.machine.table_model),
+        ),
+        q(
+            "machine_nearest_mode_hz",
+            "3D machine: other mode nearest the excitation",
+            "Hz",
+            mach.nearest_other.map_or(f64::NAN, |x| x.0),
+            None,
+            "",
+        ),
+        q(
+            "surface_mean_amplitude",
+            "work surface: mean amplitude",
+            "mm",
+            mach.mean * 1e3,
+            Some(0.2),
+            &format!("{} nodes; two-mass X1 {:.4} mm", mach.surface.len(), x1 * 1e3),
+        ),
+        q(
+            "surface_min_amplitude",
+            "work surface: min amplitude",
+            "mm",
+            mach.min * 1e3,
+            None,
+            "",
+        ),
+        q(
+            "surface_max_amplitude",
+            "work surface: max amplitude",
+            "mm",
+            mach.max * 1e3,
+            None,
+            "",
+        ),
+        q(
+            "surface_nonuniformity",
+            "work surface: non-uniformity (max − min)/mean",
+            "%",
+            mach.nonuniformity * 100.0,
+            None,
+            "",
+        ),
+        q(
+            "machine_reactive_amplitude",
+            "3D machine: reactive-mass amplitude",
+            "mm",
+            mach.reactive_amplitude * 1e3,
+            None,
+            &format!("two-mass X2 {:.4} mm", ss.amp2() * 1e3),
+        ),
+        q(
+            "leaf_kzz",
+            "condensed leaf: guided vertical stiffness",
+            "N/m",
+            mach.leaf_kzz,
+            None,
+            "12×12 from 6 FE statics",
+        ),
+        q(
+            "coil_lateral",
+            "FE coil lateral stiffness (beam helix)",
+            "N/m",
+            mach.coil_lateral,
+            None,
+            "top end guided along x",
+        ),
+    ]);
     quantities.retain(|x| x.value.is_finite() || x.published.is_some());
     if d.tune == "mass" {
         let m2_need = crate::app::dynamics::tuning::reactive_mass_for_detuning(m1, c12, omega, d.target_detuning);
@@ -1070,7 +1157,31 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             d.drive.installed_power,
             true,
         ),
+        check(
+            "mode_clearance",
+            "no other machine mode within the clearance of the excitation [%]",
+            mach.nearest_other.map_or(f64::INFINITY, |x| x.1 * 100.0),
+            d.machine.mode_clearance * 100.0,
+            false,
+        ),
+        check(
+            "surface_uniformity",
+            "work-surface amplitude non-uniformity ≤ limit [%]",
+            mach.nonuniformity * 100.0,
+            d.machine.max_nonuniformity * 100.0,
+            true,
+        ),
     ];
+    if mach.working.is_none() {
+        notes.push(format!(
+            "the 3D machine has no working mode (leaves strained, masses in vertical antiphase) below {} Hz",
+            d.machine.mode_range * d.excitation_hz
+        ));
+    }
+    notes.push(format!(
+        "3D machine: {} DOFs; forced response from {} modes up to {:.0} Hz with the two-mass dashpots placed on the leaves, isolators and work surface",
+        mach.dofs, mach.response_modes.0, mach.response_modes.1
+    ));
     if let Some(dir) = out_dir {
         progress("report and plots");
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -1092,6 +1203,8 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             Some(&dir.join("table_modes.vtu")),
             Some(&dir.join("table_modes.msh")),
         )?;
+        crate::app::machine3d::write_amplitude_svg(&dir.join("work_surface_amplitude.svg"), &mach, d.excitation_hz)?;
+        crate::app::machine3d::write_amplitude_vtu(&dir.join("machine_response.vtu"), &mach)?;
         if let Some(k) = table_run.report.modes.iter().position(|m| m.kind == "elastic") {
             write_mode_svg(
                 &dir.join("table_mode7.svg"),
@@ -1107,6 +1220,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
         checks,
         table_frequencies_hz: f_table,
         leaf_iterations: iters,
+        machine_modes: mach.modes.clone(),
         timings_s: timings,
         notes,
     })
@@ -1192,6 +1306,25 @@ pub fn verdict_text(r: &DesignReport) -> String {
             x.unit,
             x.note
         );
+    }
+    if !r.machine_modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n3D machine modes          Hz   strain energy: leaves isolators table   kinetic in m2"
+        );
+        for (i, m) in r.machine_modes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  {:>3} {:>18} {:>9.1} %  {:>7.1} % {:>7.1} %  {:>9.1} %   {}",
+                i + 1,
+                sig(m.frequency_hz),
+                100.0 * m.energy_leaves,
+                100.0 * m.energy_isolators,
+                100.0 * m.energy_table,
+                100.0 * m.kinetic_reactive,
+                m.name
+            );
+        }
     }
     for n in &r.notes {
         let _ = writeln!(s, "\nnote: {n}");
@@ -1302,6 +1435,26 @@ pub fn report_html(r: &DesignReport, dir: &std::path::Path) -> String {
         let _ = writeln!(s, "<li>mode {}: {} Hz</li>", i + 7, sig(*f));
     }
     let _ = writeln!(s, "</ul>");
+    if !r.machine_modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "<h2>3D machine modes</h2>\n<table><tr><th>#</th><th>Hz</th><th>leaves</th><th>isolators</th><th>table</th><th>kinetic in m2</th><th>mode</th></tr>"
+        );
+        for (i, m) in r.machine_modes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "<tr><td>{}</td><td class=n>{}</td><td class=n>{:.1} %</td><td class=n>{:.1} %</td><td class=n>{:.1} %</td><td class=n>{:.1} %</td><td>{}</td></tr>",
+                i + 1,
+                sig(m.frequency_hz),
+                100.0 * m.energy_leaves,
+                100.0 * m.energy_isolators,
+                100.0 * m.energy_table,
+                100.0 * m.kinetic_reactive,
+                html_escape(&m.name)
+            );
+        }
+        let _ = writeln!(s, "</table>");
+    }
     if !r.notes.is_empty() {
         let _ = writeln!(s, "<h2>Notes</h2>\n<ul>");
         for n in &r.notes {
@@ -1325,7 +1478,11 @@ pub fn report_html(r: &DesignReport, dir: &std::path::Path) -> String {
 }
 
 /// The plots the chain writes, with their captions.
-const PLOTS: [(&str, &str); 4] = [
+const PLOTS: [(&str, &str); 5] = [
+    (
+        "work_surface_amplitude.svg",
+        "Work-surface vertical amplitude at the excitation (3D machine)",
+    ),
     (
         "amplitude_frequency.svg",
         "Amplitude–frequency and phase curves with the operating point",
@@ -1378,6 +1535,25 @@ pub fn report_markdown(r: &DesignReport) -> String {
     for (i, f) in r.table_frequencies_hz.iter().enumerate() {
         let _ = writeln!(s, "- mode {}: {} Hz", i + 7, sig(*f));
     }
+    if !r.machine_modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## 3D machine modes\n\n| # | Hz | strain energy in leaves | isolators | table | kinetic in m2 | mode |\n|---:|---:|---:|---:|---:|---:|---|"
+        );
+        for (i, m) in r.machine_modes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {} |",
+                i + 1,
+                sig(m.frequency_hz),
+                100.0 * m.energy_leaves,
+                100.0 * m.energy_isolators,
+                100.0 * m.energy_table,
+                100.0 * m.kinetic_reactive,
+                m.name
+            );
+        }
+    }
     if !r.notes.is_empty() {
         let _ = writeln!(s, "\n## Notes\n");
         for n in &r.notes {
@@ -1386,7 +1562,7 @@ pub fn report_markdown(r: &DesignReport) -> String {
     }
     let _ = writeln!(
         s,
-        "\n## Plots\n\n![amplitude-frequency](amplitude_frequency.svg)\n\n![transient](transient.svg)\n\n![electromagnet force](electromagnet.svg)\n\n![work-table mode 7](table_mode7.svg)\n\nMode shapes: `table_modes.vtu` (ParaView), `table_modes.msh` (gmsh)."
+        "\n## Plots\n\n![work-surface amplitude](work_surface_amplitude.svg)\n\n![amplitude-frequency](amplitude_frequency.svg)\n\n![transient](transient.svg)\n\n![electromagnet force](electromagnet.svg)\n\n![work-table mode 7](table_mode7.svg)\n\nMode shapes: `table_modes.vtu` (ParaView), `table_modes.msh` (gmsh); forced response of the 3D machine: `machine_response.vtu`."
     );
     s
 }

@@ -9,6 +9,7 @@ pub mod converge;
 pub mod design;
 pub mod dynamics;
 pub mod export;
+pub mod machine3d;
 pub mod machines_cli;
 pub mod report;
 pub mod scene;
