@@ -67,6 +67,12 @@ pub struct Design {
     pub damping: DampingDesign,
     /// The 3D machine: layout of leaves, magnets and isolators, and its limits.
     pub machine: crate::app::machine3d::MachineDesign,
+    /// What spaces the plates: `"plates"` (flat webs, the S7 reconstruction) or `"channel10"`
+    /// (the paper's words: channel No. 10 of GOST 8240, h = 100 mm, flanges 46 × 7.6 mm on the
+    /// plates, web 4.5 mm; see [`table_parts`]).
+    pub spacers: String,
+    /// The search for a passing variant when a check fails.
+    pub search: crate::app::design_search::SearchDesign,
 }
 
 /// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
@@ -249,6 +255,8 @@ impl Design {
             drive: DriveDesign::default(),
             damping: DampingDesign::default(),
             machine: Default::default(),
+            spacers: "plates".into(),
+            search: Default::default(),
         }
     }
 
@@ -341,6 +349,13 @@ impl Design {
             .validate()
             .map_err(|e| crate::app::toml_file::bad_value("table", e))?;
         self.machine.validate(self)?;
+        if !["plates", "channel10"].contains(&self.spacers.as_str()) {
+            return Err(crate::app::toml_file::bad_value(
+                "spacers",
+                format!("design: 'spacers' must be plates or channel10, got '{}'", self.spacers),
+            ));
+        }
+        self.search.validate()?;
         Ok(())
     }
 
@@ -610,17 +625,89 @@ pub fn sandwich_clear_webs(p: &SandwichParams) -> Result<(crate::mesh::Mesh, Vec
     Ok((mesh, couplings))
 }
 
+/// GOST 8240 channel No. 10: flange width and mean flange thickness (m).
+pub const CHANNEL10_FLANGE: (f64, f64) = (0.046, 0.0076);
+
+/// The work table's shell model: mesh (webs at their clear height, [`sandwich_clear_webs`]),
+/// rigid web links and the thickness of each shell group. With `spacers = "channel10"` every
+/// longitudinal web is a channel No. 10 whose flanges lie on the plates: the plate cells whose
+/// centres fall in the flange's 46 mm strip beside the web (towards the table axis; +y for a
+/// web on it) form the groups `top_flanges`/`bottom_flanges`, with the plate's thickness plus
+/// 7.6 mm scaled by the strip's width over the cells' (so the steel's mass is exact); the rest
+/// of each plate is `top_plain`/`bottom_plain`. `top_plate` and `bottom_plate` stay whole for
+/// selecting nodes. The flange's offset from the plate's mid-surface is not modelled.
+pub fn table_parts(d: &Design) -> Result<(crate::mesh::Mesh, Vec<CouplingSpec>, Vec<(String, f64)>)> {
+    use crate::mesh::Group;
+    let p = d.sandwich();
+    let (mut mesh, links) = sandwich_clear_webs(&p)?;
+    let mut thick = p.thicknesses();
+    if d.spacers == "channel10" && !p.long_webs.is_empty() {
+        let (bf, tf) = CHANNEL10_FLANGE;
+        for (plate, t) in [("top_plate", p.top_thickness), ("bottom_plate", p.bottom_thickness)] {
+            let g = mesh.group(plate)?.clone();
+            let (mut strip, mut plain) = (vec![], vec![]);
+            let mut area = 0.0;
+            for c in &g.cells {
+                let b = &mesh.blocks[c.block as usize];
+                let nn = b.kind.n_nodes();
+                let x: Vec<[f64; 3]> = b.conn[c.index as usize * nn..(c.index as usize + 1) * nn]
+                    .iter()
+                    .map(|&a| mesh.nodes[a as usize])
+                    .collect();
+                let yc = x.iter().map(|q| q[1]).sum::<f64>() / nn as f64;
+                let inside = p.long_webs.iter().any(|&yw| {
+                    let side = if yw > 1e-9 { -1.0 } else { 1.0 };
+                    let u = (yc - yw) * side;
+                    u > 0.0 && u < bf
+                });
+                if inside {
+                    // Quad area from its diagonals (the plates are flat).
+                    let (d1, d2) = (
+                        [x[2][0] - x[0][0], x[2][1] - x[0][1]],
+                        [x[3][0] - x[1][0], x[3][1] - x[1][1]],
+                    );
+                    area += 0.5 * (d1[0] * d2[1] - d1[1] * d2[0]).abs();
+                    strip.push(*c);
+                } else {
+                    plain.push(*c);
+                }
+            }
+            if strip.is_empty() {
+                continue;
+            }
+            let flange_area = bf * p.length * p.long_webs.len() as f64;
+            let short = plate.split('_').next().unwrap_or(plate);
+            let tag = -200_000 - mesh.groups.len() as i32;
+            mesh.groups.push(Group {
+                name: format!("{short}_flanges"),
+                dim: 2,
+                tag,
+                cells: strip,
+            });
+            mesh.groups.push(Group {
+                name: format!("{short}_plain"),
+                dim: 2,
+                tag: tag - 1,
+                cells: plain,
+            });
+            thick.retain(|(n, _)| n != plate);
+            thick.push((format!("{short}_flanges"), t + tf * flange_area / area));
+            thick.push((format!("{short}_plain"), t));
+        }
+    }
+    thick.retain(|(g, _)| mesh.groups.iter().any(|gr| &gr.name == g && !gr.cells.is_empty()));
+    Ok((mesh, links, thick))
+}
+
 /// Work-table modal analysis (shells, free–free): mass and the first six elastic frequencies.
 pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
-    let p = d.sandwich();
-    let (mesh, links) = sandwich_clear_webs(&p)?;
+    let (mesh, links, thick) = table_parts(d)?;
     let mat = Material {
         young: d.steel[0],
         poisson: d.steel[1],
         density: d.steel[2],
     };
-    let shells = p
-        .thicknesses()
+    let shells = thick
         .into_iter()
         .filter(|(g, _)| mesh.groups.iter().any(|gr| &gr.name == g && !gr.cells.is_empty()))
         .map(|(g, t)| ShellPart {
@@ -688,7 +775,7 @@ pub const LARGE_DESIGN_DOFS: usize = 300_000;
 /// meshes, before any analysis: what `vibrofem design` checks against [`LARGE_DESIGN_DOFS`].
 pub fn estimate_dofs(d: &Design) -> Result<usize> {
     d.validate()?;
-    let (table, _) = sandwich_clear_webs(&d.sandwich())?;
+    let (table, _, _) = table_parts(d)?;
     let l = &d.leaf;
     let leaf = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, l.thickness], l.divisions)?;
     Ok(6 * table.n_nodes() + 3 * leaf.n_nodes())

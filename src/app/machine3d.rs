@@ -456,7 +456,7 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let (k_ax, k_lat) = coil_stiffness(d)?;
 
     // The table mesh, with the points of the machine.
-    let (mut mesh, links) = crate::app::design::sandwich_clear_webs(&p)?;
+    let (mut mesh, links, thick) = crate::app::design::table_parts(d)?;
     let n_table = mesh.n_nodes();
     let hz = p.mid_surface_spacing();
     let table_centre = [0.0, 0.0, 0.5 * hz];
@@ -668,10 +668,8 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
         iso_k.push(k);
     }
 
-    let shells = p
-        .thicknesses()
+    let shells = thick
         .into_iter()
-        .filter(|(g, _)| mesh.groups.iter().any(|gr| &gr.name == g && !gr.cells.is_empty()))
         .map(|(g, t)| ShellPart {
             group: g,
             section: ShellSection::new(t),
@@ -706,7 +704,7 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let table_ref = if rigid { Some(node_of("table_body")?) } else { None };
     let sys = System::build(model, &SystemOptions::default(), "machine")?;
     let dofs = sys.n_free();
-    let want = dofs.min(if rigid { 12 } else { 60 });
+    let want = dofs.min(if rigid { 12 } else { 24 });
     let run = crate::analysis::modal::solve(
         &sys,
         &ModalParams {

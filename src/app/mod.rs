@@ -7,6 +7,7 @@
 pub mod cli;
 pub mod converge;
 pub mod design;
+pub mod design_search;
 pub mod dynamics;
 pub mod export;
 pub mod machine3d;
