@@ -37,6 +37,9 @@ enum Cmd {
     Modes(ModesArgs),
     /// Linear static analysis: displacements, reactions, stiffness and stresses.
     Static(StaticArgs),
+    /// Steady-state response to harmonic forces at one frequency or over a sweep: modal
+    /// superposition with static correction, or a direct complex solve.
+    Harmonic(HarmonicArgs),
     /// Write K, M (PETSc binary and Matrix Market), the DOF map and a model summary for
     /// another solver (SLEPc, scipy).
     Export(ExportArgs),
@@ -96,6 +99,65 @@ struct SweepArgs {
     /// Start a study of more than 1000 designs (refused otherwise, with its size).
     #[arg(long)]
     yes: bool,
+}
+
+#[derive(clap::Args)]
+struct HarmonicArgs {
+    /// gmsh mesh file (MSH 2.2 or 4.1), or a generator (`box:`, `helix:`, `sandwich:`, `ibeam-*:`).
+    mesh: String,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Harmonic force on a group: `GROUP=FX,FY,FZ` amplitudes in N, optionally `@PHASE` in degrees;
+    /// repeatable. Spread as a static force (coupled group: its reference node; surface: uniform
+    /// traction; otherwise equally over the nodes).
+    #[arg(
+        long,
+        value_name = "GROUP=FX,FY,FZ[@DEG]",
+        allow_hyphen_values = true,
+        required = true
+    )]
+    force: Vec<String>,
+    /// One excitation frequency (Hz).
+    #[arg(long, conflicts_with = "sweep", required_unless_present = "sweep")]
+    freq: Option<f64>,
+    /// A sweep: N frequencies from F0 to F1 Hz.
+    #[arg(long, num_args = 3, value_names = ["F0", "F1", "N"])]
+    sweep: Option<Vec<String>>,
+    /// Modal damping ratio ζ (e.g. 0.02).
+    #[arg(long, conflicts_with = "rayleigh")]
+    damping: Option<f64>,
+    /// Rayleigh damping C = αM + βK: `ALPHA,BETA` (1/s, s).
+    #[arg(long, value_name = "ALPHA,BETA")]
+    rayleigh: Option<String>,
+    /// modal (superposition with static correction, default), direct (complex solve per
+    /// frequency) or both (reports their difference).
+    #[arg(long, default_value = "modal")]
+    method: String,
+    /// Modes superposed: the N lowest (default: every mode below 2 × the highest frequency).
+    #[arg(long)]
+    modes: Option<usize>,
+    /// Groups to report and plot (repeatable; default: the loaded groups).
+    #[arg(long)]
+    probe: Vec<String>,
+    /// Fill-reducing ordering: metis (default) or amd.
+    #[arg(long, default_value = "metis")]
+    ordering: String,
+    /// Refuse models whose factorisation needs more memory than this (e.g. 8G, 500M).
+    #[arg(long = "max-memory")]
+    max_memory: Option<String>,
+    /// Print the JSON report on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write the response fields as VTU (ParaView); for a sweep, at the frequency of the largest
+    /// response.
+    #[arg(long)]
+    vtu: Option<PathBuf>,
+    /// The same as gmsh views.
+    #[arg(long = "msh-out")]
+    msh_out: Option<PathBuf>,
+    /// FRF plot (SVG) of a sweep.
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -559,6 +621,108 @@ fn static_cmd(a: &StaticArgs) -> Result<i32> {
     Ok(0)
 }
 
+fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
+    use vibrofem::analysis::harmonic::{Damping, GroupForce};
+    use vibrofem::app::harmonic as h;
+    let spec = a.model.spec()?;
+    let forces = a
+        .force
+        .iter()
+        .map(|f| GroupForce::parse("--force", f))
+        .collect::<Result<Vec<_>>>()?;
+    let freqs = match (&a.freq, &a.sweep) {
+        (Some(f), _) => vec![*f],
+        (None, Some(s)) => {
+            let num = |t: &str| -> Result<f64> {
+                t.trim()
+                    .parse()
+                    .map_err(|_| Error::InvalidInput(format!("--sweep: cannot read '{t}' as a number")))
+            };
+            let n: usize = s[2]
+                .trim()
+                .parse()
+                .map_err(|_| Error::InvalidInput(format!("--sweep: N '{}' must be a whole number ≥ 2", s[2])))?;
+            h::sweep_frequencies(num(&s[0])?, num(&s[1])?, n)?
+        }
+        (None, None) => return Err(Error::InvalidInput("give --freq HZ or --sweep F0 F1 N".into())),
+    };
+    let damping = match (&a.damping, &a.rayleigh) {
+        (Some(z), _) => Damping::Ratio(*z),
+        (None, Some(r)) => {
+            let v = vibrofem::input::options::numbers("--rayleigh", r, r)?;
+            if v.len() != 2 {
+                return Err(Error::InvalidInput(format!("--rayleigh '{r}': expected ALPHA,BETA")));
+            }
+            Damping::Rayleigh {
+                alpha: v[0],
+                beta: v[1],
+            }
+        }
+        (None, None) => {
+            return Err(Error::InvalidInput(
+                "give --damping RATIO (e.g. 0.02) or --rayleigh ALPHA,BETA: an undamped response is infinite at \
+                 resonance"
+                    .into(),
+            ));
+        }
+    };
+    damping.validate()?;
+    if a.plot.is_some() && freqs.len() < 2 {
+        return Err(Error::InvalidInput("--plot draws an FRF: it needs --sweep".into()));
+    }
+    let req = h::HarmonicRequest {
+        forces,
+        freqs_hz: freqs,
+        damping,
+        method: h::Method::parse(&a.method)?,
+        modes: a.modes,
+        probes: a.probe.clone(),
+    };
+    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref(), a.plot.as_deref()], None)?;
+    let mesh = vibrofem::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let model = vibrofem::model::Model::build(&mesh, &spec, &a.mesh)?;
+    let opts = vibrofem::system::SystemOptions {
+        ordering: match a.ordering.as_str() {
+            "metis" => Ordering::Metis,
+            "amd" => Ordering::Amd,
+            o => {
+                return Err(Error::InvalidInput(format!(
+                    "--ordering: unknown '{o}' (use metis or amd)"
+                )));
+            }
+        },
+        max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
+        mass: true,
+    };
+    let sys = vibrofem::system::System::build(model, &opts, &a.mesh)?;
+    let run = h::run(&sys, &mesh, &req)?;
+    if a.json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&run.report).map_err(|e| Error::output("JSON", e))?
+        );
+    } else {
+        out!("{}", h::text(&run.report));
+    }
+    if a.vtu.is_some() || a.msh_out.is_some() {
+        let k = h::peak_index(&run.report);
+        h::write_fields(&mesh, &run, k, a.vtu.as_deref(), a.msh_out.as_deref())?;
+        if run.report.points.len() > 1 {
+            eprintln!(
+                "note: fields written at {} Hz, the frequency of the largest response",
+                vibrofem::io::fmt_sig(run.report.points[k].freq_hz, 5)
+            );
+        }
+    }
+    if let Some(p) = &a.plot {
+        h::write_frf_svg(p, &run.report)?;
+    }
+    for n in sys.model().notes.iter().chain(&run.report.notes) {
+        eprintln!("note: {n}");
+    }
+    Ok(0)
+}
+
 fn export_cmd(a: &ExportArgs) -> Result<i32> {
     use vibrofem::app::export;
     let formats = export::Formats::parse(&a.format)?;
@@ -817,6 +981,7 @@ fn main() -> ExitCode {
         Cmd::Static(a) => static_cmd(a),
         Cmd::MeshInfo(a) => mesh_info(a),
         Cmd::Export(a) => export_cmd(a),
+        Cmd::Harmonic(a) => harmonic_cmd(a),
         Cmd::Run(a) => run_cmd(a),
         Cmd::Batch(a) => batch_cmd(a),
         Cmd::Sweep(a) => sweep_cmd(a),

@@ -4,7 +4,8 @@
 #   2. run the convention self-tests (skfem_modes.py --selftest, ~10 s), then recompute every
 #      scikit-fem reference from the committed meshes into a temporary folder
 #      and check it equals the committed validation/reference/*.json (elastic frequencies to
-#      1e-9 relative, same dofs, mass) -- the committed references are never overwritten;
+#      1e-9 relative, same dofs, mass), and the harmonic references (skfem_harmonic.py, complex
+#      displacements to 1e-9 of the largest) -- the committed references are never overwritten;
 #   3. install the Python package (pip install ./python) and run validation/compare.py with it
 #      (every case to 1e-6 relative), then the package's tests (python/tests, pytest).
 #
@@ -25,6 +26,8 @@ if [ "${SKIP_REGEN:-0}" != 1 ]; then
     "$PY" validation/skfem_modes.py --selftest
     echo "== regenerating scikit-fem references into $TMP"
     "$PY" validation/skfem_modes.py --out "$TMP" --check validation/reference
+    echo "== regenerating the scikit-fem harmonic references (direct complex solves)"
+    "$PY" validation/skfem_harmonic.py --out "$TMP" --check validation/reference
 fi
 
 echo "== installing the Python package (pip install ./python)"

@@ -184,7 +184,7 @@ fn surface_weights(mesh: &Mesh, group: &str) -> Result<(Vec<(u32, f64)>, f64, Ve
 }
 
 /// Raw load vector (NCOMP per node) of one load case.
-fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<Vec<f64>> {
+pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<Vec<f64>> {
     let n = model.dofs.n_nodes();
     let mut f = vec![0.0; NCOMP * n];
     for load in loads {

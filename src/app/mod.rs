@@ -10,6 +10,7 @@ pub mod design;
 pub mod design_search;
 pub mod dynamics;
 pub mod export;
+pub mod harmonic;
 pub mod machine3d;
 pub mod machines_cli;
 pub mod report;

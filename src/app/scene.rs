@@ -54,6 +54,7 @@ struct RawScene {
     modal: Option<Spanned<RawModal>>,
     #[serde(rename = "static")]
     statics: Option<Spanned<RawStatic>>,
+    harmonic: Option<Spanned<RawHarmonic>>,
     output: Option<Spanned<RawOutput>>,
 }
 
@@ -179,6 +180,22 @@ struct RawStatic {}
 
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
+struct RawHarmonic {
+    /// `"GROUP=FX,FY,FZ"` or `"GROUP=FX,FY,FZ@PHASE_DEG"`, as `--force` of `vibrofem harmonic`.
+    #[serde(default)]
+    force: Vec<String>,
+    freq_hz: Option<f64>,
+    sweep_hz: Option<Vec<f64>>,
+    damping: Option<f64>,
+    rayleigh: Option<Vec<f64>>,
+    method: Option<String>,
+    modes: Option<i64>,
+    #[serde(default)]
+    probe: Vec<String>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
 struct RawOutput {
     vtu: Option<bool>,
     msh: Option<bool>,
@@ -240,6 +257,8 @@ pub struct Scene {
     pub modal: Option<(ModalTarget, Option<f64>, usize)>,
     /// The static load cases, if a static analysis is asked.
     pub static_cases: Option<Vec<Vec<Load>>>,
+    /// The harmonic analysis, if asked (`[harmonic]`).
+    pub harmonic: Option<crate::app::harmonic::HarmonicRequest>,
     /// Write VTU files of the results.
     pub vtu: bool,
     /// Write gmsh `.msh` files with result views.
@@ -270,6 +289,9 @@ pub struct SceneReport {
     /// Static report, if asked.
     #[serde(rename = "static")]
     pub statics: Option<StaticReport>,
+    /// Harmonic report, if asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub harmonic: Option<crate::app::harmonic::HarmonicReport>,
     /// Files written.
     pub outputs: Vec<String>,
     /// Notes (ignored cells, model notes).
@@ -308,6 +330,10 @@ impl SceneReport {
                 s.push('\n');
             }
             s.push_str(&crate::app::report::static_text(st));
+        }
+        if let Some(h) = &self.harmonic {
+            s.push('\n');
+            s.push_str(&crate::app::harmonic::text(h));
         }
         s
     }
@@ -802,6 +828,91 @@ impl Scene {
             None
         };
 
+        let harmonic = match &raw.harmonic {
+            None => None,
+            Some(h) => {
+                let r = h.get_ref();
+                let e = |msg: String| ctx.error(ctx.line(h.span().start), msg);
+                if r.force.is_empty() {
+                    return ctx.err(
+                        h.span(),
+                        "[harmonic] needs 'force = [\"GROUP=FX,FY,FZ[@PHASE_DEG]\", ...]'",
+                    );
+                }
+                let mut forces = Vec::new();
+                for f in &r.force {
+                    let gf =
+                        crate::analysis::harmonic::GroupForce::parse("'force'", f).map_err(|x| e(x.to_string()))?;
+                    refer(&gf.group, h.span(), format!("harmonic force on '{}'", gf.group));
+                    forces.push(gf);
+                }
+                for g in &r.probe {
+                    refer(g, h.span(), format!("harmonic probe '{g}'"));
+                }
+                let freqs_hz = match (r.freq_hz, &r.sweep_hz) {
+                    (Some(_), Some(_)) => {
+                        return ctx.err(h.span(), "[harmonic] takes 'freq_hz' or 'sweep_hz', not both");
+                    }
+                    (Some(f), None) => {
+                        if !(f.is_finite() && f >= 0.0) {
+                            return ctx.err(h.span(), format!("'freq_hz' must be a finite frequency ≥ 0, got {f}"));
+                        }
+                        vec![f]
+                    }
+                    (None, Some(v)) => {
+                        if v.len() != 3 || v[2].fract() != 0.0 || v[2] < 0.0 {
+                            return ctx.err(
+                                h.span(),
+                                format!("'sweep_hz' must be [F0, F1, N] with N a whole number, got {v:?}"),
+                            );
+                        }
+                        crate::app::harmonic::sweep_frequencies(v[0], v[1], v[2] as usize)
+                            .map_err(|x| e(x.to_string().replace("--sweep", "'sweep_hz'")))?
+                    }
+                    (None, None) => return ctx.err(h.span(), "[harmonic] needs 'freq_hz' or 'sweep_hz = [F0, F1, N]'"),
+                };
+                let damping = match (r.damping, &r.rayleigh) {
+                    (Some(_), Some(_)) => {
+                        return ctx.err(h.span(), "[harmonic] takes 'damping' or 'rayleigh', not both");
+                    }
+                    (Some(z), None) => crate::analysis::harmonic::Damping::Ratio(z),
+                    (None, Some(v)) if v.len() == 2 => crate::analysis::harmonic::Damping::Rayleigh {
+                        alpha: v[0],
+                        beta: v[1],
+                    },
+                    (None, Some(v)) => {
+                        return ctx.err(h.span(), format!("'rayleigh' must be [ALPHA, BETA], got {v:?}"));
+                    }
+                    (None, None) => {
+                        return ctx.err(
+                            h.span(),
+                            "[harmonic] needs 'damping' (modal ratio, e.g. 0.02) or 'rayleigh = [ALPHA, BETA]'",
+                        );
+                    }
+                };
+                damping.validate().map_err(|x| {
+                    e(x.to_string()
+                        .replace("--damping", "'damping'")
+                        .replace("--rayleigh", "'rayleigh'"))
+                })?;
+                let method = crate::app::harmonic::Method::parse(r.method.as_deref().unwrap_or("modal"))
+                    .map_err(|x| e(x.to_string().replace("--method", "'method'")))?;
+                let modes = match r.modes {
+                    Some(n) if n < 1 => return ctx.err(h.span(), format!("'modes' must be at least 1, got {n}")),
+                    Some(n) => Some(n as usize),
+                    None => None,
+                };
+                Some(crate::app::harmonic::HarmonicRequest {
+                    forces,
+                    freqs_hz,
+                    damping,
+                    method,
+                    modes,
+                    probes: r.probe.clone(),
+                })
+            }
+        };
+
         let mut slepc_ranks = None;
         let modal = match &raw.modal {
             None => None,
@@ -860,9 +971,9 @@ impl Scene {
                 Some((target, r.shift_hz, block as usize))
             }
         };
-        if modal.is_none() && static_cases.is_none() {
+        if modal.is_none() && static_cases.is_none() && harmonic.is_none() {
             return Err(Error::InvalidInput(format!(
-                "{}: the scene asks for no analysis: add [modal], or [static] / [[load]] / [[displace]]",
+                "{}: the scene asks for no analysis: add [modal], [harmonic], or [static] / [[load]] / [[displace]]",
                 ctx.file
             )));
         }
@@ -880,6 +991,7 @@ impl Scene {
             parts,
             modal,
             static_cases,
+            harmonic,
             vtu,
             msh,
             slepc_ranks,
@@ -1010,14 +1122,14 @@ impl Scene {
         let t_model = Instant::now();
         let model = crate::model::Model::build(&mesh, &self.spec, &source)?;
         let t_model = t_model.elapsed().as_secs_f64();
-        let sys = if self.slepc_ranks.is_some() && self.static_cases.is_none() {
+        let sys = if self.slepc_ranks.is_some() && self.static_cases.is_none() && self.harmonic.is_none() {
             // SLEPc factorises on its ranks: no ordering or memory check for this machine.
             crate::system::System::assemble_only(model, &source)?
         } else {
             crate::system::System::build(
                 model,
                 &crate::system::SystemOptions {
-                    mass: self.modal.is_some(),
+                    mass: self.modal.is_some() || self.harmonic.is_some(),
                     ..Default::default()
                 },
                 &source,
@@ -1106,6 +1218,28 @@ impl Scene {
                 Some(rep)
             }
         };
+        let harmonic = match &self.harmonic {
+            None => None,
+            Some(req) => {
+                let run = crate::app::harmonic::run(&sys, &mesh, req)?;
+                if let Some((dir, prefix)) = out {
+                    let k = crate::app::harmonic::peak_index(&run.report);
+                    let vtu = self.vtu.then(|| dir.join(format!("{prefix}harmonic.vtu")));
+                    let msh = self.msh.then(|| dir.join(format!("{prefix}harmonic.msh")));
+                    if vtu.is_some() || msh.is_some() {
+                        crate::app::harmonic::write_fields(&mesh, &run, k, vtu.as_deref(), msh.as_deref())?;
+                        outputs.extend(vtu.iter().chain(msh.iter()).map(|p| p.display().to_string()));
+                    }
+                    if run.report.points.len() > 1 {
+                        let svg = dir.join(format!("{prefix}frf.svg"));
+                        crate::app::harmonic::write_frf_svg(&svg, &run.report)?;
+                        outputs.push(svg.display().to_string());
+                    }
+                }
+                notes.extend(run.report.notes.iter().cloned());
+                Some(run.report)
+            }
+        };
         notes.dedup();
         Ok(SceneReport {
             scene: self.path.display().to_string(),
@@ -1116,6 +1250,7 @@ impl Scene {
             ignored_cells,
             modal,
             statics,
+            harmonic,
             outputs,
             notes,
             time_s: t0.elapsed().as_secs_f64(),

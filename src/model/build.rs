@@ -682,10 +682,12 @@ pub(crate) fn couplings(
     Ok(())
 }
 
-/// Step 6b': a coupling whose nodes carry no rotations and all sit at the reference point (a
-/// one-node group, the usual case) gives the reference node's rotations nothing to act on: a
-/// solid node carries no moment. They are held fixed, with a note, rather than left singular
-/// (a zero pivot); the reference node then moves with the node.
+/// Step 6b': a coupling whose nodes carry no rotations (solid nodes) can only turn its reference
+/// node about axes the nodes' positions resolve. All at one point (a one-node group, wherever the
+/// reference node sits): none, so the reference node's rotations are held fixed. On one line (an
+/// edge of a solid): not about that line, so the rotation about it is held (a fixed component
+/// when the line is along an axis, otherwise θ·n = 0 by elimination). Each case gets a note; left
+/// alone they are singular (a zero pivot) although the model is sound.
 pub(crate) fn pinned_references(
     active: &[DofMask],
     references: &[ReferenceNode],
@@ -699,23 +701,89 @@ pub(crate) fn pinned_references(
         if gn.is_empty() || gn.iter().any(|&s| active[s as usize] & ROTATIONS != 0) {
             continue;
         }
-        let xr = r.position;
-        let scale = xr.iter().map(|x| x.abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-        let at_reference = gn.iter().all(|&s| {
-            let x = nodes[s as usize];
-            (0..3).all(|d| (x[d] - xr[d]).abs() <= 1e-12 * scale)
-        });
         let free = ROTATIONS & !cons.fixed[r.node];
-        if at_reference && free != 0 {
+        if free == 0 {
+            continue;
+        }
+        // Spread of the nodes about their centroid: S = Σ |p|² I − p pᵀ; its null space is the
+        // set of axes the nodes cannot turn about.
+        let n = gn.len() as f64;
+        let mut c = [0.0; 3];
+        for &a in gn {
+            for d in 0..3 {
+                c[d] += nodes[a as usize][d] / n;
+            }
+        }
+        let mut sm = nalgebra::Matrix3::<f64>::zeros();
+        let mut size = 0.0f64;
+        for &a in gn {
+            let p = nalgebra::Vector3::from_fn(|d, _| nodes[a as usize][d] - c[d]);
+            sm += nalgebra::Matrix3::identity() * p.norm_squared() - p * p.transpose();
+            size = size.max(p.norm());
+        }
+        let scale = nodes
+            .iter()
+            .flatten()
+            .map(|x| x.abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let what = if gn.len() == 1 { "node carries" } else { "nodes carry" };
+        if size <= 1e-9 * scale {
             cons.fixed[r.node] |= free;
             notes.push(format!(
-                "coupling '{}': its {} at the reference point and carr{} no rotations, so the reference \
-                 node's rotations are held fixed (a moment or rotary inertia there has no effect)",
+                "coupling '{}': its {what} no rotations and {} at one point, so the reference node's \
+                 rotations are held fixed (a moment or rotary inertia there has no effect)",
                 r.group,
-                if gn.len() == 1 { "node is" } else { "nodes are" },
-                if gn.len() == 1 { "ies" } else { "y" }
+                if gn.len() == 1 { "sits" } else { "all sit" }
             ));
+            continue;
         }
+        let eig = nalgebra::SymmetricEigen::new(sm);
+        let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+        let Some(i0) = (0..3).find(|&i| eig.eigenvalues[i] <= 1e-10 * top) else {
+            continue;
+        };
+        // Collinear nodes: the axis n of the line.
+        let v = eig.eigenvectors.column(i0);
+        let n_axis = [v[0], v[1], v[2]];
+        let k = (0..3)
+            .filter(|&d| free & (1 << (3 + d)) != 0)
+            .max_by(|&a, &b| n_axis[a].abs().total_cmp(&n_axis[b].abs()));
+        let Some(k) = k else { continue };
+        if n_axis[k].abs() < 1e-12 {
+            continue; // the axis lies along rotations already held
+        }
+        let rr = |d: usize| NCOMP * r.node + 3 + d;
+        let others: Vec<(usize, f64)> = (0..3)
+            .filter(|&d| d != k && free & (1 << (3 + d)) != 0 && n_axis[d].abs() > 1e-12 * n_axis[k].abs())
+            .map(|d| (rr(d), -n_axis[d] / n_axis[k]))
+            .collect();
+        if others.is_empty() {
+            cons.fixed[r.node] |= 1 << (3 + k);
+        } else {
+            // θ_k = −Σ n_j θ_j / n_k, substituted into the coupled nodes' rows, which name θ_k.
+            for &a in gn {
+                for comp in 0..3 {
+                    if let Some(row) = cons.mpc.get_mut(&(NCOMP * a as usize + comp)) {
+                        if let Some(pos) = row.iter().position(|(m, _)| *m == rr(k)) {
+                            let (_, coef) = row.remove(pos);
+                            for &(m, f) in &others {
+                                match row.iter_mut().find(|(x, _)| *x == m) {
+                                    Some(e) => e.1 += coef * f,
+                                    None => row.push((m, coef * f)),
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            cons.mpc.insert(rr(k), others);
+        }
+        notes.push(format!(
+            "coupling '{}': its nodes lie on one line (direction {:.4}, {:.4}, {:.4}) and carry no rotations, so \
+             the reference node cannot turn about that line: that rotation is held",
+            r.group, n_axis[0], n_axis[1], n_axis[2]
+        ));
     }
     notes
 }

@@ -11,6 +11,7 @@ mod cli_15b;
 mod design;
 mod dynamics;
 mod export_engine;
+mod harmonic;
 mod machine3d;
 mod machines;
 mod numerics_15;

@@ -498,3 +498,144 @@ fn most_of_the_spectrum_is_solved_densely_and_verified() {
     assert_eq!(r.frequencies_hz.len(), 1000);
     assert!(r.notes.iter().any(|n| n.contains("solved densely")), "{:?}", r.notes);
 }
+
+/// Adds a group `name` of dimension `dim` made of the nodes at `points` (one point cell each),
+/// enough for couplings, which act on a group's nodes.
+fn node_group(mesh: &mut Mesh, name: &str, points: &[[f64; 3]]) {
+    use vibrofem::mesh::{CellKind, CellRef, Group};
+    let bi = mesh.block_index_mut(CellKind::Point1);
+    let mut cells = Vec::new();
+    for p in points {
+        let a = mesh
+            .nodes
+            .iter()
+            .position(|x| (0..3).all(|d| (x[d] - p[d]).abs() < 1e-12))
+            .unwrap_or_else(|| panic!("no node at {p:?}")) as u32;
+        let etag = mesh
+            .blocks
+            .iter()
+            .flat_map(|b| b.tags.iter().copied())
+            .max()
+            .unwrap_or(0)
+            + 1;
+        mesh.blocks[bi].push(&[a], etag);
+        cells.push(CellRef {
+            block: bi as u32,
+            index: (mesh.blocks[bi].len() - 1) as u32,
+        });
+    }
+    let tag = mesh.groups.iter().map(|g| g.tag).max().unwrap_or(0) + 1;
+    mesh.groups.push(Group {
+        name: name.into(),
+        dim: 0,
+        tag,
+        cells,
+    });
+}
+
+fn modal_of(mesh: &Mesh, opts: ModelOptions, n: usize) -> ModalReport {
+    let o = ModalOptions {
+        spec: opts.spec().unwrap(),
+        target: ModalTarget::Modes(n),
+        ..Default::default()
+    };
+    let r = run_modal(mesh, "test", &o, 0.0).unwrap().report;
+    verified("coupling", &r);
+    r
+}
+
+/// Item 13: a coupling of one solid node with its reference node placed elsewhere, and of solid
+/// nodes on one line (an edge, along an axis or not), used to leave the reference node's
+/// unresolvable rotations singular (`ZeroPivot`, exit 2). Those rotations are now held, with a
+/// note. References: a point mass coupled to one node through a moved reference carries no
+/// rotary effect (its rotations are held), so it equals the mass put on the node itself; and the
+/// diagonal-edge model rotated 45° about z so that its edge lies along y (the axis-aligned path)
+/// has the same frequencies (rotation invariance; 1e-9 covers rounding of the rotated geometry).
+#[test]
+fn couplings_of_a_point_or_a_line_of_solid_nodes() {
+    let base = source::load("box:1,1,1:2,2,2:hex8", 1.0).unwrap();
+    // One node, reference moved 1 m away.
+    let mut mesh = base.clone();
+    node_group(&mut mesh, "tip", &[[1.0, 1.0, 1.0]]);
+    let coupled = modal_of(
+        &mesh,
+        ModelOptions {
+            fix: vec!["xmin".into()],
+            couple: vec!["tip@1,1,2".into()],
+            point_mass: vec!["tip=500".into()],
+            ..Default::default()
+        },
+        4,
+    );
+    let direct = modal_of(
+        &mesh,
+        ModelOptions {
+            fix: vec!["xmin".into()],
+            point_mass: vec!["tip=500".into()],
+            ..Default::default()
+        },
+        4,
+    );
+    for (a, b) in coupled.frequencies_hz.iter().zip(&direct.frequencies_hz) {
+        assert!(
+            rel(*a, *b) < 1e-9,
+            "{:?} vs {:?}",
+            coupled.frequencies_hz,
+            direct.frequencies_hz
+        );
+    }
+    assert!(
+        coupled.notes.iter().any(|n| n.contains("at one point")),
+        "{:?}",
+        coupled.notes
+    );
+    // Two nodes on a face diagonal (direction (1,1,0)/√2) with a heavy, rotary point mass on a
+    // reference off the line; then the same body turned by 45° about z.
+    let line_case = |mesh: &Mesh, a: [f64; 3], b: [f64; 3], reference: [f64; 3]| {
+        let mut m = mesh.clone();
+        node_group(&mut m, "edge", &[a, b]);
+        modal_of(
+            &m,
+            ModelOptions {
+                fix: vec!["zmin".into()],
+                couple: vec![format!("edge@{},{},{}", reference[0], reference[1], reference[2])],
+                point_mass: vec!["edge=300,2,3,4,0,0,0".into()],
+                ..Default::default()
+            },
+            6,
+        )
+    };
+    let diag = line_case(&base, [0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.7, 0.2, 1.3]);
+    assert!(diag.notes.iter().any(|n| n.contains("one line")), "{:?}", diag.notes);
+    let (c, s) = (std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2);
+    let rot = |p: [f64; 3]| [c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]];
+    // Rotating by −45° about z maps (1,1,0)/√2 onto the x axis.
+    let mut turned = base.clone();
+    turned.nodes.iter_mut().for_each(|p| *p = rot(*p));
+    // The rotary inertia would turn with the body (I' = R I Rᵀ): keep it isotropic in the x–y
+    // plane (Ixx = Iyy) so that the same numbers describe both.
+    let iso = |mesh: &Mesh, a: [f64; 3], b: [f64; 3], reference: [f64; 3]| {
+        let mut m = mesh.clone();
+        node_group(&mut m, "edge", &[a, b]);
+        modal_of(
+            &m,
+            ModelOptions {
+                fix: vec!["zmin".into()],
+                couple: vec![format!("edge@{},{},{}", reference[0], reference[1], reference[2])],
+                point_mass: vec!["edge=300,3,3,4,0,0,0".into()],
+                ..Default::default()
+            },
+            6,
+        )
+    };
+    let d1 = iso(&base, [0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.7, 0.2, 1.3]);
+    let d2 = iso(
+        &turned,
+        rot([0.0, 0.0, 1.0]),
+        rot([1.0, 1.0, 1.0]),
+        rot([0.7, 0.2, 1.3]),
+    );
+    for (a, b) in d1.frequencies_hz.iter().zip(&d2.frequencies_hz) {
+        assert!(rel(*a, *b) < 1e-9, "{:?} vs {:?}", d1.frequencies_hz, d2.frequencies_hz);
+    }
+}

@@ -8,6 +8,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod harmonic;
 mod published_shells_beams;
 mod skfem_modes;
 mod skfem_static;

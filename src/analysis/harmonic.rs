@@ -1,0 +1,394 @@
+//! Steady-state harmonic response: u(t) = Re(û e^{iωt}) under F(t) = Re(F̂ e^{iωt}).
+//!
+//! Two methods on one assembled [`System`]:
+//! - [`superpose`]: modal superposition over verified modes, with the static (residual)
+//!   correction for the modes left out: û = Σ_j φ_j φ_jᵀF̂ / (λ_j − ω² + iωc_j) + R F̂, where
+//!   R = (K − σM)⁻¹ − Σ_j φ_j φ_jᵀ / (λ_j − σ) is the residual flexibility at σ (σ = 0, or a small
+//!   negative shift when the model has rigid-body modes). Cheap for many frequencies.
+//! - [`direct`]: the complex system (K − ω²M + iωC) û = F̂, one sparse LU per frequency; the
+//!   check on the other.
+//!
+//! Damping ([`Damping`]): a modal damping ratio ζ (c_j = 2ζω_j), or Rayleigh damping C = αM + βK
+//! (c_j = α + βλ_j). A modal ratio has no damping matrix; [`direct`] takes it as structural
+//! damping K(1 + 2iζ), equal to the modal form at each resonance (documented where it is used).
+//!
+//! Units: SI (N, m, s); ω in rad/s; phases in radians here (degrees in reports).
+
+use crate::analysis::modal::ModalRun;
+use crate::dof::NCOMP;
+use crate::system::System;
+use crate::{Error, Result};
+use faer::c64;
+use faer::linalg::solvers::SolveCore;
+use faer::sparse::{SparseColMat, SymbolicSparseColMat};
+
+/// How the structure dissipates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Damping {
+    /// Modal damping ratio ζ, the same for every mode.
+    Ratio(f64),
+    /// Rayleigh damping C = αM + βK (α in 1/s, β in s).
+    Rayleigh {
+        /// Mass-proportional coefficient α (1/s).
+        alpha: f64,
+        /// Stiffness-proportional coefficient β (s).
+        beta: f64,
+    },
+}
+
+impl Damping {
+    /// Refuse values that make no physical sense (negative, non-finite).
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            Damping::Ratio(z) if !(z.is_finite() && z >= 0.0) => Err(Error::InvalidInput(format!(
+                "--damping: the damping ratio must be a finite number ≥ 0, got {z}"
+            ))),
+            Damping::Rayleigh { alpha, beta }
+                if !(alpha.is_finite() && beta.is_finite() && alpha >= 0.0 && beta >= 0.0) =>
+            {
+                Err(Error::InvalidInput(format!(
+                    "--rayleigh: α and β must be finite numbers ≥ 0, got {alpha}, {beta}"
+                )))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Modal damping coefficient c_j = 2ζ_jω_j of a mode with eigenvalue λ = ω_j².
+    pub fn modal(&self, lambda: f64) -> f64 {
+        match *self {
+            Damping::Ratio(z) => 2.0 * z * lambda.max(0.0).sqrt(),
+            Damping::Rayleigh { alpha, beta } => alpha + beta * lambda,
+        }
+    }
+
+    /// The damping ratio this gives a mode of eigenvalue λ.
+    pub fn ratio(&self, lambda: f64) -> f64 {
+        let w = lambda.max(0.0).sqrt();
+        if w > 0.0 { self.modal(lambda) / (2.0 * w) } else { 0.0 }
+    }
+}
+
+/// Load vector on the free DOFs from nodal forces and moments: `(node, [Fx, Fy, Fz, Mx, My, Mz])`
+/// complex amplitudes (N, N·m). Forces on a coupled (slave) DOF go to its masters (Tᵀ); a force
+/// on a fixed DOF is refused (it would go into the support unused).
+pub fn load_vector(sys: &System, forces: &[(usize, [c64; 6])]) -> Result<Vec<c64>> {
+    let dofs = sys.dofs();
+    let mut f = vec![c64::new(0.0, 0.0); dofs.n_free];
+    for &(a, fa) in forces {
+        if a >= dofs.n_nodes() {
+            return Err(Error::InvalidInput(format!(
+                "harmonic load on node {a}: the model has {} nodes",
+                dofs.n_nodes()
+            )));
+        }
+        for (c, &v) in fa.iter().enumerate() {
+            if v == c64::new(0.0, 0.0) {
+                continue;
+            }
+            if !(v.re.is_finite() && v.im.is_finite()) {
+                return Err(Error::InvalidInput(format!("harmonic load on node {a} is not finite")));
+            }
+            if dofs.active[a] & (1 << c) == 0 {
+                return Err(Error::InvalidInput(format!(
+                    "harmonic load on node {a} component {}: no element uses that degree of freedom",
+                    crate::dof::COMPONENT_NAMES[c]
+                )));
+            }
+            let ex = dofs.expansion(NCOMP * a + c);
+            if ex.terms.is_empty() {
+                return Err(Error::InvalidInput(format!(
+                    "harmonic load on node {a} component {}: the degree of freedom is held, the load would go \
+                     into the support",
+                    crate::dof::COMPONENT_NAMES[c]
+                )));
+            }
+            for (e, k) in ex.terms {
+                f[e] += v * k;
+            }
+        }
+    }
+    Ok(f)
+}
+
+/// Free-DOF load vector of a raw (NCOMP per node) real load times a complex factor: Tᵀ f.
+pub fn reduce_raw(sys: &System, f_raw: &[f64], factor: c64) -> Vec<c64> {
+    let dofs = sys.dofs();
+    let mut f = vec![c64::new(0.0, 0.0); dofs.n_free];
+    for (r, &v) in f_raw.iter().enumerate() {
+        if v == 0.0 || dofs.active[r / NCOMP] & (1 << (r % NCOMP)) == 0 {
+            continue;
+        }
+        for (e, k) in dofs.expansion(r).terms {
+            f[e] += factor * (k * v);
+        }
+    }
+    f
+}
+
+/// The shift at which the residual flexibility is evaluated: 0 for a supported structure; for
+/// one with rigid-body modes (K singular) a negative shift a tenth of the first elastic
+/// eigenvalue below zero (K − σM is then positive definite and conditioned as a supported K).
+fn residual_shift(modes: &ModalRun) -> Result<f64> {
+    let n_rigid = modes.report.n_rigid;
+    if n_rigid == 0 {
+        return Ok(0.0);
+    }
+    match modes.lambda.get(n_rigid) {
+        Some(&l) if l > 0.0 => Ok(-0.1 * l),
+        _ => Err(Error::InvalidInput(format!(
+            "the static correction of a model with {n_rigid} rigid-body modes needs at least one elastic mode \
+             among the modes superposed (it places its shift below the first); ask for more modes"
+        ))),
+    }
+}
+
+/// Steady-state response by modal superposition, one free-DOF vector per angular frequency in
+/// `omegas` (rad/s). With `residual`, the static correction for the modes not in `modes` is added
+/// (one factorisation of K − σM and one solve, whatever the number of frequencies).
+pub fn superpose(
+    sys: &System,
+    modes: &ModalRun,
+    load: &[c64],
+    omegas: &[f64],
+    damping: &Damping,
+    residual: bool,
+) -> Result<Vec<Vec<c64>>> {
+    damping.validate()?;
+    let n = sys.n_free();
+    if load.len() != n {
+        return Err(Error::InvalidInput(format!(
+            "harmonic load has {} entries, the system {n} free DOFs",
+            load.len()
+        )));
+    }
+    if let Some(w) = omegas.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
+        return Err(Error::InvalidInput(format!(
+            "harmonic frequency must be finite and ≥ 0, got {w} rad/s"
+        )));
+    }
+    let phi = &modes.vectors;
+    let k = phi.ncols();
+    if phi.nrows() != n {
+        return Err(Error::InvalidInput(format!(
+            "the modes have {} rows, the system {n} free DOFs: they belong to another model",
+            phi.nrows()
+        )));
+    }
+    // Modal loads q_j = φ_jᵀ F.
+    let q: Vec<c64> = (0..k)
+        .map(|j| {
+            let mut s = c64::new(0.0, 0.0);
+            for i in 0..n {
+                s += load[i] * phi[(i, j)];
+            }
+            s
+        })
+        .collect();
+    let res = if residual {
+        let sigma = residual_shift(modes)?;
+        let mut r = solve_real_shifted(sys, sigma, load)?;
+        for j in 0..k {
+            let c = q[j] / (modes.lambda[j] - sigma);
+            for i in 0..n {
+                r[i] -= c * phi[(i, j)];
+            }
+        }
+        Some(r)
+    } else {
+        None
+    };
+    let mut out = Vec::with_capacity(omegas.len());
+    for &w in omegas {
+        let mut u = res.clone().unwrap_or_else(|| vec![c64::new(0.0, 0.0); n]);
+        for j in 0..k {
+            let lam = modes.lambda[j];
+            let den = c64::new(lam - w * w, w * damping.modal(lam));
+            if den.norm() == 0.0 {
+                return Err(Error::InvalidInput(format!(
+                    "undamped response at {:.6} Hz, the frequency of mode {}: infinite; give --damping or \
+                     --rayleigh",
+                    w / (2.0 * std::f64::consts::PI),
+                    j + 1
+                )));
+            }
+            let c = q[j] / den;
+            for i in 0..n {
+                u[i] += c * phi[(i, j)];
+            }
+        }
+        out.push(u);
+    }
+    Ok(out)
+}
+
+/// Solve (K − σM) x = f for a complex f with the real LDLᵀ on the system's ordering (real and
+/// imaginary parts as two right-hand sides).
+fn solve_real_shifted(sys: &System, sigma: f64, f: &[c64]) -> Result<Vec<c64>> {
+    let a = if sigma == 0.0 {
+        sys.k().clone()
+    } else {
+        sys.k().sub_scaled(sigma, sys.m()?)
+    };
+    let fac = crate::linalg::factor::Factor::new(sys.symbolic()?.clone(), &a)
+        .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
+    let n = f.len();
+    let mut b = faer::Mat::from_fn(n, 2, |i, c| if c == 0 { f[i].re } else { f[i].im });
+    fac.solve_in_place(b.as_mut());
+    Ok((0..n).map(|i| c64::new(b[(i, 0)], b[(i, 1)])).collect())
+}
+
+/// Direct solve of (K − ω²M + iωC) û = F̂ at one angular frequency ω (rad/s), sparse LU with
+/// partial pivoting. Rayleigh damping uses C = αM + βK; a modal ratio ζ is taken as structural
+/// damping iωC = 2iζK (the same response as modal damping at every resonance, not between).
+pub fn direct(sys: &System, load: &[c64], omega: f64, damping: &Damping) -> Result<Vec<c64>> {
+    damping.validate()?;
+    let n = sys.n_free();
+    if load.len() != n {
+        return Err(Error::InvalidInput(format!(
+            "harmonic load has {} entries, the system {n} free DOFs",
+            load.len()
+        )));
+    }
+    if !(omega.is_finite() && omega >= 0.0) {
+        return Err(Error::InvalidInput(format!(
+            "harmonic frequency must be finite and ≥ 0, got {omega} rad/s"
+        )));
+    }
+    let k = sys.k();
+    let m = sys.m()?;
+    let p = &k.pattern;
+    let w2 = omega * omega;
+    // A = (1 + iωβ)K − (ω² − iωα)M for Rayleigh; (1 + 2iζ)K − ω²M for a modal ratio.
+    let (ck, cm) = match *damping {
+        Damping::Rayleigh { alpha, beta } => (c64::new(1.0, omega * beta), c64::new(w2, -omega * alpha)),
+        Damping::Ratio(z) => (c64::new(1.0, 2.0 * z), c64::new(w2, 0.0)),
+    };
+    let values: Vec<c64> = k
+        .values
+        .iter()
+        .zip(&m.values)
+        .map(|(&kv, &mv)| ck * kv - cm * mv)
+        .collect();
+    let symbolic = SymbolicSparseColMat::new_checked(n, n, p.col_ptr.clone(), None, p.row_idx.clone());
+    let a = SparseColMat::new(symbolic, values);
+    let lu = a.sp_lu().map_err(|e| Error::Singular {
+        equation: None,
+        at: None,
+        msg: format!(
+            "K − ω²M + iωC is singular at {:.6} Hz ({e:?}): an undamped resonance or an unsupported \
+             rigid-body motion; give --damping or --rayleigh, or support the model",
+            omega / (2.0 * std::f64::consts::PI)
+        ),
+    })?;
+    let mut x = faer::Mat::from_fn(n, 1, |i, _| load[i]);
+    lu.solve_in_place_with_conj(faer::Conj::No, x.as_mut());
+    let mut u: Vec<c64> = (0..n).map(|i| x[(i, 0)]).collect();
+    // Two steps of iterative refinement with the residual F − A u (A applied through K and M):
+    // near a lightly damped resonance A is ill-conditioned and one LU solve alone loses digits.
+    for _ in 0..2 {
+        let re: Vec<f64> = u.iter().map(|v| v.re).collect();
+        let im: Vec<f64> = u.iter().map(|v| v.im).collect();
+        let (kr, ki, mr, mi) = (k.mul_vec(&re), k.mul_vec(&im), m.mul_vec(&re), m.mul_vec(&im));
+        let mut r = faer::Mat::from_fn(n, 1, |i, _| {
+            load[i] - (ck * c64::new(kr[i], ki[i]) - cm * c64::new(mr[i], mi[i]))
+        });
+        lu.solve_in_place_with_conj(faer::Conj::No, r.as_mut());
+        for (i, v) in u.iter_mut().enumerate() {
+            *v += r[(i, 0)];
+        }
+    }
+    if u.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
+        return Err(Error::Singular {
+            equation: None,
+            at: None,
+            msg: format!(
+                "direct harmonic solve at {:.6} Hz gave non-finite values: the system is singular there",
+                omega / (2.0 * std::f64::consts::PI)
+            ),
+        });
+    }
+    Ok(u)
+}
+
+/// Per-node complex displacement `[ux, uy, uz, rx, ry, rz]` from a free-DOF vector (constrained
+/// components through their constraints, fixed ones 0: a harmonic load has no prescribed motion).
+pub fn expand(sys: &System, u: &[c64]) -> Vec<[c64; 6]> {
+    let dofs = sys.dofs();
+    let re: Vec<f64> = u.iter().map(|v| v.re).collect();
+    let im: Vec<f64> = u.iter().map(|v| v.im).collect();
+    let r = dofs.expand(&re, NCOMP);
+    let i = dofs.expand(&im, NCOMP);
+    (0..dofs.n_nodes())
+        .map(|a| std::array::from_fn(|c| c64::new(r[NCOMP * a + c], i[NCOMP * a + c])))
+        .collect()
+}
+
+/// Peak displacement of a node over one period: the semi-major axis of the orbit traced by
+/// Re(û e^{iωt}) for û = a + ib (equals |û| when the components are in phase).
+pub fn peak(u: &[c64; 3]) -> f64 {
+    let aa: f64 = u.iter().map(|v| v.re * v.re).sum();
+    let bb: f64 = u.iter().map(|v| v.im * v.im).sum();
+    let ab: f64 = u.iter().map(|v| v.re * v.im).sum();
+    let h = 0.5 * (aa - bb);
+    (0.5 * (aa + bb) + (h * h + ab * ab).sqrt()).max(0.0).sqrt()
+}
+
+/// A harmonic force on a group: F(t) = Re(F e^{i(ωt + φ)}), F total over the group (N), spread
+/// as a static force is (a coupled group at its reference node, a surface group as a uniform
+/// traction, other groups equally over their nodes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GroupForce {
+    /// Group (or coupled group).
+    pub group: String,
+    /// Fx, Fy, Fz amplitudes (N).
+    pub force: [f64; 3],
+    /// Phase φ (degrees).
+    pub phase_deg: f64,
+}
+
+impl GroupForce {
+    /// `GROUP=Fx,Fy,Fz` or `GROUP=Fx,Fy,Fz@PHASE_DEG`.
+    pub fn parse(opt: &str, text: &str) -> Result<GroupForce> {
+        let (body, phase) = match text.rsplit_once('@') {
+            Some((b, p)) => {
+                let v: f64 = p.trim().parse().map_err(|_| {
+                    Error::InvalidInput(format!(
+                        "{opt} '{text}': cannot read the phase '{p}' (degrees, e.g. GROUP=0,0,100@90)"
+                    ))
+                })?;
+                if !v.is_finite() {
+                    return Err(Error::InvalidInput(format!("{opt} '{text}': the phase must be finite")));
+                }
+                (b, v)
+            }
+            None => (text, 0.0),
+        };
+        let (group, v) = crate::input::options::group_values(opt, body, 3)?;
+        Ok(GroupForce {
+            group,
+            force: [v[0], v[1], v[2]],
+            phase_deg: phase,
+        })
+    }
+}
+
+/// Free-DOF load vector of group forces with their phases.
+pub fn group_load(sys: &System, mesh: &crate::mesh::Mesh, forces: &[GroupForce]) -> Result<Vec<c64>> {
+    let mut f = vec![c64::new(0.0, 0.0); sys.n_free()];
+    for gf in forces {
+        let raw = crate::analysis::statics::load_vector(
+            mesh,
+            sys.model(),
+            &[crate::analysis::statics::Load::Force {
+                group: gf.group.clone(),
+                force: gf.force,
+            }],
+        )?;
+        let ph = gf.phase_deg.to_radians();
+        for (a, b) in f.iter_mut().zip(reduce_raw(sys, &raw, c64::new(ph.cos(), ph.sin()))) {
+            *a += b;
+        }
+    }
+    Ok(f)
+}
