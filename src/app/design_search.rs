@@ -54,7 +54,7 @@ impl Default for SearchDesign {
             n_trans_webs: vec![0, 3],
             trans_web_span: 1.1,
             spacers: vec!["plates".into(), "channel10".into()],
-            max_full_runs: 5,
+            max_full_runs: 3,
         }
     }
 }
@@ -367,15 +367,14 @@ pub fn search_text(d: &Design, o: &SearchOutcome) -> String {
             verdict
         );
     }
-    let lighter = o
-        .candidates
-        .iter()
-        .take_while(|c| c.failed.as_ref().is_none_or(|f| !f.is_empty()))
-        .filter(|c| c.f1_hz.is_none())
-        .count();
     let _ = writeln!(
         s,
-        "  ({lighter} lighter variants miss the amplitude target in the two-mass model and were not analysed further)"
+        "  ({} variants miss the amplitude target in the two-mass model (they are heavier) and {} were not reached)",
+        o.candidates.len() - o.screened,
+        o.candidates
+            .iter()
+            .filter(|c| c.f1_hz.is_none() && c.x1 >= d.target_amplitude)
+            .count()
     );
     if let [a, b] = o.spacer_effect.as_slice() {
         let _ = writeln!(

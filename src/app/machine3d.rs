@@ -27,7 +27,9 @@
 //! stiffness matrix (so that the leaves together give μ12 in relative vertical motion), μ13 to
 //! each isolator's, μ1 shared by the work-surface nodes vertically. The response is solved in the
 //! basis of the machine's modes up to `response_range` × the excitation with the full (not
-//! diagonal) modal damping matrix, so with a rigid table the 12-DOF machine is solved exactly.
+//! diagonal) modal damping matrix, plus the static correction for the modes left out (a static
+//! solve of the machine under the magnet forces less its part in the kept modes); with a rigid
+//! table the 12-DOF machine is solved exactly.
 
 use crate::analysis::modal::{ModalParams, ModalTarget};
 use crate::analysis::statics::{StaticOptions, run_static};
@@ -809,8 +811,48 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let q = a_mat.lu().solve(&rhs).ok_or_else(|| {
         Error::Verification("machine forced response: the reduced dynamic stiffness is singular".into())
     })?;
+    // Static correction for the modes left out: u_res = K⁻¹F − Σ φ_k φ_kᵀF / λ_k (quasi-static
+    // at the excitation, far below their frequencies); it carries the local bending of the
+    // plates under the armatures. Zero (to rounding) when every mode is kept.
+    let c0 = faer::c64::new(0.0, 0.0);
+    let mut forces: Vec<(usize, [faer::c64; 6])> = vec![];
+    for nodes in &armatures {
+        for &a in nodes {
+            let mut f = [c0; 6];
+            f[2] = faer::c64::new(-f_mag / nodes.len() as f64, 0.0);
+            forces.push((a as usize, f));
+        }
+    }
+    let mut f_r = [c0; 6];
+    for m in &md.magnets {
+        let r = [m[0] - rc[0], m[1] - rc[1]];
+        f_r[2] += faer::c64::new(f_mag, 0.0);
+        f_r[3] += faer::c64::new(r[1] * f_mag, 0.0);
+        f_r[4] += faer::c64::new(-r[0] * f_mag, 0.0);
+    }
+    forces.push((reactive as usize, f_r));
+    let load = crate::analysis::harmonic::load_vector(&sys, &forces)?;
+    // K⁻¹F with the real LDLᵀ on the system's ordering (the isolators hold the machine, so K is
+    // positive definite; the load is real).
+    let fac = crate::linalg::factor::Factor::new(sys.symbolic()?.clone(), sys.k())
+        .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
+    let mut b = faer::Mat::from_fn(load.len(), 1, |i, _| load[i].re);
+    fac.solve_in_place(b.as_mut());
+    let mut u_res: Vec<faer::c64> = (0..load.len()).map(|i| faer::c64::new(b[(i, 0)], 0.0)).collect();
+    for k in 0..n_use {
+        let c = fr[k] / run.lambda[k];
+        for (i, u) in u_res.iter_mut().enumerate() {
+            *u -= faer::c64::new(c * run.vectors[(i, k)], 0.0);
+        }
+    }
+    let res_nodes = crate::analysis::harmonic::expand(&sys, &u_res);
     let n_mesh = mesh.n_nodes();
     let mut response = vec![[Complex::new(0.0, 0.0); 3]; n_mesh];
+    for (a, r) in response.iter_mut().enumerate() {
+        for c in 0..3 {
+            r[c] = Complex::new(res_nodes[a][c].re, res_nodes[a][c].im);
+        }
+    }
     for (k, s) in shapes.iter().enumerate() {
         for (a, r) in response.iter_mut().enumerate() {
             for c in 0..3 {
@@ -930,7 +972,8 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
         })
         .min_by(|a, b| a.1.total_cmp(&b.1));
     let reactive_amplitude = {
-        let mut z = Complex::new(0.0, 0.0);
+        let rz = res_nodes[reactive as usize][2];
+        let mut z = Complex::new(rz.re, rz.im);
         for (k, s) in shapes.iter().enumerate() {
             z += q[k] * s[6 * reactive as usize + 2];
         }

@@ -222,3 +222,50 @@ fn machine_layout_errors_name_the_key() {
     let e = analyse(&d, 0.0099).err().unwrap().to_string();
     assert!(e.contains("machine.magnets") && e.contains("magnet 1"), "{e}");
 }
+
+#[test]
+fn channel_spacers_add_their_flanges() {
+    // Channel No. 10 (GOST 8240): flanges 46 × 7.6 mm on both plates along each of the three
+    // longitudinal webs; the flange strips' equivalent thickness keeps the steel's mass exact.
+    use vibrofem::app::design_search::table_mass;
+    let d = Design::paper();
+    let mut c = d.clone();
+    c.spacers = "channel10".into();
+    let added = table_mass(&c).unwrap() - table_mass(&d).unwrap();
+    let want = 3.0 * 2.0 * 0.046 * 0.0076 * 1.2 * 7850.0;
+    assert!((added - want).abs() < 1e-9 * want, "{added} vs {want}");
+    let e = {
+        let mut b = d.clone();
+        b.spacers = "channel8".into();
+        b.validate().err().unwrap().to_string()
+    };
+    assert!(e.contains("spacers"), "{e}");
+}
+
+#[test]
+fn search_reports_the_lightest_passing_variant() {
+    use vibrofem::app::design_search::search;
+    // Two table variants (3 transverse webs, top 16 and 20 mm): both reach the amplitude and
+    // the first-mode limit. With the given 10 % uniformity limit neither passes (their
+    // work-surface amplitude varies by about 15 % with the reconstruction's leaf layout); with
+    // a 20 % limit the lighter one passes and is the one reported.
+    let mut d = Design::paper();
+    d.search.top_thickness = vec![0.02, 0.016];
+    d.search.bottom_thickness = vec![0.008];
+    d.search.n_long_webs = vec![3];
+    d.search.n_trans_webs = vec![3];
+    d.search.spacers = vec!["plates".into()];
+    d.search.max_full_runs = 1;
+    let o = search(&d, None, &|_| {}).unwrap();
+    assert_eq!(o.candidates.len(), 2);
+    assert!(o.candidates[0].mass_kg < o.candidates[1].mass_kg, "lightest first");
+    assert!(o.best.is_none());
+    let failed = o.candidates[0].failed.as_ref().unwrap();
+    assert!(failed.iter().all(|f| f.starts_with("surface_uniformity")), "{failed:?}");
+    d.machine.max_nonuniformity = 0.2;
+    let o = search(&d, None, &|_| {}).unwrap();
+    let (v, r) = o.best.expect("a passing variant");
+    assert!(v.name.starts_with("top 16 mm"), "{}", v.name);
+    assert!(r.checks.iter().all(|c| c.ok), "{:?}", r.checks);
+    assert_eq!(o.spacer_effect.len(), 2);
+}
