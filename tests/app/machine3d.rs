@@ -252,6 +252,8 @@ fn search_reports_the_lightest_passing_variant() {
     let mut d = Design::paper();
     d.search.top_thickness = vec![0.02, 0.016];
     d.search.bottom_thickness = vec![0.008];
+    d.search.bottom_width = vec![0.4];
+    d.search.long_web_span = vec![0.3];
     d.search.n_long_webs = vec![3];
     d.search.n_trans_webs = vec![3];
     d.search.spacers = vec!["plates".into()];
