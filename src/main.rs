@@ -552,6 +552,44 @@ report: {}/report.md (plots and mode shapes beside it)",
             a.out.display()
         );
     }
+    if d.search.enabled && r.checks.iter().any(|c| !c.ok) {
+        // Issue 13 item 3: a failing design is followed by the lightest passing variant.
+        let vdir = a.out.join("passing-variant");
+        let bar = if std::io::stderr().is_terminal() {
+            let b = indicatif::ProgressBar::new_spinner();
+            b.enable_steady_tick(std::time::Duration::from_millis(120));
+            Some(b)
+        } else {
+            None
+        };
+        let progress = |step: &str| match &bar {
+            Some(b) => b.set_message(step.to_string()),
+            None => eprintln!("[{:6.1} s] {step}", t0.elapsed().as_secs_f64()),
+        };
+        std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
+        let o = vibrofem::app::design_search::search(&d, Some(&vdir), &progress);
+        if let Some(b) = &bar {
+            b.finish_and_clear();
+        }
+        let o = o?;
+        let text = vibrofem::app::design_search::search_text(&d, &o);
+        std::fs::write(a.out.join("search.txt"), &text).map_err(|e| Error::io(a.out.join("search.txt"), e))?;
+        if !a.json {
+            outln!("\n{text}");
+        }
+        if let Some((_, vr)) = &o.best {
+            let vjson = serde_json::to_string_pretty(vr).map_err(|e| Error::output("JSON", e))?;
+            std::fs::write(vdir.join("report.json"), &vjson).map_err(|e| Error::io(vdir.join("report.json"), e))?;
+            std::fs::write(vdir.join("report.md"), vibrofem::app::design::report_markdown(vr))
+                .map_err(|e| Error::io(vdir.join("report.md"), e))?;
+            let vhtml = vdir.join("report.html");
+            std::fs::write(&vhtml, vibrofem::app::design::report_html(vr, &vdir)).map_err(|e| Error::io(&vhtml, e))?;
+            if !a.json {
+                out!("{}", vibrofem::app::design::verdict_text(vr));
+                outln!("\nreport of the passing variant: {}/report.md", vdir.display());
+            }
+        }
+    }
     Ok(0)
 }
 

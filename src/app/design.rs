@@ -65,6 +65,14 @@ pub struct Design {
     pub drive: DriveDesign,
     /// Viscous damping, N·s/m.
     pub damping: DampingDesign,
+    /// The 3D machine: layout of leaves, magnets and isolators, and its limits.
+    pub machine: crate::app::machine3d::MachineDesign,
+    /// What spaces the plates: `"plates"` (flat webs, the S7 reconstruction) or `"channel10"`
+    /// (the paper's words: channel No. 10 of GOST 8240, h = 100 mm, flanges 46 × 7.6 mm on the
+    /// plates, web 4.5 mm; see [`table_parts`]).
+    pub spacers: String,
+    /// The search for a passing variant when a check fails.
+    pub search: crate::app::design_search::SearchDesign,
 }
 
 /// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
@@ -249,6 +257,9 @@ impl Design {
             coil: CoilDesign::default(),
             drive: DriveDesign::default(),
             damping: DampingDesign::default(),
+            machine: Default::default(),
+            spacers: "plates".into(),
+            search: Default::default(),
         }
     }
 
@@ -354,10 +365,19 @@ impl Design {
         self.sandwich()
             .validate()
             .map_err(|e| crate::app::toml_file::bad_value("table", e))?;
+        self.machine.validate(self)?;
+        if !["plates", "channel10"].contains(&self.spacers.as_str()) {
+            return Err(crate::app::toml_file::bad_value(
+                "spacers",
+                format!("design: 'spacers' must be plates or channel10, got '{}'", self.spacers),
+            ));
+        }
+        self.search.validate()?;
         Ok(())
     }
 
-    fn sandwich(&self) -> SandwichParams {
+    /// The table generator's parameters (quad4 shells).
+    pub(crate) fn sandwich(&self) -> SandwichParams {
         SandwichParams {
             shell_kind: CellKind::Quad4,
             ..self.table.clone()
@@ -437,6 +457,8 @@ pub struct DesignReport {
     pub table_frequencies_hz: Vec<f64>,
     /// Leaf thicknesses tried while tuning (m) and the detuning each gave.
     pub leaf_iterations: Vec<(f64, f64)>,
+    /// Modes of the 3D machine up to `machine.mode_range` × the excitation.
+    pub machine_modes: Vec<crate::app::machine3d::MachineMode>,
     /// Wall time per step (s).
     pub timings_s: Vec<(String, f64)>,
     /// Notes.
@@ -620,17 +642,89 @@ pub fn sandwich_clear_webs(p: &SandwichParams) -> Result<(crate::mesh::Mesh, Vec
     Ok((mesh, couplings))
 }
 
+/// GOST 8240 channel No. 10: flange width and mean flange thickness (m).
+pub const CHANNEL10_FLANGE: (f64, f64) = (0.046, 0.0076);
+
+/// The work table's shell model: mesh (webs at their clear height, [`sandwich_clear_webs`]),
+/// rigid web links and the thickness of each shell group. With `spacers = "channel10"` every
+/// longitudinal web is a channel No. 10 whose flanges lie on the plates: the plate cells whose
+/// centres fall in the flange's 46 mm strip beside the web (towards the table axis; +y for a
+/// web on it) form the groups `top_flanges`/`bottom_flanges`, with the plate's thickness plus
+/// 7.6 mm scaled by the strip's width over the cells' (so the steel's mass is exact); the rest
+/// of each plate is `top_plain`/`bottom_plain`. `top_plate` and `bottom_plate` stay whole for
+/// selecting nodes. The flange's offset from the plate's mid-surface is not modelled.
+pub fn table_parts(d: &Design) -> Result<(crate::mesh::Mesh, Vec<CouplingSpec>, Vec<(String, f64)>)> {
+    use crate::mesh::Group;
+    let p = d.sandwich();
+    let (mut mesh, links) = sandwich_clear_webs(&p)?;
+    let mut thick = p.thicknesses();
+    if d.spacers == "channel10" && !p.long_webs.is_empty() {
+        let (bf, tf) = CHANNEL10_FLANGE;
+        for (plate, t) in [("top_plate", p.top_thickness), ("bottom_plate", p.bottom_thickness)] {
+            let g = mesh.group(plate)?.clone();
+            let (mut strip, mut plain) = (vec![], vec![]);
+            let mut area = 0.0;
+            for c in &g.cells {
+                let b = &mesh.blocks[c.block as usize];
+                let nn = b.kind.n_nodes();
+                let x: Vec<[f64; 3]> = b.conn[c.index as usize * nn..(c.index as usize + 1) * nn]
+                    .iter()
+                    .map(|&a| mesh.nodes[a as usize])
+                    .collect();
+                let yc = x.iter().map(|q| q[1]).sum::<f64>() / nn as f64;
+                let inside = p.long_webs.iter().any(|&yw| {
+                    let side = if yw > 1e-9 { -1.0 } else { 1.0 };
+                    let u = (yc - yw) * side;
+                    u > 0.0 && u < bf
+                });
+                if inside {
+                    // Quad area from its diagonals (the plates are flat).
+                    let (d1, d2) = (
+                        [x[2][0] - x[0][0], x[2][1] - x[0][1]],
+                        [x[3][0] - x[1][0], x[3][1] - x[1][1]],
+                    );
+                    area += 0.5 * (d1[0] * d2[1] - d1[1] * d2[0]).abs();
+                    strip.push(*c);
+                } else {
+                    plain.push(*c);
+                }
+            }
+            if strip.is_empty() {
+                continue;
+            }
+            let flange_area = bf * p.length * p.long_webs.len() as f64;
+            let short = plate.split('_').next().unwrap_or(plate);
+            let tag = -200_000 - mesh.groups.len() as i32;
+            mesh.groups.push(Group {
+                name: format!("{short}_flanges"),
+                dim: 2,
+                tag,
+                cells: strip,
+            });
+            mesh.groups.push(Group {
+                name: format!("{short}_plain"),
+                dim: 2,
+                tag: tag - 1,
+                cells: plain,
+            });
+            thick.retain(|(n, _)| n != plate);
+            thick.push((format!("{short}_flanges"), t + tf * flange_area / area));
+            thick.push((format!("{short}_plain"), t));
+        }
+    }
+    thick.retain(|(g, _)| mesh.groups.iter().any(|gr| &gr.name == g && !gr.cells.is_empty()));
+    Ok((mesh, links, thick))
+}
+
 /// Work-table modal analysis (shells, free–free): mass and the first six elastic frequencies.
 pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
-    let p = d.sandwich();
-    let (mesh, links) = sandwich_clear_webs(&p)?;
+    let (mesh, links, thick) = table_parts(d)?;
     let mat = Material {
         young: d.steel[0],
         poisson: d.steel[1],
         density: d.steel[2],
     };
-    let shells = p
-        .thicknesses()
+    let shells = thick
         .into_iter()
         .filter(|(g, _)| mesh.groups.iter().any(|gr| &gr.name == g && !gr.cells.is_empty()))
         .map(|(g, t)| ShellPart {
@@ -698,7 +792,7 @@ pub const LARGE_DESIGN_DOFS: usize = 300_000;
 /// meshes, before any analysis: what `vibrofem design` checks against [`LARGE_DESIGN_DOFS`].
 pub fn estimate_dofs(d: &Design) -> Result<usize> {
     d.validate()?;
-    let (table, _) = sandwich_clear_webs(&d.sandwich())?;
+    let (table, _, _) = table_parts(d)?;
     let l = &d.leaf;
     let leaf = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, l.thickness], l.divisions)?;
     Ok(6 * table.n_nodes() + 3 * leaf.n_nodes())
@@ -800,6 +894,11 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     )?;
     let trs = tr.summary(10)?;
     timings.push(("two-mass model and transient".to_string(), t.elapsed().as_secs_f64()));
+
+    progress("3D machine: modes and forced response");
+    let t = Instant::now();
+    let mach = crate::app::machine3d::analyse(d, h)?;
+    timings.push(("3D machine".to_string(), t.elapsed().as_secs_f64()));
 
     // Stresses.
     let sigma_leaf = stress_per_m * rel;
@@ -1006,6 +1105,81 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             "K from C = D/d",
         ),
     ];
+    let working_hz = mach.working.map_or(f64::NAN, |i| mach.modes[i].frequency_hz);
+    quantities.extend([
+        q(
+            "machine_working_hz",
+            "3D machine: working mode",
+            "Hz",
+            working_hz,
+            Some(103.09),
+            &format!("two-mass model {w2:.2} Hz; table as {}", d.machine.table_model),
+        ),
+        q(
+            "machine_nearest_mode_hz",
+            "3D machine: other mode nearest the excitation",
+            "Hz",
+            mach.nearest_other.map_or(f64::NAN, |x| x.0),
+            None,
+            "",
+        ),
+        q(
+            "surface_mean_amplitude",
+            "work surface: mean amplitude",
+            "mm",
+            mach.mean * 1e3,
+            Some(0.2),
+            &format!("{} nodes; two-mass X1 {:.4} mm", mach.surface.len(), x1 * 1e3),
+        ),
+        q(
+            "surface_min_amplitude",
+            "work surface: min amplitude",
+            "mm",
+            mach.min * 1e3,
+            None,
+            "",
+        ),
+        q(
+            "surface_max_amplitude",
+            "work surface: max amplitude",
+            "mm",
+            mach.max * 1e3,
+            None,
+            "",
+        ),
+        q(
+            "surface_nonuniformity",
+            "work surface: non-uniformity (max − min)/mean",
+            "%",
+            mach.nonuniformity * 100.0,
+            None,
+            "",
+        ),
+        q(
+            "machine_reactive_amplitude",
+            "3D machine: reactive-mass amplitude",
+            "mm",
+            mach.reactive_amplitude * 1e3,
+            None,
+            &format!("two-mass X2 {:.4} mm", ss.amp2() * 1e3),
+        ),
+        q(
+            "leaf_kzz",
+            "condensed leaf: guided vertical stiffness",
+            "N/m",
+            mach.leaf_kzz,
+            None,
+            "12×12 from 6 FE statics",
+        ),
+        q(
+            "coil_lateral",
+            "FE coil lateral stiffness (beam helix)",
+            "N/m",
+            mach.coil_lateral,
+            None,
+            "top end guided along x",
+        ),
+    ]);
     quantities.retain(|x| x.value.is_finite() || x.published.is_some());
     if d.tune == "mass" {
         let m2_need = crate::app::dynamics::tuning::reactive_mass_for_detuning(m1, c12, omega, d.target_detuning);
@@ -1087,7 +1261,31 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             d.drive.installed_power,
             true,
         ),
+        check(
+            "mode_clearance",
+            "no other machine mode within the clearance of the excitation [%]",
+            mach.nearest_other.map_or(f64::INFINITY, |x| x.1 * 100.0),
+            d.machine.mode_clearance * 100.0,
+            false,
+        ),
+        check(
+            "surface_uniformity",
+            "work-surface amplitude non-uniformity ≤ limit [%]",
+            mach.nonuniformity * 100.0,
+            d.machine.max_nonuniformity * 100.0,
+            true,
+        ),
     ];
+    if mach.working.is_none() {
+        notes.push(format!(
+            "the 3D machine has no working mode (leaves strained, masses in vertical antiphase) below {} Hz",
+            d.machine.mode_range * d.excitation_hz
+        ));
+    }
+    notes.push(format!(
+        "3D machine: {} DOFs; forced response from {} modes up to {:.0} Hz with the two-mass dashpots placed on the leaves, isolators and work surface",
+        mach.dofs, mach.response_modes.0, mach.response_modes.1
+    ));
     if let Some(dir) = out_dir {
         progress("report and plots");
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -1109,6 +1307,8 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
             Some(&dir.join("table_modes.vtu")),
             Some(&dir.join("table_modes.msh")),
         )?;
+        crate::app::machine3d::write_amplitude_svg(&dir.join("work_surface_amplitude.svg"), &mach, d.excitation_hz)?;
+        crate::app::machine3d::write_amplitude_vtu(&dir.join("machine_response.vtu"), &mach)?;
         if let Some(k) = table_run.report.modes.iter().position(|m| m.kind == "elastic") {
             write_mode_svg(
                 &dir.join("table_mode7.svg"),
@@ -1124,6 +1324,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
         checks,
         table_frequencies_hz: f_table,
         leaf_iterations: iters,
+        machine_modes: mach.modes.clone(),
         timings_s: timings,
         notes,
     })
@@ -1209,6 +1410,25 @@ pub fn verdict_text(r: &DesignReport) -> String {
             x.unit,
             x.note
         );
+    }
+    if !r.machine_modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n3D machine modes          Hz   strain energy: leaves isolators table   kinetic in m2"
+        );
+        for (i, m) in r.machine_modes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  {:>3} {:>18} {:>9.1} %  {:>7.1} % {:>7.1} %  {:>9.1} %   {}",
+                i + 1,
+                sig(m.frequency_hz),
+                100.0 * m.energy_leaves,
+                100.0 * m.energy_isolators,
+                100.0 * m.energy_table,
+                100.0 * m.kinetic_reactive,
+                m.name
+            );
+        }
     }
     for n in &r.notes {
         let _ = writeln!(s, "\nnote: {n}");
@@ -1319,6 +1539,26 @@ pub fn report_html(r: &DesignReport, dir: &std::path::Path) -> String {
         let _ = writeln!(s, "<li>mode {}: {} Hz</li>", i + 7, sig(*f));
     }
     let _ = writeln!(s, "</ul>");
+    if !r.machine_modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "<h2>3D machine modes</h2>\n<table><tr><th>#</th><th>Hz</th><th>leaves</th><th>isolators</th><th>table</th><th>kinetic in m2</th><th>mode</th></tr>"
+        );
+        for (i, m) in r.machine_modes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "<tr><td>{}</td><td class=n>{}</td><td class=n>{:.1} %</td><td class=n>{:.1} %</td><td class=n>{:.1} %</td><td class=n>{:.1} %</td><td>{}</td></tr>",
+                i + 1,
+                sig(m.frequency_hz),
+                100.0 * m.energy_leaves,
+                100.0 * m.energy_isolators,
+                100.0 * m.energy_table,
+                100.0 * m.kinetic_reactive,
+                html_escape(&m.name)
+            );
+        }
+        let _ = writeln!(s, "</table>");
+    }
     if !r.notes.is_empty() {
         let _ = writeln!(s, "<h2>Notes</h2>\n<ul>");
         for n in &r.notes {
@@ -1342,7 +1582,11 @@ pub fn report_html(r: &DesignReport, dir: &std::path::Path) -> String {
 }
 
 /// The plots the chain writes, with their captions.
-const PLOTS: [(&str, &str); 4] = [
+const PLOTS: [(&str, &str); 5] = [
+    (
+        "work_surface_amplitude.svg",
+        "Work-surface vertical amplitude at the excitation (3D machine)",
+    ),
     (
         "amplitude_frequency.svg",
         "Amplitude–frequency and phase curves with the operating point",
@@ -1395,6 +1639,25 @@ pub fn report_markdown(r: &DesignReport) -> String {
     for (i, f) in r.table_frequencies_hz.iter().enumerate() {
         let _ = writeln!(s, "- mode {}: {} Hz", i + 7, sig(*f));
     }
+    if !r.machine_modes.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## 3D machine modes\n\n| # | Hz | strain energy in leaves | isolators | table | kinetic in m2 | mode |\n|---:|---:|---:|---:|---:|---:|---|"
+        );
+        for (i, m) in r.machine_modes.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {} |",
+                i + 1,
+                sig(m.frequency_hz),
+                100.0 * m.energy_leaves,
+                100.0 * m.energy_isolators,
+                100.0 * m.energy_table,
+                100.0 * m.kinetic_reactive,
+                m.name
+            );
+        }
+    }
     if !r.notes.is_empty() {
         let _ = writeln!(s, "\n## Notes\n");
         for n in &r.notes {
@@ -1403,7 +1666,7 @@ pub fn report_markdown(r: &DesignReport) -> String {
     }
     let _ = writeln!(
         s,
-        "\n## Plots\n\n![amplitude-frequency](amplitude_frequency.svg)\n\n![transient](transient.svg)\n\n![electromagnet force](electromagnet.svg)\n\n![work-table mode 7](table_mode7.svg)\n\nMode shapes: `table_modes.vtu` (ParaView), `table_modes.msh` (gmsh)."
+        "\n## Plots\n\n![work-surface amplitude](work_surface_amplitude.svg)\n\n![amplitude-frequency](amplitude_frequency.svg)\n\n![transient](transient.svg)\n\n![electromagnet force](electromagnet.svg)\n\n![work-table mode 7](table_mode7.svg)\n\nMode shapes: `table_modes.vtu` (ParaView), `table_modes.msh` (gmsh); forced response of the 3D machine: `machine_response.vtu`."
     );
     s
 }

@@ -496,6 +496,44 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
             }
         }
     }
+    for sp in &spec.spring_matrices {
+        let n = if sp.b.is_some() { 12 } else { 6 };
+        let what = format!("spring '{}' on '{}'", sp.label, sp.a);
+        if sp.k.len() != n * n {
+            return Err(Error::InvalidInput(format!(
+                "{what}: the stiffness matrix needs {} entries ({n}×{n}), got {}",
+                n * n,
+                sp.k.len()
+            )));
+        }
+        if sp.k.iter().any(|v| !v.is_finite()) {
+            return Err(Error::InvalidInput(format!(
+                "{what}: the stiffness matrix is not finite"
+            )));
+        }
+        let scale = sp.k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let km = nalgebra::DMatrix::from_row_slice(n, n, &sp.k);
+        if (0..n).any(|i| (0..n).any(|j| (km[(i, j)] - km[(j, i)]).abs() > 1e-9 * scale)) {
+            return Err(Error::InvalidInput(format!(
+                "{what}: the stiffness matrix is not symmetric"
+            )));
+        }
+        // Positive semi-definite to rounding: a negative eigenvalue would make K indefinite.
+        let lmin = km.symmetric_eigenvalues().iter().fold(f64::INFINITY, |a, &v| a.min(v));
+        if lmin < -1e-9 * scale {
+            return Err(Error::InvalidInput(format!(
+                "{what}: the stiffness matrix is not positive semi-definite (eigenvalue {lmin:.3e})"
+            )));
+        }
+        let a = point_of(mesh, references, &sp.a)?;
+        match &sp.b {
+            None => springs1.push(&[a as u32], sp.k.clone(), vec![0.0; 36], what),
+            Some(bg) => {
+                let b = point_of(mesh, references, bg)?;
+                springs2.push(&[a as u32, b as u32], sp.k.clone(), vec![0.0; 144], what);
+            }
+        }
+    }
     Ok([springs1, springs2]
         .into_iter()
         .filter(|d| !d.labels.is_empty())

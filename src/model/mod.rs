@@ -10,7 +10,10 @@ pub mod sets;
 pub mod spec;
 
 pub use sets::{BeamSet, DiscreteSet, ReferenceNode, ShellSet, SolidSet};
-pub use spec::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
+pub use spec::{
+    BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringMatrixSpec, SpringSpec,
+    rigid_offset, transform_blocks,
+};
 
 use crate::Result;
 use crate::dof::DofMap;

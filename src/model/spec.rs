@@ -28,6 +28,8 @@ pub struct ModelSpec {
     pub point_masses: Vec<PointMassSpec>,
     /// Discrete springs.
     pub springs: Vec<SpringSpec>,
+    /// General springs: full symmetric stiffness matrices between two points or to the ground.
+    pub spring_matrices: Vec<SpringMatrixSpec>,
     /// Groups meshed with surface cells analysed as shells.
     pub shells: Vec<ShellPart>,
     /// Groups meshed with line cells analysed as beams.
@@ -88,6 +90,7 @@ impl Default for ModelSpec {
             prescribed: vec![],
             point_masses: vec![],
             springs: vec![],
+            spring_matrices: vec![],
             shells: vec![],
             beams: vec![],
             solid_groups: None,
@@ -132,4 +135,65 @@ pub struct SpringSpec {
     pub b: Option<String>,
     /// Stiffness in ux, uy, uz (N/m) and rx, ry, rz (N·m/rad).
     pub k: [f64; 6],
+}
+
+/// A general discrete spring: a full symmetric positive semi-definite stiffness matrix in
+/// global axes, between two points (12×12, the six components ux, uy, uz, rx, ry, rz of `a`
+/// first, then those of `b`) or from one point to the ground (6×6). A point is a coupled group's
+/// reference node or a one-node group. Built for springs condensed from FE parts (a leaf
+/// spring between its clamp and its guided end) and for springs away from the point they act
+/// on ([`rigid_offset`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpringMatrixSpec {
+    /// First end.
+    pub a: String,
+    /// Second end, or `None` for the ground.
+    pub b: Option<String>,
+    /// Stiffness, row-major: 144 entries between two points, 36 to the ground (N/m, N/rad,
+    /// N·m/rad).
+    pub k: Vec<f64>,
+    /// What the spring is, for messages.
+    pub label: String,
+}
+
+/// The 6×6 rigid-offset matrix `T` with `u_p = T u_r` for a point at `r = x_p − x_r` from a
+/// reference point that moves rigidly with it: `u_p = u_r + θ_r × r`, `θ_p = θ_r` (row-major).
+/// A stiffness `k_p` acting at the point acts on the reference as `Tᵀ k_p T`.
+pub fn rigid_offset(r: [f64; 3]) -> [[f64; 6]; 6] {
+    let mut t = [[0.0; 6]; 6];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    // θ × r = −[r]× θ
+    t[0][4] = r[2];
+    t[0][5] = -r[1];
+    t[1][3] = -r[2];
+    t[1][5] = r[0];
+    t[2][3] = r[1];
+    t[2][4] = -r[0];
+    t
+}
+
+/// `Tᵀ K T` for a square row-major `k` of size `6·n` and one 6×6 block `t[i]` per node
+/// (block-diagonal `T`).
+pub fn transform_blocks(k: &[f64], t: &[[[f64; 6]; 6]]) -> Vec<f64> {
+    let n = 6 * t.len();
+    debug_assert_eq!(k.len(), n * n);
+    let tf = |r: usize, c: usize| -> f64 { if r / 6 == c / 6 { t[r / 6][r % 6][c % 6] } else { 0.0 } };
+    // K T
+    let mut kt = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            let b = j / 6;
+            kt[i * n + j] = (0..6).map(|l| k[i * n + 6 * b + l] * tf(6 * b + l, j)).sum();
+        }
+    }
+    let mut out = vec![0.0; n * n];
+    for i in 0..n {
+        let b = i / 6;
+        for j in 0..n {
+            out[i * n + j] = (0..6).map(|l| tf(6 * b + l, i) * kt[(6 * b + l) * n + j]).sum();
+        }
+    }
+    out
 }

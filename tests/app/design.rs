@@ -38,10 +38,12 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
         "electromagnet.svg",
         "table_mode7.svg",
         "table_modes.vtu",
+        "work_surface_amplitude.svg",
+        "machine_response.vtu",
     ] {
         assert!(dir.join(f).exists() || f == "report.md", "{f} missing");
     }
-    assert_eq!(r.checks.len(), 6);
+    assert_eq!(r.checks.len(), 8);
     assert!(r.table_frequencies_hz.len() == 6 && r.table_frequencies_hz[0] > 50.0);
     report_formats(&r, &dir);
 }
@@ -80,8 +82,8 @@ fn report_formats(r: &vibrofem::app::design::DesignReport, dir: &std::path::Path
     }
     let html = report_html(r, dir);
     assert!(html.starts_with("<!DOCTYPE html>") && html.contains("<code>c12</code>"));
-    // The four plots are inlined (no file references), so the page stands alone.
-    assert_eq!(html.matches("<svg").count(), 4, "inline plots");
+    // The five plots are inlined (no file references), so the page stands alone.
+    assert_eq!(html.matches("<svg").count(), 5, "inline plots");
     assert!(!html.contains("src=\""));
 }
 
