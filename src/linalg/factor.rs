@@ -199,6 +199,12 @@ impl Factor {
         })
     }
 
+    /// True for a supernodal factor (solved by [`supernodal_solve`]); small or very sparse
+    /// factors are simplicial (solved by faer).
+    pub fn is_supernodal(&self) -> bool {
+        matches!(self.sym.sym.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
     /// Bytes of the factor's values.
     pub fn bytes(&self) -> usize {
         self.values.len() * std::mem::size_of::<f64>()
@@ -211,11 +217,20 @@ impl Factor {
             .map_or(0, |s| s.iter().map(|w| 8 * w.capacity()).sum())
     }
 
-    /// Solve `A X = B` in place for a block of right-hand sides. The columns are split into
-    /// groups of at most eight, at least one per worker thread, each solved sequentially by
-    /// [`supernodal_solve`] in one pass over L per direction (every column's arithmetic is the
-    /// same whatever the split, so results do not depend on the thread count).
+    /// Solve `A X = B` in place for a block of right-hand sides (faer's supernodal solve,
+    /// sequential: the same arithmetic for any thread count).
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        if rhs.ncols() > 0 {
+            self.solve_faer(rhs);
+        }
+    }
+
+    /// Solve `A X = B` in place with [`supernodal_solve`]: column groups of at most eight, at
+    /// least one per worker thread, one pass over each supernode column per direction,
+    /// workspaces kept with the factor. Its rounding differs from [`Factor::solve_in_place`]
+    /// and with the grouping, so it is not the default (runs must give the same bits whatever
+    /// the thread count).
+    pub fn solve_in_place_grouped(&self, rhs: MatMut<'_, f64>) {
         use rayon::prelude::*;
         let k = rhs.ncols();
         if k == 0 {
