@@ -232,6 +232,18 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
         }
     };
     const CHUNK: usize = 2048;
+    // Column ranges of about equal numbers of entries, one per worker thread.
+    let ranges = rayon::current_num_threads().clamp(1, 64).min(pattern.n.max(1));
+    let bounds: Vec<usize> = (0..=ranges)
+        .map(|r| {
+            if r == ranges {
+                pattern.n
+            } else {
+                let target = pattern.nnz() * r / ranges;
+                pattern.col_ptr.partition_point(|&p| p < target).min(pattern.n)
+            }
+        })
+        .collect();
     // Element matrices of one chunk, back to back (element e at offs[e - start]); reused.
     let mut kbuf: Vec<f64> = Vec::new();
     let mut mbuf: Vec<f64> = Vec::new();
@@ -269,30 +281,69 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
                 .zip(mparts)
                 .enumerate()
                 .try_for_each(|(off, (ke, me))| set.matrices(start + off, ke, me, want_mass))?;
-            for (off, w) in offs.windows(2).enumerate() {
-                let nodes = set.nodes(start + off);
-                let ke = &kbuf[w[0]..w[1]];
-                let me = if want_mass { &mbuf[w[0]..w[1]] } else { &[][..] };
-                if nodes.iter().any(|&a| dofs.special[a as usize]) {
-                    scatter_general(&pattern, dofs, nodes, ndpn, ke, &mut k.values);
-                    if want_mass {
-                        scatter_general(&pattern, dofs, nodes, ndpn, me, &mut m.values);
+            // Scatter in parallel over disjoint column ranges: each range takes every element
+            // of the chunk in element order, so each entry's sum is formed in the same order
+            // whatever the number of ranges (bit-for-bit the serial result).
+            let kparts = split_by_columns(&mut k.values, &pattern, &bounds);
+            let mparts = if want_mass {
+                split_by_columns(&mut m.values, &pattern, &bounds)
+            } else {
+                (0..ranges).map(|_| &mut [][..]).collect()
+            };
+            kparts
+                .into_par_iter()
+                .zip(mparts)
+                .enumerate()
+                .for_each(|(r, (kv, mv))| {
+                    let cols = bounds[r]..bounds[r + 1];
+                    for (off, w) in offs.windows(2).enumerate() {
+                        let nodes = set.nodes(start + off);
+                        let ke = &kbuf[w[0]..w[1]];
+                        let me = if want_mass { &mbuf[w[0]..w[1]] } else { &[][..] };
+                        if nodes.iter().any(|&a| dofs.special[a as usize]) {
+                            scatter_general(&pattern, dofs, nodes, ndpn, ke, cols.clone(), kv);
+                            if want_mass {
+                                scatter_general(&pattern, dofs, nodes, ndpn, me, cols.clone(), mv);
+                            }
+                        } else {
+                            scatter(&pattern, dofs, nodes, ndpn, ke, cols.clone(), kv);
+                            if want_mass {
+                                scatter(&pattern, dofs, nodes, ndpn, me, cols.clone(), mv);
+                            }
+                        }
                     }
-                } else {
-                    scatter(&pattern, dofs, nodes, ndpn, ke, &mut k.values);
-                    if want_mass {
-                        scatter(&pattern, dofs, nodes, ndpn, me, &mut m.values);
-                    }
-                }
-            }
+                });
         }
     }
     Ok(Assembled { k, m })
 }
 
+/// The values of each column range `bounds[r]..bounds[r + 1]`, as disjoint slices.
+fn split_by_columns<'a>(values: &'a mut [f64], pattern: &Pattern, bounds: &[usize]) -> Vec<&'a mut [f64]> {
+    let mut out = Vec::with_capacity(bounds.len().saturating_sub(1));
+    let mut rest = values;
+    for w in bounds.windows(2) {
+        let len = pattern.col_ptr[w[1]] - pattern.col_ptr[w[0]];
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(len);
+        out.push(head);
+        rest = tail;
+    }
+    out
+}
+
 /// Add one element matrix through the constraint transformation: K̂ += Tₑᵀ Kₑ Tₑ, where row i
 /// of Tₑ expands local DOF i into equations (slaves into their masters).
-fn scatter_general(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f64], vals: &mut [f64]) {
+/// Only the columns in `cols` are written; `vals` holds their values (from the first of them).
+fn scatter_general(
+    pattern: &Pattern,
+    dofs: &DofMap,
+    nodes: &[u32],
+    ndpn: usize,
+    me: &[f64],
+    cols: std::ops::Range<usize>,
+    vals: &mut [f64],
+) {
+    let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
     let exps: Vec<crate::dof::Expansion> = nodes
         .iter()
@@ -307,6 +358,9 @@ fn scatter_general(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize,
         .collect();
     for j in 0..nd {
         for &(ej, cj) in &exps[j].terms {
+            if !cols.contains(&ej) {
+                continue;
+            }
             for i in 0..nd {
                 let v = me[i * nd + j];
                 if v == 0.0 {
@@ -314,7 +368,7 @@ fn scatter_general(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize,
                 }
                 for &(ei, ci) in &exps[i].terms {
                     if let Some(pos) = pattern.position(ei, ej) {
-                        vals[pos] += ci * cj * v;
+                        vals[pos - off] += ci * cj * v;
                     } else {
                         debug_assert!(false, "pattern misses ({ei}, {ej})");
                     }
@@ -328,7 +382,17 @@ fn scatter_general(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize,
 ///
 /// For each node pair (a, b) and free component of b, the free DOFs of node a are
 /// consecutive in the column, so one binary search per (a, b, component) finds the run.
-fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f64], vals: &mut [f64]) {
+/// Only the columns in `cols` are written; `vals` holds their values (from the first of them).
+fn scatter(
+    pattern: &Pattern,
+    dofs: &DofMap,
+    nodes: &[u32],
+    ndpn: usize,
+    me: &[f64],
+    cols: std::ops::Range<usize>,
+    vals: &mut [f64],
+) {
+    let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
     for (lb, &b) in nodes.iter().enumerate() {
         let b = b as usize;
@@ -336,6 +400,9 @@ fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f
             let Some(col) = dofs.eq_of(b, cb) else {
                 continue;
             };
+            if !cols.contains(&col) {
+                continue;
+            }
             let s = pattern.col_ptr[col];
             let rows = &pattern.row_idx[s..pattern.col_ptr[col + 1]];
             for (la, &a) in nodes.iter().enumerate() {
@@ -352,7 +419,7 @@ fn scatter(pattern: &Pattern, dofs: &DofMap, nodes: &[u32], ndpn: usize, me: &[f
                     if let Some(row) = dofs.eq_of(a, ca) {
                         if ca < ndpn {
                             debug_assert_eq!(pattern.row_idx[pos], row);
-                            vals[pos] += me[(la * ndpn + ca) * nd + lb * ndpn + cb];
+                            vals[pos - off] += me[(la * ndpn + ca) * nd + lb * ndpn + cb];
                         }
                         pos += 1;
                     }

@@ -115,9 +115,17 @@ impl System {
             factor = factor_entries(&graph, &model.dofs, order, cap);
             check_estimate(source, &budget, 8 * factor + mats * 16 * nnz, detail(factor))?;
         }
+        let t_pat = Instant::now();
         let pattern = Arc::new(dof_pattern(&graph, &model.dofs)?);
+        let t_km = Instant::now();
         let km = assemble(pattern.clone(), &model.dofs, &sets, opts.mass)?;
         drop(sets);
+        let (km_s, pat_s) = (t_km.elapsed().as_secs_f64(), t_pat.elapsed().as_secs_f64());
+        log::debug!(
+            "{source}: graph and estimates {:.3} s, ordering {ordering_time:.3} s, pattern {:.3} s, K and M {km_s:.3} s",
+            t.elapsed().as_secs_f64() - ordering_time - pat_s,
+            pat_s - km_s
+        );
         let t_assemble = t.elapsed().as_secs_f64() - ordering_time;
         if model.dofs.n_free == 0 {
             return Err(Error::InvalidInput(format!(

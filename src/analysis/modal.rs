@@ -96,6 +96,29 @@ pub struct Timings {
     pub total: f64,
 }
 
+/// Bytes of the large allocations of a modal run, by phase. The mesh, the model and K, M live
+/// through the run; the node graph and the element scratch of the assembly are freed before the
+/// factorisation; K − σM and the factorisation scratch exist only while one factorisation is
+/// computed (never two factors at once); the solve workspaces and the Lanczos basis coexist
+/// with one factor.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct MemoryByPhase {
+    /// Node coordinates and element connectivity of the model.
+    pub mesh: u64,
+    /// The shared sparsity pattern and the values of K and M.
+    pub k_and_m: u64,
+    /// Values of one LDLᵀ factor.
+    pub factor: u64,
+    /// K − σM while it is factorised.
+    pub shifted_matrix: u64,
+    /// Scratch of the numeric factorisation.
+    pub factor_workspace: u64,
+    /// Solve workspaces kept with the factor.
+    pub solve_workspace: u64,
+    /// Lanczos basis, its M-image and the projected matrix.
+    pub lanczos_basis: u64,
+}
+
 /// Everything a modal run reports (the `--json` document).
 #[derive(Clone, Debug, Serialize)]
 pub struct ModalReport {
@@ -144,6 +167,8 @@ pub struct ModalReport {
     pub timings_s: Timings,
     /// Peak resident memory of the process, bytes (Linux VmHWM), if known.
     pub peak_memory_bytes: Option<u64>,
+    /// The large allocations by phase, bytes.
+    pub memory_bytes: MemoryByPhase,
     /// Flops of one numeric factorisation.
     pub factor_flops: f64,
     /// Achieved factorisation rate, GFLOP/s.
@@ -405,6 +430,25 @@ pub fn finish(
         centre_of_mass: part.centre_of_mass,
         timings_s: tm.clone(),
         peak_memory_bytes: peak_memory(),
+        memory_bytes: MemoryByPhase {
+            mesh: {
+                let sets = model.element_sets();
+                let conn: usize = sets
+                    .iter()
+                    .map(|s| (0..s.len()).map(|e| s.nodes(e).len()).sum::<usize>())
+                    .sum();
+                (24 * model.nodes.len() + 4 * conn) as u64
+            },
+            k_and_m: {
+                let pat = sys.pattern();
+                (8 * (pat.col_ptr.len() + pat.row_idx.len()) + k_mat.value_bytes() + m_mat.value_bytes()) as u64
+            },
+            factor: sol.memory.factor,
+            shifted_matrix: sol.memory.shifted_matrix,
+            factor_workspace: sol.memory.factor_workspace,
+            solve_workspace: sol.memory.solve_workspace,
+            lanczos_basis: sol.memory.lanczos_basis,
+        },
         factor_flops,
         factor_gflops: if tm.factor > 0.0 {
             factor_flops / tm.factor / 1e9

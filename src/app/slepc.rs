@@ -445,6 +445,7 @@ pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<Mod
         time_verify: time_verify + info.timings_s.get("sturm").copied().unwrap_or(0.0),
         // MUMPS's factorisations are not probed here; the recomputed backward errors are the check.
         factor_backward_error: 0.0,
+        memory: Default::default(),
     };
     let ts = |k: &str| info.timings_s.get(k).copied().unwrap_or(0.0);
     let tm = Timings {

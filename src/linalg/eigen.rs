@@ -29,6 +29,7 @@
 //! A user shift finds the modes nearest to it.
 
 use super::factor::{Factor, SymbolicFactor};
+use super::tall;
 use crate::linalg::sparse::SymMatrix;
 use crate::{Error, Result};
 use faer::linalg::matmul::matmul;
@@ -127,6 +128,32 @@ pub struct EigenSolution {
     pub time_verify: f64,
     /// Worst probe backward error of the factorisations used (see [`Factor::probe_residual`]).
     pub factor_backward_error: f64,
+    /// The large allocations of the solve.
+    pub memory: EigenMemory,
+}
+
+/// Bytes of the large allocations of an eigen solve (the largest of each kind held at once).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct EigenMemory {
+    /// Values of one LDLᵀ factor (never two at once).
+    pub factor: u64,
+    /// K − σM, the matrix being factorised (dropped once factorised).
+    pub shifted_matrix: u64,
+    /// Scratch of the numeric factorisation (freed when it returns).
+    pub factor_workspace: u64,
+    /// Solve workspaces kept with the factor.
+    pub solve_workspace: u64,
+    /// Lanczos basis V, its M-image and the projected matrix.
+    pub lanczos_basis: u64,
+}
+
+impl EigenMemory {
+    fn add_factor(&mut self, f: &Factor, n_values: usize) {
+        self.factor = self.factor.max(f.bytes() as u64);
+        self.shifted_matrix = self.shifted_matrix.max(8 * n_values as u64);
+        self.factor_workspace = self.factor_workspace.max(f.factor_workspace_bytes as u64);
+        self.solve_workspace = self.solve_workspace.max(f.workspace_bytes() as u64);
+    }
 }
 
 /// Largest model solved densely when a request asks for a third of its modes or more.
@@ -176,28 +203,23 @@ pub fn backward_errors(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'
     let mut mx = Mat::zeros(n, nc);
     k.mul_block(x, kx.as_mut());
     m.mul_block(x, mx.as_mut());
-    let abs_mul = |a: &SymMatrix, c: usize| -> f64 {
-        let p = &a.pattern;
-        let mut s2 = 0.0;
-        for j in 0..n {
-            let mut s = 0.0;
-            for q in p.col_ptr[j]..p.col_ptr[j + 1] {
-                s += a.values[q].abs() * x[(p.row_idx[q], c)].abs();
-            }
-            s2 += s * s;
-        }
-        s2.sqrt()
-    };
+    let ak = k.abs_mul_norms(x);
+    let am = m.abs_mul_norms(x);
+    use rayon::prelude::*;
     (0..nc)
+        .into_par_iter()
         .map(|c| {
-            let r = (0..n)
-                .map(|i| {
-                    let r = kx[(i, c)] - lambda[c] * mx[(i, c)];
+            let r = kx
+                .col(c)
+                .iter()
+                .zip(mx.col(c).iter())
+                .map(|(a, b)| {
+                    let r = a - lambda[c] * b;
                     r * r
                 })
                 .sum::<f64>()
                 .sqrt();
-            let denom = abs_mul(k, c) + lambda[c].abs() * abs_mul(m, c);
+            let denom = ak[c] + lambda[c].abs() * am[c];
             if denom > 0.0 { r / denom } else { r }
         })
         .collect()
@@ -296,18 +318,46 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
     };
     let mut factorizations = 0;
+    let mut memory = EigenMemory::default();
     let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
+    memory.add_factor(&fa, k.values.len());
     let mut backward = fa.probe_residual;
+    let mut applications = 0usize;
+    // Lanczos started while probing the spectrum (kept when the shift stays), and its result if
+    // it already converged.
+    let mut probe_lz: Option<Lanczos> = None;
+    let mut early: Option<(Vec<f64>, Mat<f64>)> = None;
+    // Seconds of those Lanczos steps (iteration, not factorisation).
+    let mut time_probe = 0.0;
     if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
         if n > p.dense_below && !big_request(nm.min(n)) {
             // The diagonal heuristic can put the default shift far below the wanted modes
             // (thin shells: rotational stiffness ∝ 1/t²; huge stiffness contrasts). Then every
-            // θ = 1/(λ − σ) is nearly the same and Lanczos crawls. Estimate the low spectrum by a
-            // few block inverse iterations and move the shift closer while it is too far.
+            // θ = 1/(λ − σ) is nearly the same and Lanczos crawls. Estimate the low spectrum
+            // from the Ritz values of the first few Lanczos steps and move the shift closer
+            // while it is too far; when it stays, the iteration simply continues (no solve is
+            // spent on the estimate alone).
             for _ in 0..6 {
-                // Probe past the block: several free parts put more than six rigid-body modes
-                // first, and the first elastic scale must be among the estimates.
-                let est = probe_low_spectrum(k, m, &fa, (nm + 6).min(12.max(p.block + 6)).min(n), p.seed);
+                // Estimates past the block: several free parts put more than six rigid-body
+                // modes first, and the first elastic scale must be among the estimates.
+                let nb = (nm + 6).min(12.max(p.block + 6)).min(n);
+                let mut lz = Lanczos::new(n, nm.min(n), p, false);
+                lz.pause_after = Some(nb.div_ceil(lz.b).max(3));
+                let tp = Instant::now();
+                early = lz.run(p, &fa, m, sigma, &mut applications)?;
+                time_probe += tp.elapsed().as_secs_f64();
+                let mut est: Vec<f64> = lz
+                    .last_theta
+                    .iter()
+                    .filter(|t| **t > 0.0)
+                    .map(|t| sigma + 1.0 / t)
+                    .collect();
+                est.sort_by(f64::total_cmp);
+                est.truncate(nb);
+                probe_lz = Some(lz);
+                if early.is_some() {
+                    break;
+                }
                 let Some(&last) = est.last() else { break };
                 let mut lam_est = est[nm.min(est.len()) - 1];
                 if lam_est < 1e-6 * last {
@@ -320,24 +370,33 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
                 // about 2, and K − σM stays as well conditioned as the problem allows.
                 let s_new = -lam_est;
                 log::info!(
-                    "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e}"
+                    "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e} (another factorisation)"
                 );
+                probe_lz = None;
+                drop(fa);
                 (fa, sigma) = factor_at(k, m, sym, s_new, &mut factorizations)?;
+                memory.add_factor(&fa, k.values.len());
                 backward = fa.probe_residual;
             }
         }
     }
-    let time_factor_main = t0.elapsed().as_secs_f64();
+    let time_factor_main = t0.elapsed().as_secs_f64() - time_probe;
     let mut time_verify = 0.0;
 
     // How many modes we need.
+    // The Sturm count at the band's upper end, kept for the final check: (point asked for,
+    // point used, count).
+    let mut upper_known: Option<(f64, f64, usize)> = None;
     let mut want = match p.target {
         Target::Nearest(nm) => nm.min(n),
         Target::Band(_, hi) => {
             let tv = Instant::now();
-            let (fh, _) = factor_at(k, m, sym, hi, &mut factorizations)?;
+            log::info!("factorisation at the band's upper end {hi:.6e} for its Sturm count");
+            let (fh, s_hi) = factor_at(k, m, sym, hi, &mut factorizations)?;
+            memory.add_factor(&fh, k.values.len());
             backward = backward.max(fh.probe_residual);
             time_verify += tv.elapsed().as_secs_f64();
+            upper_known = Some((hi, s_hi, fh.negative_pivots));
             fh.negative_pivots.saturating_sub(fa.negative_pivots)
         }
     };
@@ -360,16 +419,16 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             applications: 0,
             factorizations,
             time_factor: time_factor_main,
-            time_iterate: 0.0,
+            time_iterate: time_probe,
             time_verify,
             factor_backward_error: backward,
+            memory,
         });
     }
 
     let ti = Instant::now();
-    let mut applications = 0usize;
     let mut attempt = 0;
-    let mut time_iterate = 0.0;
+    let mut time_iterate = time_probe;
     let lower_count_at_shift = fa.negative_pivots;
     let dense = n <= p.dense_below || big_request(want);
     if dense && n > p.dense_below {
@@ -377,7 +436,10 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             "{want} modes of {n} degrees of freedom: solved densely (all eigenpairs) rather than by Lanczos"
         ));
     }
-    let mut lz = Lanczos::new(n, if dense { 1 } else { want }, p, &fa, m, band.is_some());
+    let mut lz = match probe_lz.take() {
+        Some(lz) if !dense => lz,
+        _ => Lanczos::new(n, if dense { 1 } else { want }, p, band.is_some()),
+    };
     // The shift factor is dropped before each Sturm factorisation, so that two factors never
     // coexist in memory; it is rebuilt only if the check asks for more iteration.
     let mut fa = Some(fa);
@@ -385,6 +447,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         attempt += 1;
         let ti_round = Instant::now();
         if fa.is_none() {
+            log::info!("factorising K − σM at the shift again to iterate for more modes");
             fa = Some(factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?.0);
         }
         let f = fa
@@ -399,7 +462,13 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             lz.last_theta = l.iter().map(|l| 1.0 / (l - sigma)).collect();
             (l, x)
         } else {
-            let (l, x) = lz.run(p, f, m, sigma, &mut applications)?;
+            let res = match early.take() {
+                Some(r) => Some(r),
+                None => lz.run(p, f, m, sigma, &mut applications)?,
+            };
+            let (l, x) = res.ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
+            memory.lanczos_basis = memory.lanczos_basis.max(lz.bytes());
+            memory.solve_workspace = memory.solve_workspace.max(f.workspace_bytes() as u64);
             log::info!(
                 "Lanczos: {} pairs converged after {applications} operator applications",
                 l.len()
@@ -451,14 +520,22 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let lower_count = if lower_pt == sigma {
             lower_count_at_shift
         } else {
+            log::info!("factorisation at {lower_pt:.6e} for the lower Sturm count");
             let (fl, _) = factor_at(k, m, sym, lower_pt, &mut factorizations)?;
+            memory.add_factor(&fl, k.values.len());
             backward = backward.max(fl.probe_residual);
             fl.negative_pivots
         };
-        let (fu, upper_pt) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
-        let upper_count = fu.negative_pivots;
-        backward = backward.max(fu.probe_residual);
-        drop(fu);
+        let (upper_pt, upper_count) = match upper_known {
+            Some((asked, used, count)) if asked == upper_pt => (used, count),
+            _ => {
+                log::info!("factorisation at {upper_pt:.6e} for the upper Sturm count");
+                let (fu, used) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
+                memory.add_factor(&fu, k.values.len());
+                backward = backward.max(fu.probe_residual);
+                (used, fu.negative_pivots)
+            }
+        };
         let n_between = found.iter().filter(|(l, _)| *l > lower_pt && *l < upper_pt).count();
         let expected = upper_count.saturating_sub(lower_count);
         log::info!(
@@ -515,50 +592,10 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             time_iterate,
             time_verify,
             factor_backward_error: backward,
+            memory,
         };
         return Ok(sol);
     }
-}
-
-/// Rayleigh–Ritz estimates (ascending) of the lowest eigenvalues from a few block inverse
-/// iterations with the factor of K − σM (upper bounds of the lowest `nb` eigenvalues).
-fn probe_low_spectrum(k: &SymMatrix, m: &SymMatrix, fa: &Factor, nb: usize, seed: u64) -> Vec<f64> {
-    let n = k.n();
-    let mut rng = Rng(seed.rotate_left(17) | 1);
-    let mut x = Mat::from_fn(n, nb, |_, _| rng.next());
-    let mut y = Mat::zeros(n, nb);
-    for _ in 0..4 {
-        m.mul_block(x.as_ref(), y.as_mut());
-        fa.solve_in_place(y.as_mut());
-        for c in 0..nb {
-            let nrm = (0..n).map(|i| y[(i, c)] * y[(i, c)]).sum::<f64>().sqrt();
-            if !(nrm > 0.0 && nrm.is_finite()) {
-                return vec![];
-            }
-            for i in 0..n {
-                x[(i, c)] = y[(i, c)] / nrm;
-            }
-        }
-    }
-    let mut kx = Mat::zeros(n, nb);
-    let mut mx = Mat::zeros(n, nb);
-    k.mul_block(x.as_ref(), kx.as_mut());
-    m.mul_block(x.as_ref(), mx.as_mut());
-    let mut kh = Mat::zeros(nb, nb);
-    let mut mh = Mat::zeros(nb, nb);
-    matmul(kh.as_mut(), Accum::Replace, x.transpose(), kx.as_ref(), 1.0, Par::Seq);
-    matmul(mh.as_mut(), Accum::Replace, x.transpose(), mx.as_ref(), 1.0, Par::Seq);
-    let kd = nalgebra::DMatrix::from_fn(nb, nb, |i, j| 0.5 * (kh[(i, j)] + kh[(j, i)]));
-    let md = nalgebra::DMatrix::from_fn(nb, nb, |i, j| 0.5 * (mh[(i, j)] + mh[(j, i)]));
-    let Some(ch) = md.cholesky() else { return vec![] };
-    let Some(linv) = ch.l().try_inverse() else {
-        return vec![];
-    };
-    let c = &linv * kd * linv.transpose();
-    let c = (&c + c.transpose()) * 0.5;
-    let mut ev: Vec<f64> = c.symmetric_eigen().eigenvalues.iter().copied().collect();
-    ev.sort_by(f64::total_cmp);
-    ev
 }
 
 /// Factor K − σM; if σ sits exactly on an eigenvalue (zero pivot), nudge it.
@@ -632,10 +669,8 @@ fn refine(k: &SymMatrix, m: &SymMatrix, fa: &Factor, x: &Mat<f64>) -> Result<(Ve
     let mut my = Mat::zeros(n, c);
     k.mul_block(y.as_ref(), ky.as_mut());
     m.mul_block(y.as_ref(), my.as_mut());
-    let mut kh = Mat::zeros(c, c);
-    let mut mh = Mat::zeros(c, c);
-    matmul(kh.as_mut(), Accum::Replace, y.transpose(), ky.as_ref(), 1.0, Par::Seq);
-    matmul(mh.as_mut(), Accum::Replace, y.transpose(), my.as_ref(), 1.0, Par::Seq);
+    let kh = tall::gram(y.as_ref(), ky.as_ref());
+    let mh = tall::gram(y.as_ref(), my.as_ref());
     // Columns scaled to unit M-norm first (they differ by the ratios of θ).
     let sc: Vec<f64> = (0..c)
         .map(|i| 1.0 / mh[(i, i)].abs().sqrt().max(f64::MIN_POSITIVE))
@@ -664,7 +699,7 @@ fn refine(k: &SymMatrix, m: &SymMatrix, fa: &Factor, x: &Mat<f64>) -> Result<(Ve
     let z = &q * &eig.eigenvectors;
     let zf = Mat::from_fn(c, r, |i, j| z[(i, order[j])] * sc[i]);
     let mut xn = Mat::zeros(n, r);
-    matmul(xn.as_mut(), Accum::Replace, y.as_ref(), zf.as_ref(), 1.0, Par::Seq);
+    tall::mul(xn.as_mut(), Accum::Replace, y.as_ref(), zf.as_ref(), 1.0);
     Ok((order.iter().map(|&j| eig.eigenvalues[j]).collect(), xn))
 }
 
@@ -696,8 +731,7 @@ pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, 
         };
         res.push(if denom > 0.0 { r2.sqrt() / denom } else { r2.sqrt() });
     }
-    let mut g = Mat::zeros(nc, nc);
-    matmul(g.as_mut(), Accum::Replace, x.transpose(), mx.as_ref(), 1.0, Par::Seq);
+    let g = tall::gram(x, mx.as_ref());
     let mut err = 0.0f64;
     for i in 0..nc {
         for j in 0..nc {
@@ -730,10 +764,12 @@ struct Lanczos {
     last_theta: Vec<f64>,
     /// The start block has been built.
     started: bool,
+    /// Return (`Ok(None)`) after this many more block steps, to look at the Ritz values.
+    pause_after: Option<usize>,
 }
 
 impl Lanczos {
-    fn new(n: usize, want: usize, p: &EigenParams, _fa: &Factor, _m: &SymMatrix, positive_only: bool) -> Self {
+    fn new(n: usize, want: usize, p: &EigenParams, positive_only: bool) -> Self {
         let b = p.block.max(1).min(n);
         let m_max = (want * 2 + 4 * b).max(want + 6 * b).min(n);
         let m_max = m_max.max(b.min(n));
@@ -750,7 +786,14 @@ impl Lanczos {
             positive_only,
             last_theta: Vec::new(),
             started: false,
+            pause_after: None,
         }
+    }
+
+    /// Bytes of the basis, its M-image and the projected matrix.
+    fn bytes(&self) -> u64 {
+        8 * (self.v.nrows() * self.v.ncols() + self.mv.nrows() * self.mv.ncols() + self.t.nrows() * self.t.ncols())
+            as u64
     }
 
     /// Apply Op = A⁻¹M to a block: W = A⁻¹ (M X).
@@ -771,31 +814,9 @@ impl Lanczos {
             return coef;
         }
         for _ in 0..2 {
-            let mut c = Mat::zeros(upto, bw);
-            matmul(
-                c.as_mut(),
-                Accum::Replace,
-                self.mv.get(.., 0..upto).transpose(),
-                w.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            matmul(
-                w.as_mut(),
-                Accum::Add,
-                self.v.get(.., 0..upto),
-                c.as_ref(),
-                -1.0,
-                Par::Seq,
-            );
-            matmul(
-                mw.as_mut(),
-                Accum::Add,
-                self.mv.get(.., 0..upto),
-                c.as_ref(),
-                -1.0,
-                Par::Seq,
-            );
+            let c = tall::gram(self.mv.get(.., 0..upto), w.as_ref());
+            tall::mul(w.as_mut(), Accum::Add, self.v.get(.., 0..upto), c.as_ref(), -1.0);
+            tall::mul(mw.as_mut(), Accum::Add, self.mv.get(.., 0..upto), c.as_ref(), -1.0);
             coef += &c;
         }
         coef
@@ -810,8 +831,7 @@ impl Lanczos {
         let bw = w.ncols();
         let mut r_total = Mat::<f64>::identity(bw, bw);
         for pass in 0..3 {
-            let mut g = Mat::zeros(bw, bw);
-            matmul(g.as_mut(), Accum::Replace, w.transpose(), mw.as_ref(), 1.0, Par::Seq);
+            let g = tall::gram(w.as_ref(), mw.as_ref());
             let gs = nalgebra::DMatrix::from_fn(bw, bw, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
             let eig = nalgebra::SymmetricEigen::new(gs);
             let smax = eig.eigenvalues.iter().fold(0.0f64, |a, &s| a.max(s));
@@ -836,9 +856,9 @@ impl Lanczos {
                 }
             }
             let mut wn = Mat::zeros(self.n, bw);
-            matmul(wn.as_mut(), Accum::Replace, w.as_ref(), u.as_ref(), 1.0, Par::Seq);
+            tall::mul(wn.as_mut(), Accum::Replace, w.as_ref(), u.as_ref(), 1.0);
             let mut mwn = Mat::zeros(self.n, bw);
-            matmul(mwn.as_mut(), Accum::Replace, mw.as_ref(), u.as_ref(), 1.0, Par::Seq);
+            tall::mul(mwn.as_mut(), Accum::Replace, mw.as_ref(), u.as_ref(), 1.0);
             *w = wn;
             *mw = mwn;
             r_total = &r * &r_total;
@@ -875,7 +895,8 @@ impl Lanczos {
         (theta, y)
     }
 
-    /// Run until the wanted Ritz pairs converge. Returns (λ, X) of the converged pairs.
+    /// Run until the wanted Ritz pairs converge. Returns (λ, X) of the converged pairs, or
+    /// `None` when [`Lanczos::pause_after`] block steps were done first.
     fn run(
         &mut self,
         p: &EigenParams,
@@ -883,7 +904,7 @@ impl Lanczos {
         m: &SymMatrix,
         sigma: f64,
         apps: &mut usize,
-    ) -> Result<(Vec<f64>, Mat<f64>)> {
+    ) -> Result<Option<(Vec<f64>, Mat<f64>)>> {
         let n = self.n;
         let b = self.b;
         if self.started {
@@ -947,7 +968,7 @@ impl Lanczos {
         m: &SymMatrix,
         sigma: f64,
         apps: &mut usize,
-    ) -> Result<(Vec<f64>, Mat<f64>)> {
+    ) -> Result<Option<(Vec<f64>, Mat<f64>)>> {
         let n = self.n;
         let b = self.b;
         loop {
@@ -958,9 +979,7 @@ impl Lanczos {
             *apps += b;
             let mut mw = Mat::zeros(n, b);
             m.mul_block(w.as_ref(), mw.as_mut());
-            let scale2 = (0..b)
-                .map(|c| (0..n).map(|i| w[(i, c)] * mw[(i, c)]).sum::<f64>())
-                .fold(0.0, f64::max);
+            let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
             let coef = self.orthogonalise(&mut w, &mut mw, blk + b);
             // Column block `blk` of T: rows 0..blk+b.
             self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
@@ -1007,18 +1026,11 @@ impl Lanczos {
                 let mut x = Mat::zeros(n, take.len());
                 let mut lam = Vec::with_capacity(take.len());
                 let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
-                matmul(
-                    x.as_mut(),
-                    Accum::Replace,
-                    self.v.get(.., 0..c),
-                    yk.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
+                tall::mul(x.as_mut(), Accum::Replace, self.v.get(.., 0..c), yk.as_ref(), 1.0);
                 for &k in &take {
                     lam.push(sigma + 1.0 / theta[k]);
                 }
-                return Ok((lam, x));
+                return Ok(Some((lam, x)));
             }
             if *apps > p.max_applications {
                 let nconv = (0..nw).filter(|&k| converged(k)).count();
@@ -1033,22 +1045,8 @@ impl Lanczos {
                 let yk = y.get(.., 0..keep).to_owned();
                 let mut xk = Mat::zeros(n, keep);
                 let mut mxk = Mat::zeros(n, keep);
-                matmul(
-                    xk.as_mut(),
-                    Accum::Replace,
-                    self.v.get(.., 0..c),
-                    yk.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                matmul(
-                    mxk.as_mut(),
-                    Accum::Replace,
-                    self.mv.get(.., 0..c),
-                    yk.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
+                tall::mul(xk.as_mut(), Accum::Replace, self.v.get(.., 0..c), yk.as_ref(), 1.0);
+                tall::mul(mxk.as_mut(), Accum::Replace, self.mv.get(.., 0..c), yk.as_ref(), 1.0);
                 // R·E_lastᵀ·Y: coupling of the kept Ritz vectors to the next block.
                 let mut coup = Mat::zeros(b, keep);
                 matmul(
@@ -1072,6 +1070,13 @@ impl Lanczos {
                 self.t.get_mut(keep..keep + b, 0..keep).copy_from(&coup);
                 self.t.get_mut(0..keep, keep..keep + b).copy_from(coup.transpose());
                 self.cur = keep;
+            }
+            if let Some(left) = self.pause_after {
+                if left <= 1 {
+                    self.pause_after = None;
+                    return Ok(None);
+                }
+                self.pause_after = Some(left - 1);
             }
         }
     }

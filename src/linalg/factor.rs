@@ -16,7 +16,7 @@ use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky,
 };
 use faer::{Conj, MatMut, Par, Side};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Ordering and elimination structure, computed once per pattern.
 pub struct SymbolicFactor {
@@ -91,6 +91,10 @@ pub struct Factor {
     /// near rounding for a stable factorisation; large after pivot growth (an unpivoted LDLᵀ of
     /// an indefinite matrix can be unstable), when results must not be trusted.
     pub probe_residual: f64,
+    /// Bytes of the numeric factorisation's scratch (freed when it returns).
+    pub factor_workspace_bytes: usize,
+    /// Solve workspaces kept between calls (one per concurrent column group).
+    scratch: Mutex<Vec<Vec<f64>>>,
 }
 
 impl Factor {
@@ -107,6 +111,7 @@ impl Factor {
         values.resize(sym.sym.len_val(), 0.0);
         let par = Par::rayon(0);
         let req = sym.sym.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
+        let factor_workspace_bytes = req.unaligned_bytes_required();
         let mut mem =
             MemBuffer::try_new(req).map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
         let stack = MemStack::new(&mut mem);
@@ -189,16 +194,110 @@ impl Factor {
             pivot_range: (lo, hi),
             min_rel_pivot,
             probe_residual: 0.0,
+            factor_workspace_bytes,
+            scratch: Mutex::new(Vec::new()),
         })
     }
 
-    /// Solve `A X = B` in place for a block of right-hand sides.
+    /// True for a supernodal factor (solved by [`supernodal_solve`]); small or very sparse
+    /// factors are simplicial (solved by faer).
+    pub fn is_supernodal(&self) -> bool {
+        matches!(self.sym.sym.raw(), SymbolicCholeskyRaw::Supernodal(_))
+    }
+
+    /// Bytes of the factor's values.
+    pub fn bytes(&self) -> usize {
+        self.values.len() * std::mem::size_of::<f64>()
+    }
+
+    /// Bytes of the solve workspaces kept between calls.
+    pub fn workspace_bytes(&self) -> usize {
+        self.scratch
+            .lock()
+            .map_or(0, |s| s.iter().map(|w| 8 * w.capacity()).sum())
+    }
+
+    /// Solve `A X = B` in place for a block of right-hand sides (faer's supernodal solve,
+    /// sequential: the same arithmetic for any thread count).
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        if rhs.ncols() > 0 {
+            self.solve_faer(rhs);
+        }
+    }
+
+    /// Solve `A X = B` in place with [`supernodal_solve`]: column groups of at most eight, at
+    /// least one per worker thread, one pass over each supernode column per direction,
+    /// workspaces kept with the factor. Its rounding differs from [`Factor::solve_in_place`]
+    /// and with the grouping, so it is not the default (runs must give the same bits whatever
+    /// the thread count).
+    pub fn solve_in_place_grouped(&self, rhs: MatMut<'_, f64>) {
+        use rayon::prelude::*;
+        let k = rhs.ncols();
+        if k == 0 {
+            return;
+        }
+        let SymbolicCholeskyRaw::Supernodal(_) = self.sym.sym.raw() else {
+            return self.solve_faer(rhs);
+        };
+        let threads = rayon::current_num_threads().max(1);
+        let groups = threads.max(k.div_ceil(MAX_GROUP)).min(k);
+        let per = k.div_ceil(groups);
+        if per == k {
+            self.solve_group(rhs);
+        } else {
+            rhs.par_col_chunks_mut(per).for_each(|c| self.solve_group(c));
+        }
+    }
+
+    /// faer's solve (simplicial factors).
+    fn solve_faer(&self, rhs: MatMut<'_, f64>) {
         let par = Par::Seq;
         let req = self.sym.sym.solve_in_place_scratch::<f64>(rhs.ncols(), par);
         let mut mem = MemBuffer::new(req);
         let stack = MemStack::new(&mut mem);
         LdltRef::new(&self.sym.sym, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
+    }
+
+    /// One group of at most [`MAX_GROUP`] columns: permuted into a row-major workspace (kept
+    /// for the next call), solved, permuted back.
+    fn solve_group(&self, mut rhs: MatMut<'_, f64>) {
+        let SymbolicCholeskyRaw::Supernodal(sn) = self.sym.sym.raw() else {
+            return self.solve_faer(rhs);
+        };
+        let (n, k) = (rhs.nrows(), rhs.ncols());
+        let need = n * k;
+        let pooled = self.scratch.lock().ok().and_then(|mut pool| {
+            let i = pool.iter().position(|w| w.len() >= need)?;
+            Some(pool.swap_remove(i))
+        });
+        let mut x = pooled.unwrap_or_else(|| vec![0.0; need]);
+        let perm = self.sym.sym.perm().map(|p| p.arrays());
+        for c in 0..k {
+            let col = rhs.as_ref().col(c);
+            for i in 0..n {
+                let src = perm.map_or(i, |(fwd, _)| fwd[i]);
+                x[i * k + c] = col[src];
+            }
+        }
+        macro_rules! go {
+            ($($kk:literal)*) => {
+                match k {
+                    $($kk => supernodal_solve::<$kk>(sn, &self.values, x[..need].as_chunks_mut::<$kk>().0),)*
+                    _ => unreachable!("column groups hold at most {MAX_GROUP} columns"),
+                }
+            };
+        }
+        go!(1 2 3 4 5 6 7 8);
+        for c in 0..k {
+            let mut col = rhs.as_mut().col_mut(c);
+            for i in 0..n {
+                let src = perm.map_or(i, |(_, inv)| inv[i]);
+                col[i] = x[src * k + c];
+            }
+        }
+        if let Ok(mut pool) = self.scratch.lock() {
+            pool.push(x);
+        }
     }
 
     /// Measure [`Factor::probe_residual`] against the matrix `a` that was factorised.
@@ -227,6 +326,153 @@ impl Factor {
     pub fn symbolic(&self) -> &Arc<SymbolicFactor> {
         &self.sym
     }
+}
+
+/// Most right-hand sides solved together by one thread.
+const MAX_GROUP: usize = 8;
+
+/// Solve L D Lᵀ x = b in place for `K` right-hand sides stored row by row (`x[i]` holds row i
+/// of the block, in the factor's elimination order). Each column of a supernode is read once
+/// per direction, contiguously. The rows of a supernode's off-diagonal pattern are gathered
+/// once into a dense buffer (one column per right-hand side), so the work on them is
+/// contiguous multiply–adds and dot products; no packing, nothing allocated per supernode.
+fn supernodal_solve<const K: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+        // SAFETY: the CPU has the features the function is compiled for.
+        unsafe { supernodal_solve_fma::<K>(sn, values, x) };
+        return;
+    }
+    supernodal_solve_body::<K, false>(sn, values, x)
+}
+
+type SupernodalSymbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>;
+
+/// [`supernodal_solve`] compiled for AVX2 with fused multiply–adds.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn supernodal_solve_fma<const K: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
+    supernodal_solve_body::<K, true>(sn, values, x)
+}
+
+/// `a·b + c`, fused when `F`.
+#[inline(always)]
+fn madd<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
+    if F { a.mul_add(b, c) } else { a * b + c }
+}
+
+#[inline(always)]
+fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
+    let ns = sn.n_supernodes();
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    let cp = sn.col_ptr_for_val();
+    let max_p = (0..ns).map(|s| sn.supernode(s).pattern().len()).max().unwrap_or(0);
+    let mut buf = vec![0.0f64; K * max_p];
+    // Forward: L y = b.
+    for s in 0..ns {
+        let (f, l) = (begin[s], end[s]);
+        let w = l - f;
+        let pat = sn.supernode(s).pattern();
+        let p = pat.len();
+        let nr = w + p;
+        let ls = &values[cp[s]..cp[s + 1]];
+        let tmp = &mut buf[..K * p];
+        tmp.fill(0.0);
+        for j in 0..w {
+            let col = &ls[j * nr..(j + 1) * nr];
+            let xj = x[f + j];
+            for (xi, &a) in x[f + j + 1..l].iter_mut().zip(&col[j + 1..w]) {
+                for c in 0..K {
+                    xi[c] = madd::<F>(-a, xj[c], xi[c]);
+                }
+            }
+            let bot = &col[w..];
+            for c in 0..K {
+                let v = xj[c];
+                if v != 0.0 {
+                    axpy::<F>(&mut tmp[c * p..(c + 1) * p], bot, v);
+                }
+            }
+        }
+        for (idx, &r) in pat.iter().enumerate() {
+            let xr = &mut x[r];
+            for c in 0..K {
+                xr[c] -= tmp[c * p + idx];
+            }
+        }
+    }
+    // Diagonal: D z = y.
+    for s in 0..ns {
+        let (f, l) = (begin[s], end[s]);
+        let w = l - f;
+        let nr = w + sn.supernode(s).pattern().len();
+        let ls = &values[cp[s]..cp[s + 1]];
+        for j in 0..w {
+            let dinv = ls[j * nr + j].recip();
+            for v in x[f + j].iter_mut() {
+                *v *= dinv;
+            }
+        }
+    }
+    // Backward: Lᵀ x = z.
+    for s in (0..ns).rev() {
+        let (f, l) = (begin[s], end[s]);
+        let w = l - f;
+        let pat = sn.supernode(s).pattern();
+        let p = pat.len();
+        let nr = w + p;
+        let ls = &values[cp[s]..cp[s + 1]];
+        let g = &mut buf[..K * p];
+        for (idx, &r) in pat.iter().enumerate() {
+            for c in 0..K {
+                g[c * p + idx] = x[r][c];
+            }
+        }
+        for j in (0..w).rev() {
+            let col = &ls[j * nr..(j + 1) * nr];
+            let mut acc = [0.0f64; K];
+            for (xi, &a) in x[f + j + 1..l].iter().zip(&col[j + 1..w]) {
+                for c in 0..K {
+                    acc[c] = madd::<F>(a, xi[c], acc[c]);
+                }
+            }
+            let bot = &col[w..];
+            for c in 0..K {
+                acc[c] += dot::<F>(bot, &g[c * p..(c + 1) * p]);
+            }
+            let xj = &mut x[f + j];
+            for c in 0..K {
+                xj[c] -= acc[c];
+            }
+        }
+    }
+}
+
+/// `y += a·x`.
+#[inline(always)]
+fn axpy<const F: bool>(y: &mut [f64], x: &[f64], a: f64) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi = madd::<F>(a, *xi, *yi);
+    }
+}
+
+/// `x·y` with eight partial sums (in a fixed order).
+#[inline(always)]
+fn dot<const F: bool>(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len().min(y.len());
+    let (x8, xr) = x[..n].split_at(n - n % 8);
+    let (y8, yr) = y[..n].split_at(n - n % 8);
+    let mut s = [0.0f64; 8];
+    for (a, b) in x8.chunks_exact(8).zip(y8.chunks_exact(8)) {
+        for l in 0..8 {
+            s[l] = madd::<F>(a[l], b[l], s[l]);
+        }
+    }
+    let mut t = ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
+    for (a, b) in xr.iter().zip(yr) {
+        t = madd::<F>(*a, *b, t);
+    }
+    t
 }
 
 /// The pivots D of an LDLᵀ factor (in elimination order).

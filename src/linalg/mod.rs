@@ -7,3 +7,4 @@ pub mod eigen;
 pub mod factor;
 pub mod ordering;
 pub mod sparse;
+pub mod tall;

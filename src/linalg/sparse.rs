@@ -154,6 +154,54 @@ impl SymMatrix {
             }
         }
     }
+    /// `‖|A|·|x_c|‖₂` for each column `x_c` of `x` (|A|: the entries' magnitudes), the scale of
+    /// the rounding in forming `A x_c`. Parallel over fixed chunks of rows, summed in order.
+    pub fn abs_mul_norms(&self, x: MatRef<'_, f64>) -> Vec<f64> {
+        let n = self.n();
+        let b = x.ncols();
+        assert_eq!(x.nrows(), n);
+        let mut xr = vec![0.0f64; n * b];
+        for c in 0..b {
+            for (i, v) in x.col(c).iter().enumerate() {
+                xr[i * b + c] = v.abs();
+            }
+        }
+        const ROWS: usize = 2048;
+        let p = &*self.pattern;
+        let vals = &self.values;
+        let parts: Vec<Vec<f64>> = (0..n.div_ceil(ROWS))
+            .into_par_iter()
+            .map(|ch| {
+                let mut s2 = vec![0.0f64; b];
+                let mut acc = vec![0.0f64; b];
+                for j in ch * ROWS..((ch + 1) * ROWS).min(n) {
+                    acc.fill(0.0);
+                    let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+                    for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+                        let a = a.abs();
+                        for (o, &xv) in acc.iter_mut().zip(&xr[i * b..i * b + b]) {
+                            *o += a * xv;
+                        }
+                    }
+                    for (t, a) in s2.iter_mut().zip(&acc) {
+                        *t += a * a;
+                    }
+                }
+                s2
+            })
+            .collect();
+        let mut out = vec![0.0f64; b];
+        for part in &parts {
+            for (o, v) in out.iter_mut().zip(part) {
+                *o += v;
+            }
+        }
+        out.iter().map(|v| v.sqrt()).collect()
+    }
+    /// Bytes of the values (the pattern is shared and counted once elsewhere).
+    pub fn value_bytes(&self) -> usize {
+        self.values.len() * std::mem::size_of::<f64>()
+    }
     /// `y = A x` for one vector.
     pub fn mul_vec(&self, x: &[f64]) -> Vec<f64> {
         let p = &*self.pattern;

@@ -1,0 +1,360 @@
+#!/usr/bin/env python3
+"""Side-by-side benchmark of vibrofem against CalculiX, SLEPc + MUMPS and scikit-fem.
+
+The S2 plate (0.9 x 0.4 x 0.116 m, steel, free-free) meshed by gmsh with tet10 at several sizes;
+every tool computes the 18 lowest modes (6 rigid + 12 elastic) of the same mesh, each run in its
+own process, timed as a whole with ``/usr/bin/time -v`` (wall time, peak RSS of the largest
+process of the run):
+
+* vibrofem: ``vibrofem modes MESH --modes 18 --json`` (read to report, verified: residuals,
+  M-orthonormality, Sturm count); its own phase timings come from the JSON;
+* SLEPc 3.18 Krylov-Schur with a MUMPS LDL^T (Debian's python3-slepc4py, 1 MPI rank), driven by
+  ``vibrofem modes MESH --engine slepc``: the figure compared is SLEPc's own eigen solve (PETSc
+  load of K, M and EPSSolve, including MUMPS's factorisation), from the JSON phase ``solve``;
+* CalculiX 2.20 (Debian's calculix-ccx: SPOOLES + ARPACK, shift 1): ``ccx`` on an input deck
+  written here from the same mesh (C3D10, ``*FREQUENCY`` 18), whole process;
+* scikit-fem (``bench_plate.py``'s worker: assemble, SuperLU shift-invert, eigsh), whole process.
+
+Sizes (label: h in mm): 20k: 40, 65k: 25, 120k: 20.3, 300k: 14.9, 1M: 9.4 (vibrofem alone at
+1M). Runs under ``--repeat-below`` seconds are repeated (``--repeat``, default 3) and the
+median is reported. Writes ``validation/out/bench_peers.json``, a log-log plot of wall time and
+peak memory against DOFs (``validation/out/bench_peers.svg``, copied to ``docs/bench_peers.svg``
+with ``--readme``), and the markdown table; with ``--readme`` the table replaces the block
+between ``<!-- bench_peers:begin -->`` and ``<!-- bench_peers:end -->`` in README.md.
+
+Usage (crate root, after ``cargo build --release``; installs CalculiX and SLEPc through
+``validation/setup_peers.sh`` when missing)::
+
+    validation/.venv/bin/python validation/bench_peers.py --quick          # 20k, all tools, 1 run
+    validation/.venv/bin/python validation/bench_peers.py --sizes 20k,65k,120k --tools vibrofem,slepc
+    validation/.venv/bin/python validation/bench_peers.py --readme          # everything (hours)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+OUT = os.path.join(HERE, "out")
+sys.path.insert(0, HERE)
+import bench_plate as BP  # noqa: E402  (measure, make_mesh, the scikit-fem worker)
+
+SIZES = {"20k": 0.040, "65k": 0.025, "120k": 0.0203, "300k": 0.0149, "1M": 0.0094}
+TOOLS = ("vibrofem", "slepc", "calculix", "skfem")
+STEEL = BP.STEEL
+N_MODES = 18
+
+
+def dofs_of(mesh: str) -> int:
+    with open(mesh) as fh:  # MSH 4.1: the $Nodes header's second number is the node count
+        text = fh.read(1 << 16)
+    return 3 * int(text.split("$Nodes\n", 1)[1].split()[1])
+
+
+def write_ccx_deck(mesh: str, path: str) -> None:
+    """CalculiX input deck of the tet10 mesh: nodes, C3D10 cells (gmsh's last two midside nodes
+    swapped into Abaqus order), steel, one *FREQUENCY step for N_MODES modes."""
+    import gmsh
+    gmsh.initialize(readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 0)
+    gmsh.open(mesh)
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    etags, enodes = gmsh.model.mesh.getElementsByType(11)  # tet10
+    gmsh.finalize()
+    with open(path, "w") as fh:
+        fh.write("*NODE, NSET=NALL\n")
+        for i, t in enumerate(tags):
+            x, y, z = (float(c) for c in coords[3 * i:3 * i + 3])
+            fh.write(f"{int(t)},{x!r},{y!r},{z!r}\n")
+        fh.write("*ELEMENT, TYPE=C3D10, ELSET=EALL\n")
+        for i, t in enumerate(etags):
+            n = [int(x) for x in enodes[10 * i:10 * i + 10]]
+            n[8], n[9] = n[9], n[8]
+            fh.write(f"{int(t)}," + ",".join(map(str, n[:8])) + ",\n" + ",".join(map(str, n[8:])) + "\n")
+        e, nu, rho = STEEL
+        fh.write(f"*MATERIAL, NAME=STEEL\n*ELASTIC\n{e!r},{nu!r}\n*DENSITY\n{rho!r}\n")
+        fh.write("*SOLID SECTION, ELSET=EALL, MATERIAL=STEEL\n")
+        fh.write(f"*STEP\n*FREQUENCY, SOLVER=SPOOLES\n{N_MODES}\n*END STEP\n")
+
+
+def ccx_frequencies(dat: str) -> list:
+    """Frequencies (cycles/time) from the eigenvalue table of a CalculiX .dat file."""
+    out = []
+    with open(dat) as fh:
+        text = fh.read()
+    block = text.split("E I G E N V A L U E   O U T P U T", 1)[-1]
+    for line in block.splitlines():
+        m = re.match(r"\s*(\d+)\s+([-+\d.Ee]+)\s+([-+\d.Ee]+)\s+([-+\d.Ee]+)\s+([-+\d.Ee]+)\s*$", line)
+        if m:
+            out.append(float(m.group(4)))
+        elif out and line.strip() and not line.strip()[0].isdigit():
+            break
+    return out
+
+
+def vibrofem_json(stdout: str):
+    try:
+        return json.loads(stdout)
+    except json.JSONDecodeError:
+        s, e = stdout.find("{"), stdout.rfind("}")
+        return json.loads(stdout[s:e + 1]) if s >= 0 else None
+
+
+def run_tool(tool: str, mesh: str, args) -> dict:
+    """One run of `tool` on `mesh`: wall s, compared s, peak bytes, frequencies, details."""
+    if tool in ("vibrofem", "slepc"):
+        cmd = [args.vibrofem, "modes", mesh, "--modes", str(N_MODES), "--json",
+               "--material", ",".join(repr(float(x)) for x in STEEL)]
+        if tool == "slepc":
+            cmd += ["--engine", "slepc"]
+        m = BP.measure(cmd, args.timeout)
+        # Exit 2 is a run whose verification failed: its report (and timing) still counts.
+        res = vibrofem_json(m["stdout"]) if m["returncode"] in (0, 2) else None
+        if not res:
+            return {"failed": f"exit {m['returncode']}: {m['stderr'][-500:]}"}
+        tim = res["timings_s"]
+        ok = bool(res.get("complete")) and bool(res.get("accurate"))
+        return {"wall_s": m["wall_s"], "cpu_s": m["cpu_s"], "peak_bytes": m["peak_rss_bytes"],
+                # vibrofem: the whole run; SLEPc: its eigen solve (load + EPSSolve with MUMPS).
+                "compared_s": m["wall_s"] if tool == "vibrofem" else tim.get("solve"),
+                "frequencies_hz": res["frequencies_hz"], "verified": ok,
+                "timings_s": tim, "memory_bytes": res.get("memory_bytes"),
+                "factor_gflops": res.get("factor_gflops"), "factorizations": res.get("factorizations"),
+                "operator_applications": res.get("operator_applications")}
+    if tool == "calculix":
+        ccx = shutil.which("ccx") or shutil.which("ccx2.20")
+        if not ccx:
+            return {"failed": "ccx not found (validation/setup_peers.sh installs calculix-ccx)"}
+        deck = os.path.splitext(mesh)[0] + "_ccx.inp"
+        if not os.path.exists(deck):
+            write_ccx_deck(mesh, deck)
+        work = tempfile.mkdtemp(dir=OUT)
+        try:
+            shutil.copy(deck, os.path.join(work, "plate.inp"))
+            env = dict(os.environ, OMP_NUM_THREADS=str(os.cpu_count()),
+                       CCX_NPROC_EQUATION_SOLVER=str(os.cpu_count()))
+            cwd = os.getcwd()
+            os.chdir(work)
+            try:
+                m = measure_in(work, [ccx, "-i", "plate"], args.timeout, env)
+            finally:
+                os.chdir(cwd)
+            f = ccx_frequencies(os.path.join(work, "plate.dat")) if m["returncode"] == 0 else []
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        if not f:
+            return {"failed": f"exit {m['returncode']}: {m['stderr'][-500:]}"}
+        return {"wall_s": m["wall_s"], "cpu_s": m["cpu_s"], "peak_bytes": m["peak_rss_bytes"],
+                "compared_s": m["wall_s"], "frequencies_hz": f}
+    if tool == "skfem":
+        with tempfile.NamedTemporaryFile(suffix=".json", dir=OUT) as tf:
+            m = BP.measure([sys.executable, os.path.join(HERE, "bench_plate.py"), "--worker", mesh,
+                            str(N_MODES), tf.name], args.timeout)
+            res = json.load(open(tf.name)) if m["returncode"] == 0 else None
+        if not res:
+            return {"failed": f"exit {m['returncode']}: {m['stderr'][-500:]}"}
+        return {"wall_s": m["wall_s"], "cpu_s": m["cpu_s"], "peak_bytes": m["peak_rss_bytes"],
+                "compared_s": m["wall_s"], "frequencies_hz": res.get("frequencies_hz"),
+                "timings_s": res.get("timings_s")}
+    raise ValueError(tool)
+
+
+def measure_in(cwd: str, cmd: list, timeout: float, env: dict) -> dict:
+    """bench_plate.measure with a working directory and environment (CalculiX writes beside
+    its input)."""
+    import time
+    tic = time.perf_counter()
+    with tempfile.NamedTemporaryFile("r", suffix=".time") as tf:
+        p = subprocess.run(["/usr/bin/time", "-v", "-o", tf.name] + cmd, capture_output=True,
+                           text=True, timeout=timeout, cwd=cwd, env=env)
+        report = open(tf.name).read()
+    m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", report)
+    cpu = sum(float(x) for x in re.findall(r"(?:User|System) time \(seconds\): ([\d.]+)", report))
+    return {"returncode": p.returncode, "stdout": p.stdout, "stderr": p.stderr,
+            "wall_s": time.perf_counter() - tic, "cpu_s": cpu or None,
+            "peak_rss_bytes": int(m.group(1)) * 1024 if m else None}
+
+
+def median_run(tool: str, mesh: str, args) -> dict:
+    """Median of `--repeat` runs when one takes under `--repeat-below` seconds."""
+    runs = [run_tool(tool, mesh, args)]
+    if "failed" not in runs[0] and runs[0]["wall_s"] < args.repeat_below:
+        runs += [run_tool(tool, mesh, args) for _ in range(args.repeat - 1)]
+    good = [r for r in runs if "failed" not in r]
+    if not good:
+        return runs[0]
+    out = dict(sorted(good, key=lambda r: r["wall_s"])[len(good) // 2])
+    for key in ("wall_s", "compared_s", "peak_bytes", "cpu_s"):
+        vals = [r[key] for r in good if r.get(key) is not None]
+        if vals:
+            out[key] = statistics.median(vals)
+            out[key + "_range"] = [min(vals), max(vals)]
+    out["runs"] = len(good)
+    return out
+
+
+def dgemm_gflops() -> float | None:
+    """This machine's DGEMM rate (numpy's BLAS, 2000 x 2000, best of 3), GFLOP/s."""
+    try:
+        import time
+
+        import numpy as np
+        a = np.random.default_rng(1).random((2000, 2000))
+        best = float("inf")
+        for _ in range(3):
+            t = time.perf_counter()
+            a @ a
+            best = min(best, time.perf_counter() - t)
+        return 2 * 2000 ** 3 / best / 1e9
+    except Exception:  # noqa: BLE001 - the rate is informative only
+        return None
+
+
+def table(rows: list, dgemm) -> str:
+    def f(x, fmt="{:.2f}"):
+        return "–" if x is None else fmt.format(x)
+
+    lines = ["| DOFs | tool | runs | wall [s] | compared [s] | peak RSS [MiB] | factor GFLOP/s "
+             "| max rel. diff (elastic) | note |", "|---:|---|---:|---:|---:|---:|---:|---:|---|"]
+    for row in rows:
+        ref = (row["tools"].get("vibrofem") or {}).get("frequencies_hz")
+        for tool in TOOLS:
+            r = row["tools"].get(tool)
+            if r is None:
+                continue
+            if "failed" in r or "skipped" in r:
+                lines.append(f"| {row['dofs']:,} | {tool} | 0 | – | – | – | – | – | "
+                             f"{(r.get('failed') or r.get('skipped'))[:80]} |".replace(",", " "))
+                continue
+            diff = None
+            fr = r.get("frequencies_hz")
+            if ref and fr and tool != "vibrofem" and len(fr) >= N_MODES:
+                diff = max(abs(a - b) / b for a, b in zip(sorted(fr)[6:N_MODES], sorted(ref)[6:N_MODES]))
+            note = {True: "verified", False: "verification failed"}.get(r.get("verified"), "")
+            lines.append(
+                f"| {row['dofs']:,} | {tool} | {r.get('runs', 1)} | {f(r['wall_s'])} | {f(r.get('compared_s'))} "
+                f"| {f(r['peak_bytes'] / 2 ** 20 if r.get('peak_bytes') else None, '{:.0f}')} "
+                f"| {f(r.get('factor_gflops'), '{:.1f}')} | {f(diff, '{:.1e}')} | {note} |".replace(",", " ", 1))
+    lines.append("")
+    lines.append(f"DGEMM on this machine (numpy, 2000², best of 3): {f(dgemm, '{:.1f}')} GFLOP/s. "
+                 "'compared': vibrofem's whole run, SLEPc's eigen solve alone (load + EPSSolve with "
+                 "MUMPS), the whole process for CalculiX and scikit-fem.")
+    return "\n".join(lines)
+
+
+def plot(rows: list, path: str) -> bool:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return False
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    for tool in TOOLS:
+        pts = [(row["dofs"], row["tools"][tool]) for row in rows
+               if tool in row["tools"] and "wall_s" in row["tools"][tool]]
+        if not pts:
+            continue
+        x = [p[0] for p in pts]
+        ax1.loglog(x, [p[1]["compared_s"] or p[1]["wall_s"] for p in pts], "o-", label=tool)
+        ax2.loglog(x, [(p[1]["peak_bytes"] or 0) / 2 ** 20 for p in pts], "o-", label=tool)
+    ax1.set(xlabel="DOFs", ylabel="time [s]", title="time (compared figure)")
+    ax2.set(xlabel="DOFs", ylabel="peak RSS [MiB]", title="peak memory")
+    for a in (ax1, ax2):
+        a.grid(True, which="both", alpha=0.3)
+        a.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+    return True
+
+
+def update_readme(text: str) -> None:
+    path = os.path.join(ROOT, "README.md")
+    with open(path) as fh:
+        readme = fh.read()
+    begin, end = "<!-- bench_peers:begin -->", "<!-- bench_peers:end -->"
+    if begin not in readme or end not in readme:
+        raise SystemExit("README.md has no bench_peers markers")
+    head, rest = readme.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    with open(path, "w") as fh:
+        fh.write(head + begin + "\n" + text + "\n" + end + tail)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sizes", default="20k,65k,120k,300k,1M", help=f"comma list of {list(SIZES)}")
+    ap.add_argument("--tools", default=",".join(TOOLS), help=f"comma list of {list(TOOLS)}")
+    ap.add_argument("--quick", action="store_true", help="20k only, one run each")
+    ap.add_argument("--repeat", type=int, default=3, help="runs for the median")
+    ap.add_argument("--repeat-below", type=float, default=60.0, help="repeat runs shorter than this (s)")
+    ap.add_argument("--peers-up-to", type=int, default=400_000,
+                    help="run the other tools only up to this many DOFs (vibrofem alone above)")
+    ap.add_argument("--skfem-up-to", type=int, default=150_000, help="scikit-fem only up to this many DOFs")
+    ap.add_argument("--vibrofem", default=os.path.join(ROOT, "target", "release", "vibrofem"))
+    ap.add_argument("--timeout", type=float, default=3600.0, help="seconds per run")
+    ap.add_argument("--readme", action="store_true", help="write the table into README.md")
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.sizes, args.repeat = "20k", 1
+    tools = [t.strip() for t in args.tools.split(",") if t.strip()]
+    for t in tools:
+        if t not in TOOLS:
+            ap.error(f"unknown tool {t!r}")
+    if ("calculix" in tools and not (shutil.which("ccx") or shutil.which("ccx2.20"))) or "slepc" in tools:
+        subprocess.run(["bash", os.path.join(HERE, "setup_peers.sh")] +
+                       (["--calculix"] if "calculix" in tools else []) +
+                       (["--slepc"] if "slepc" in tools else []), check=False)
+    os.makedirs(OUT, exist_ok=True)
+    rows = []
+    for label in args.sizes.split(","):
+        label = label.strip()
+        if label not in SIZES:
+            ap.error(f"unknown size {label!r}; known: {', '.join(SIZES)}")
+        mesh = BP.make_mesh(label, SIZES[label])
+        row = {"size": label, "h_mm": SIZES[label] * 1000, "mesh": os.path.relpath(mesh, ROOT),
+               "dofs": dofs_of(mesh), "tools": {}}
+        print(f"# {label}: {row['mesh']} ({row['dofs']} DOFs)", file=sys.stderr, flush=True)
+        for tool in tools:
+            if tool != "vibrofem" and row["dofs"] > args.peers_up_to:
+                row["tools"][tool] = {"skipped": f"DOFs > {args.peers_up_to}"}
+                continue
+            if tool == "skfem" and row["dofs"] > args.skfem_up_to:
+                row["tools"][tool] = {"skipped": f"DOFs > {args.skfem_up_to}"}
+                continue
+            r = median_run(tool, os.path.abspath(mesh), args)
+            row["tools"][tool] = r
+            print(f"#   {tool}: " + (r.get("failed") or f"{r['wall_s']:.2f} s wall, "
+                  f"{(r.get('peak_bytes') or 0) / 2 ** 20:.0f} MiB"), file=sys.stderr, flush=True)
+        rows.append(row)
+    dgemm = dgemm_gflops()
+    report = {"case": "S2 plate 0.9 x 0.4 x 0.116 m, tet10, free-free, steel, 18 modes",
+              "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
+                          "loadavg_at_end": os.getloadavg(), "dgemm_gflops": dgemm},
+              "rows": rows}
+    with open(os.path.join(OUT, "bench_peers.json"), "w") as fh:
+        json.dump(report, fh, indent=1)
+    text = table(rows, dgemm)
+    svg = os.path.join(OUT, "bench_peers.svg")
+    if plot(rows, svg):
+        text += f"\n\n![time and peak memory against DOFs](docs/bench_peers.svg)"
+    print(text)
+    if args.readme:
+        if os.path.exists(svg):
+            shutil.copy(svg, os.path.join(ROOT, "docs", "bench_peers.svg"))
+        update_readme(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

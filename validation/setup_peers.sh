@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Install the peer solvers validation/bench_peers.py compares against: CalculiX (Debian's
+# calculix-ccx: SPOOLES + ARPACK) and SLEPc + MUMPS (validation/setup_slepc.sh).
+#
+#   bash validation/setup_peers.sh                 # both; idempotent; as root with apt-get
+#   bash validation/setup_peers.sh --calculix      # CalculiX only
+set -euo pipefail
+HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+want_ccx=0 want_slepc=0
+[ "$#" = 0 ] && want_ccx=1 && want_slepc=1
+for a in "$@"; do
+    case "$a" in
+        --calculix) want_ccx=1 ;;
+        --slepc) want_slepc=1 ;;
+        *) echo "setup_peers.sh: unknown option $a" >&2; exit 2 ;;
+    esac
+done
+if [ "$want_ccx" = 1 ] && ! command -v ccx >/dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+        echo "setup_peers.sh: installing calculix-ccx" >&2
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends calculix-ccx >/dev/null
+    else
+        echo "setup_peers.sh: install Debian's calculix-ccx (as root: apt-get install calculix-ccx)" >&2
+        exit 1
+    fi
+fi
+[ "$want_ccx" = 1 ] && echo "CalculiX: $(command -v ccx)"
+[ "$want_slepc" = 1 ] && bash "$HERE/setup_slepc.sh"
+exit 0
