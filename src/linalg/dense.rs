@@ -59,7 +59,11 @@ pub fn eigen_all(k: &SymMatrix, m: &SymMatrix, sigma: f64, upper: bool) -> Resul
     };
     let a = Mat::from_fn(n, n, |i, j| kd[(i, j)] - sigma * md[(i, j)]);
     let m_chol = if upper { md.llt(Side::Lower).ok() } else { None };
-    let shifted = if m_chol.is_some() { None } else { a.llt(Side::Lower).ok() };
+    let shifted = if m_chol.is_some() {
+        None
+    } else {
+        a.llt(Side::Lower).ok()
+    };
     let (mut pairs, mut x) = if let Some(ch) = shifted {
         let l = ch.L();
         let (th, mut y) = eig(&reduce(l, &md))?;
@@ -74,9 +78,9 @@ pub fn eigen_all(k: &SymMatrix, m: &SymMatrix, sigma: f64, upper: bool) -> Resul
     } else {
         let ch = match m_chol {
             Some(c) => c,
-            None => md.llt(Side::Lower).map_err(|_| {
-                Error::Factorization("dense oracle: neither K − σM nor M is positive definite".into())
-            })?,
+            None => md
+                .llt(Side::Lower)
+                .map_err(|_| Error::Factorization("dense oracle: neither K − σM nor M is positive definite".into()))?,
         };
         let l = ch.L();
         let (lam, mut y) = eig(&reduce(l, &kd))?;
