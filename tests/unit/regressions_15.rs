@@ -591,7 +591,7 @@ fn couplings_of_a_point_or_a_line_of_solid_nodes() {
     );
     // Two nodes on a face diagonal (direction (1,1,0)/√2) with a heavy, rotary point mass on a
     // reference off the line; then the same body turned by 45° about z.
-    let line_case = |mesh: &Mesh, a: [f64; 3], b: [f64; 3], reference: [f64; 3]| {
+    let line_case = |mesh: &Mesh, a: [f64; 3], b: [f64; 3], reference: [f64; 3], mass: &str| {
         let mut m = mesh.clone();
         node_group(&mut m, "edge", &[a, b]);
         modal_of(
@@ -599,13 +599,19 @@ fn couplings_of_a_point_or_a_line_of_solid_nodes() {
             ModelOptions {
                 fix: vec!["zmin".into()],
                 couple: vec![format!("edge@{},{},{}", reference[0], reference[1], reference[2])],
-                point_mass: vec!["edge=300,2,3,4,0,0,0".into()],
+                point_mass: vec![format!("edge={mass}")],
                 ..Default::default()
             },
             6,
         )
     };
-    let diag = line_case(&base, [0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.7, 0.2, 1.3]);
+    let diag = line_case(
+        &base,
+        [0.0, 0.0, 1.0],
+        [1.0, 1.0, 1.0],
+        [0.7, 0.2, 1.3],
+        "300,2,3,4,0,0,0",
+    );
     assert!(diag.notes.iter().any(|n| n.contains("one line")), "{:?}", diag.notes);
     let (c, s) = (std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2);
     let rot = |p: [f64; 3]| [c * p[0] + s * p[1], -s * p[0] + c * p[1], p[2]];
@@ -614,27 +620,10 @@ fn couplings_of_a_point_or_a_line_of_solid_nodes() {
     turned.nodes.iter_mut().for_each(|p| *p = rot(*p));
     // The rotary inertia would turn with the body (I' = R I Rᵀ): keep it isotropic in the x–y
     // plane (Ixx = Iyy) so that the same numbers describe both.
-    let iso = |mesh: &Mesh, a: [f64; 3], b: [f64; 3], reference: [f64; 3]| {
-        let mut m = mesh.clone();
-        node_group(&mut m, "edge", &[a, b]);
-        modal_of(
-            &m,
-            ModelOptions {
-                fix: vec!["zmin".into()],
-                couple: vec![format!("edge@{},{},{}", reference[0], reference[1], reference[2])],
-                point_mass: vec!["edge=300,3,3,4,0,0,0".into()],
-                ..Default::default()
-            },
-            6,
-        )
-    };
-    let d1 = iso(&base, [0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.7, 0.2, 1.3]);
-    let d2 = iso(
-        &turned,
-        rot([0.0, 0.0, 1.0]),
-        rot([1.0, 1.0, 1.0]),
-        rot([0.7, 0.2, 1.3]),
-    );
+    let iso = "300,3,3,4,0,0,0";
+    let d1 = line_case(&base, [0.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.7, 0.2, 1.3], iso);
+    let (a, b, r) = (rot([0.0, 0.0, 1.0]), rot([1.0, 1.0, 1.0]), rot([0.7, 0.2, 1.3]));
+    let d2 = line_case(&turned, a, b, r, iso);
     for (a, b) in d1.frequencies_hz.iter().zip(&d2.frequencies_hz) {
         assert!(rel(*a, *b) < 1e-9, "{:?} vs {:?}", d1.frequencies_hz, d2.frequencies_hz);
     }
