@@ -143,17 +143,9 @@ fn residual_shift(modes: &ModalRun) -> Result<f64> {
     }
 }
 
-/// Steady-state response by modal superposition, one free-DOF vector per angular frequency in
-/// `omegas` (rad/s). With `residual`, the static correction for the modes not in `modes` is added
-/// (one factorisation of K − σM and one solve, whatever the number of frequencies).
-pub fn superpose(
-    sys: &System,
-    modes: &ModalRun,
-    load: &[c64],
-    omegas: &[f64],
-    damping: &Damping,
-    residual: bool,
-) -> Result<Vec<Vec<c64>>> {
+/// Refuse a load of the wrong length, a negative or non-finite frequency, or bad damping; the
+/// number of free DOFs otherwise.
+fn check_request(sys: &System, load: &[c64], omegas: &[f64], damping: &Damping) -> Result<usize> {
     damping.validate()?;
     let n = sys.n_free();
     if load.len() != n {
@@ -167,6 +159,21 @@ pub fn superpose(
             "harmonic frequency must be finite and ≥ 0, got {w} rad/s"
         )));
     }
+    Ok(n)
+}
+
+/// Steady-state response by modal superposition, one free-DOF vector per angular frequency in
+/// `omegas` (rad/s). With `residual`, the static correction for the modes not in `modes` is added
+/// (one factorisation of K − σM and one solve, whatever the number of frequencies).
+pub fn superpose(
+    sys: &System,
+    modes: &ModalRun,
+    load: &[c64],
+    omegas: &[f64],
+    damping: &Damping,
+    residual: bool,
+) -> Result<Vec<Vec<c64>>> {
+    let n = check_request(sys, load, omegas, damping)?;
     let phi = &modes.vectors;
     let k = phi.ncols();
     if phi.nrows() != n {
@@ -242,19 +249,7 @@ fn solve_real_shifted(sys: &System, sigma: f64, f: &[c64]) -> Result<Vec<c64>> {
 /// partial pivoting. Rayleigh damping uses C = αM + βK; a modal ratio ζ is taken as structural
 /// damping iωC = 2iζK (the same response as modal damping at every resonance, not between).
 pub fn direct(sys: &System, load: &[c64], omega: f64, damping: &Damping) -> Result<Vec<c64>> {
-    damping.validate()?;
-    let n = sys.n_free();
-    if load.len() != n {
-        return Err(Error::InvalidInput(format!(
-            "harmonic load has {} entries, the system {n} free DOFs",
-            load.len()
-        )));
-    }
-    if !(omega.is_finite() && omega >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "harmonic frequency must be finite and ≥ 0, got {omega} rad/s"
-        )));
-    }
+    let n = check_request(sys, load, &[omega], damping)?;
     let k = sys.k();
     let m = sys.m()?;
     let p = &k.pattern;
