@@ -3,7 +3,7 @@
 //! arrays into scipy matrices; this module holds meshes, models and their assembled systems and
 //! returns numpy arrays. Heavy work runs with the interpreter detached.
 
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -443,6 +443,74 @@ impl PyModel {
                 .into_pyarray(py),
             vm.into_pyarray(py),
         ))
+    }
+
+    /// Harmonic response (see `vibrofem harmonic`): forces in the command line's grammar
+    /// (`GROUP=FX,FY,FZ[@DEG]`), frequencies in Hz, a modal damping ratio or Rayleigh (α, β).
+    /// Returns (report JSON, real and imaginary displacements, frequencies × n_nodes × 3).
+    #[pyo3(signature = (force, freqs, damping = None, rayleigh = None, method = "modal", modes = None, probe = vec![]))]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn harmonic<'py>(
+        &mut self,
+        py: Python<'py>,
+        force: Vec<String>,
+        freqs: Vec<f64>,
+        damping: Option<f64>,
+        rayleigh: Option<(f64, f64)>,
+        method: &str,
+        modes: Option<usize>,
+        probe: Vec<String>,
+    ) -> PyResult<(String, Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>)> {
+        use vibrofem::analysis::harmonic::{Damping, GroupForce};
+        use vibrofem::app::harmonic as h;
+        let damping = match (damping, rayleigh) {
+            (Some(z), None) => Damping::Ratio(z),
+            (None, Some((alpha, beta))) => Damping::Rayleigh { alpha, beta },
+            _ => {
+                return Err(err(vibrofem::Error::InvalidInput(
+                    "harmonic: give damping=ZETA or rayleigh=(ALPHA, BETA), one of them".into(),
+                )));
+            }
+        };
+        let forces = force
+            .iter()
+            .map(|f| GroupForce::parse("force", f))
+            .collect::<vibrofem::Result<Vec<_>>>()
+            .map_err(err)?;
+        let req = h::HarmonicRequest {
+            forces,
+            freqs_hz: freqs,
+            damping,
+            method: h::Method::parse(method).map_err(err)?,
+            modes,
+            probes: probe,
+        };
+        let sys = self.system(py)?;
+        let mesh = self.mesh.clone();
+        let (json, re, im, nf) = py
+            .detach(move || -> vibrofem::Result<(String, Vec<f64>, Vec<f64>, usize)> {
+                let run = h::run(&sys, &mesh, &req)?;
+                let json = serde_json::to_string(&run.report).map_err(|e| vibrofem::Error::output("JSON", e))?;
+                let n = mesh.nodes.len();
+                let (mut re, mut im) = (Vec::with_capacity(run.nodal.len() * n * 3), Vec::new());
+                for nodal in &run.nodal {
+                    for v in nodal.iter().take(n) {
+                        for c in &v[..3] {
+                            re.push(c.re);
+                            im.push(c.im);
+                        }
+                    }
+                }
+                Ok((json, re, im, run.nodal.len()))
+            })
+            .map_err(err)?;
+        let n = re.len() / (3 * nf.max(1));
+        let arr = |v: Vec<f64>| {
+            numpy::ndarray::Array3::from_shape_vec((nf, n, 3), v)
+                .expect("frequencies × nodes × 3")
+                .into_pyarray(py)
+        };
+        Ok((json, arr(re), arr(im)))
     }
 
     /// Write K, M, the DOF map and model.json into `dir` (see `vibrofem export`); returns the

@@ -57,6 +57,7 @@ __all__ = [
     "Dofs",
     "Modes",
     "Static",
+    "Harmonic",
     "run_scene",
     "COMPONENTS",
     "VibrofemError",
@@ -378,6 +379,35 @@ class Model:
             report=r,
         )
 
+    def harmonic(self, force, freq=None, sweep=None, damping=None, rayleigh=None, method="modal", modes=None,
+                 probe=None):
+        """Steady-state response to harmonic forces (as ``vibrofem harmonic``):
+        ``force={group: (Fx, Fy, Fz)}`` or ``(Fx, Fy, Fz, phase_deg)`` (N, total on the group);
+        ``freq=Hz`` or ``sweep=(f0, f1, n)``; ``damping=ζ`` (modal) or ``rayleigh=(α, β)``
+        (C = αM + βK); ``method`` "modal" (superposition with static correction), "direct" or
+        "both"; ``modes`` superposed (default: all below 2 × the highest frequency)."""
+        forces = []
+        if isinstance(force, dict):
+            for g, v in force.items():
+                v = tuple(v)
+                phase = v[3] if len(v) > 3 else 0.0
+                forces.append(f"{g}={_nums(v[:3])}@{_num(phase)}")
+        else:
+            forces = _group_values(force, "force")
+        if (freq is None) == (sweep is None):
+            raise InputError("harmonic: give freq=Hz or sweep=(f0, f1, n), one of them")
+        freqs = [float(freq)] if freq is not None else [float(f) for f in _np.linspace(sweep[0], sweep[1], int(sweep[2]))]
+        rep, re, im = self._core.harmonic(
+            force=forces,
+            freqs=freqs,
+            damping=None if damping is None else float(damping),
+            rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
+            method=method,
+            modes=modes,
+            probe=[] if probe is None else _names(probe),
+        )
+        return Harmonic(frequencies_hz=_np.array(freqs), displacement=re + 1j * im, report=_json.loads(rep))
+
     def static(self, force=None, pressure=None, gravity=None, displace=None):
         """Linear statics, one load case: ``force={group: (Fx, Fy, Fz)}`` (N; on a coupled group
         at its reference node, on a surface as a uniform traction), ``pressure={surface: p}``
@@ -410,6 +440,18 @@ class Model:
 
     def __repr__(self):
         return f"<vibrofem Model of {self.mesh.source!r}>"
+
+
+@_dataclass
+class Harmonic:
+    """Steady-state harmonic response: u(t) = Re(û e^{iωt}).
+
+    ``frequencies_hz`` (k,), ``displacement`` (k × n_nodes × 3, complex, m), and the report as a
+    dict (per-group amplitude and phase per frequency, modes used, notes)."""
+
+    frequencies_hz: object
+    displacement: object
+    report: dict = _field(repr=False)
 
 
 def run_scene(path, out=None):
