@@ -345,17 +345,7 @@ fn scatter_general(
 ) {
     let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
-    let exps: Vec<crate::dof::Expansion> = nodes
-        .iter()
-        .flat_map(|&a| (0..ndpn).map(move |c| (a as usize, c)))
-        .map(|(a, c)| {
-            if dofs.active[a] & (1 << c) != 0 {
-                dofs.expansion(crate::dof::NCOMP * a + c)
-            } else {
-                Default::default()
-            }
-        })
-        .collect();
+    let exps = dofs.local_expansions(nodes, ndpn);
     for j in 0..nd {
         for &(ej, cj) in &exps[j].terms {
             if !cols.contains(&ej) {

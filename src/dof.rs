@@ -246,6 +246,22 @@ impl DofMap {
         }
     }
 
+    /// The expansions of an element's local DOFs (`ndpn` per node of `nodes`, node-major);
+    /// components the model does not use expand to nothing.
+    pub fn local_expansions(&self, nodes: &[u32], ndpn: usize) -> Vec<Expansion> {
+        nodes
+            .iter()
+            .flat_map(|&a| (0..ndpn).map(move |c| (a as usize, c)))
+            .map(|(a, c)| {
+                if self.active[a] & (1 << c) != 0 {
+                    self.expansion(NCOMP * a + c)
+                } else {
+                    Default::default()
+                }
+            })
+            .collect()
+    }
+
     /// The node and component of equation `eq` (for messages).
     pub fn node_comp_of(&self, eq: usize) -> (usize, usize) {
         // `first` is monotone: binary search the node whose range holds `eq`.

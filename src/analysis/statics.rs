@@ -351,7 +351,7 @@ fn reduced_rhs(model: &Model, sets: &[&dyn ElementSet], f_raw: &[f64]) -> Result
                 continue;
             }
             let nd = ndpn * nodes.len();
-            let exps: Vec<crate::dof::Expansion> = local_expansions(dofs, nodes, ndpn);
+            let exps = dofs.local_expansions(nodes, ndpn);
             if exps.iter().all(|x| x.constant == 0.0) {
                 continue;
             }
@@ -367,20 +367,6 @@ fn reduced_rhs(model: &Model, sets: &[&dyn ElementSet], f_raw: &[f64]) -> Result
         }
     }
     Ok(fh)
-}
-
-fn local_expansions(dofs: &DofMap, nodes: &[u32], ndpn: usize) -> Vec<crate::dof::Expansion> {
-    nodes
-        .iter()
-        .flat_map(|&a| (0..ndpn).map(move |c| (a as usize, c)))
-        .map(|(a, c)| {
-            if dofs.active[a] & (1 << c) != 0 {
-                dofs.expansion(NCOMP * a + c)
-            } else {
-                Default::default()
-            }
-        })
-        .collect()
 }
 
 /// Internal forces K u at every raw DOF (element by element).

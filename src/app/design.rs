@@ -506,6 +506,12 @@ pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
 
 /// FE axial stiffness of one coil isolator (beam helix), N/m.
 pub fn coil_fe(d: &Design) -> Result<f64> {
+    coil_stiffness_along(d, 2, -600.0)
+}
+
+/// Stiffness of one coil isolator (beam helix, N/m) with its bottom end clamped and its top end
+/// guided along `axis` (0 = x, 2 = z) under `force` N along it.
+pub fn coil_stiffness_along(d: &Design, axis: usize, force: f64) -> Result<f64> {
     let c = &d.coil;
     let hp = HelixParams {
         mean_diameter: c.mean_diameter,
@@ -527,7 +533,7 @@ pub fn coil_fe(d: &Design) -> Result<f64> {
         fixes: vec![("end_bottom".into(), crate::dof::ALL6)],
         couplings: vec![CouplingSpec {
             group: "end_top".into(),
-            guided: Some(2),
+            guided: Some(axis),
             reference: None,
         }],
         beams: vec![BeamPart {
@@ -541,6 +547,8 @@ pub fn coil_fe(d: &Design) -> Result<f64> {
         }],
         ..Default::default()
     };
+    let mut f = [0.0; 3];
+    f[axis] = force;
     let run = run_static(
         &mesh,
         "coil spring",
@@ -548,12 +556,11 @@ pub fn coil_fe(d: &Design) -> Result<f64> {
             spec,
             cases: vec![vec![Load::Force {
                 group: "end_top".into(),
-                force: [0.0, 0.0, -600.0],
+                force: f,
             }]],
         },
     )?;
-    let uz = run.cases[0].references[0].displacement[2];
-    Ok(-600.0 / uz)
+    Ok(force / run.cases[0].references[0].displacement[axis])
 }
 
 /// The sandwich as shells with the webs at their real (clear) height: mid-surface webs would

@@ -36,10 +36,9 @@ use crate::analysis::statics::{StaticOptions, run_static};
 use crate::app::design::Design;
 use crate::mesh::{CellBlock, CellKind, CellRef, Group, Mesh};
 use crate::model::{
-    BeamPart, CouplingSpec, Model, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringMatrixSpec, rigid_offset,
-    transform_blocks,
+    CouplingSpec, Model, ModelSpec, PointMassSpec, ShellPart, SpringMatrixSpec, rigid_offset, transform_blocks,
 };
-use crate::section::{BeamSection, ShellSection};
+use crate::section::ShellSection;
 use crate::system::{System, SystemOptions};
 use crate::{Error, Result};
 use nalgebra::{Complex, DMatrix, DVector};
@@ -273,58 +272,10 @@ pub fn leaf_matrix(kbb: &[[f64; 6]; 6], length: f64) -> Vec<f64> {
 /// Axial and lateral stiffness of one coil isolator (N/m): the FE helix with its top end guided
 /// along z and then along x.
 pub fn coil_stiffness(d: &Design) -> Result<(f64, f64)> {
-    let c = &d.coil;
-    let hp = crate::mesh::parametric::HelixParams {
-        mean_diameter: c.mean_diameter,
-        pitch: c.pitch,
-        turns: c.turns,
-        elems_per_turn: c.elements_per_turn,
-        wire_diameter: c.wire,
-        kind: CellKind::Line3,
-    };
-    let mesh = crate::mesh::parametric::helix_beam(&hp)?;
-    let nu = 0.3;
-    let mut out = [0.0; 2];
-    for (i, axis) in [2usize, 0].into_iter().enumerate() {
-        let spec = ModelSpec {
-            material: crate::material::Material {
-                young: 2.0 * c.shear_modulus * (1.0 + nu),
-                poisson: nu,
-                density: 7850.0,
-            },
-            fixes: vec![("end_bottom".into(), crate::dof::ALL6)],
-            couplings: vec![CouplingSpec {
-                group: "end_top".into(),
-                guided: Some(axis),
-                reference: None,
-            }],
-            beams: vec![BeamPart {
-                group: "wire".into(),
-                section: BeamSection::circle(c.wire),
-                orientation: Orientation::Radial {
-                    centre: [0.0; 3],
-                    axis: [0.0, 0.0, 1.0],
-                },
-                material: None,
-            }],
-            ..Default::default()
-        };
-        let mut force = [0.0; 3];
-        force[axis] = 600.0;
-        let run = run_static(
-            &mesh,
-            "coil spring",
-            &StaticOptions {
-                spec,
-                cases: vec![vec![crate::analysis::statics::Load::Force {
-                    group: "end_top".into(),
-                    force,
-                }]],
-            },
-        )?;
-        out[i] = 600.0 / run.cases[0].references[0].displacement[axis];
-    }
-    Ok((out[0], out[1]))
+    Ok((
+        crate::app::design::coil_stiffness_along(d, 2, 600.0)?,
+        crate::app::design::coil_stiffness_along(d, 0, 600.0)?,
+    ))
 }
 
 /// One mode of the machine.

@@ -296,28 +296,8 @@ fn non_finite_shift_is_an_input_error() {
 /// translational spring at one corner has 3 rigid rotations (about that corner).
 #[test]
 fn translational_spring_on_a_solid_node() {
-    use vibrofem::mesh::{CellKind, CellRef, Group};
     let mut mesh = source::load("box:1,0.1,0.1:12,1,1:tet10", 1.0).unwrap();
-    let a = mesh.nodes.iter().position(|p| p.iter().all(|&c| c == 0.0)).unwrap() as u32;
-    let bi = mesh.block_index_mut(CellKind::Point1);
-    let etag = mesh
-        .blocks
-        .iter()
-        .flat_map(|b| b.tags.iter().copied())
-        .max()
-        .unwrap_or(0)
-        + 1;
-    mesh.blocks[bi].push(&[a], etag);
-    let gtag = mesh.groups.iter().map(|g| g.tag).max().unwrap_or(0) + 1;
-    mesh.groups.push(Group {
-        name: "pt".into(),
-        dim: 0,
-        tag: gtag,
-        cells: vec![CellRef {
-            block: bi as u32,
-            index: (mesh.blocks[bi].len() - 1) as u32,
-        }],
-    });
+    node_group(&mut mesh, "pt", &[[0.0, 0.0, 0.0]]);
     let spec = ModelOptions {
         spring: vec!["pt=1e6,1e6,1e6,0,0,0".into()],
         ..Default::default()
