@@ -218,8 +218,9 @@ pub struct Assembled {
 
 /// Assemble K (and M) of all element sets on `pattern`.
 ///
-/// Elements are processed in chunks: each chunk's element matrices are computed in
-/// parallel, then scattered in element order. Fixed DOFs are skipped (eliminated).
+/// The columns are split into one range per worker; each range computes the matrices of the
+/// elements reaching it and adds their entries in its columns, in a fixed element order (see
+/// the body). Fixed DOFs are skipped (eliminated).
 pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], want_mass: bool) -> Result<Assembled> {
     let mut k = SymMatrix::try_zeros(pattern.clone(), "the stiffness matrix")?;
     // Without mass, M keeps the pattern but no values (nothing is scattered into it).
@@ -231,7 +232,6 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
             values: Vec::new(),
         }
     };
-    const CHUNK: usize = 2048;
     // Column ranges of about equal numbers of entries, one per worker thread.
     let ranges = rayon::current_num_threads().clamp(1, 64).min(pattern.n.max(1));
     let bounds: Vec<usize> = (0..=ranges)
@@ -244,77 +244,70 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
             }
         })
         .collect();
-    // Element matrices of one chunk, back to back (element e at offs[e - start]); reused.
-    let mut kbuf: Vec<f64> = Vec::new();
-    let mut mbuf: Vec<f64> = Vec::new();
-    let mut offs: Vec<usize> = Vec::with_capacity(CHUNK + 1);
-    for set in sets {
-        let ndpn = set.dofs_per_node();
-        for start in (0..set.len()).step_by(CHUNK) {
-            let end = (start + CHUNK).min(set.len());
-            offs.clear();
-            offs.push(0);
-            for e in start..end {
-                let nd = ndpn * set.nodes(e).len();
-                offs.push(offs[offs.len() - 1] + nd * nd);
-            }
-            let total = offs[offs.len() - 1];
-            kbuf.clear();
-            kbuf.resize(total, 0.0);
-            mbuf.clear();
-            mbuf.resize(if want_mass { total } else { 0 }, 0.0);
-            // Split the buffers into one disjoint slice per element and fill them in parallel.
-            let mut kparts: Vec<&mut [f64]> = Vec::with_capacity(end - start);
-            let mut mparts: Vec<&mut [f64]> = Vec::with_capacity(end - start);
-            let (mut krest, mut mrest) = (kbuf.as_mut_slice(), mbuf.as_mut_slice());
-            for w in offs.windows(2) {
-                let len = w[1] - w[0];
-                let (kh, kt) = krest.split_at_mut(len);
-                kparts.push(kh);
-                krest = kt;
-                let (mh, mt) = mrest.split_at_mut(if want_mass { len } else { 0 });
-                mparts.push(mh);
-                mrest = mt;
-            }
-            kparts
-                .into_par_iter()
-                .zip(mparts)
-                .enumerate()
-                .try_for_each(|(off, (ke, me))| set.matrices(start + off, ke, me, want_mass))?;
-            // Scatter in parallel over disjoint column ranges: each range takes every element
-            // of the chunk in element order, so each entry's sum is formed in the same order
-            // whatever the number of ranges (bit-for-bit the serial result).
-            let kparts = split_by_columns(&mut k.values, &pattern, &bounds);
-            let mparts = if want_mass {
-                split_by_columns(&mut m.values, &pattern, &bounds)
-            } else {
-                (0..ranges).map(|_| &mut [][..]).collect()
-            };
-            kparts
-                .into_par_iter()
-                .zip(mparts)
-                .enumerate()
-                .for_each(|(r, (kv, mv))| {
-                    let cols = bounds[r]..bounds[r + 1];
-                    for (off, w) in offs.windows(2).enumerate() {
-                        let nodes = set.nodes(start + off);
-                        let ke = &kbuf[w[0]..w[1]];
-                        let me = if want_mass { &mbuf[w[0]..w[1]] } else { &[][..] };
-                        if nodes.iter().any(|&a| dofs.special[a as usize]) {
-                            scatter_general(&pattern, dofs, nodes, ndpn, ke, cols.clone(), kv);
-                            if want_mass {
-                                scatter_general(&pattern, dofs, nodes, ndpn, me, cols.clone(), mv);
-                            }
-                        } else {
-                            scatter(&pattern, dofs, nodes, ndpn, ke, cols.clone(), kv);
-                            if want_mass {
-                                scatter(&pattern, dofs, nodes, ndpn, me, cols.clone(), mv);
-                            }
+    // Elements in the order of their lowest node: consecutive elements then share columns of
+    // K and M, which stay in cache while they are added to.
+    let orders: Vec<Vec<u32>> = sets
+        .iter()
+        .map(|set| {
+            let mut order: Vec<u32> = (0..set.len() as u32).collect();
+            order.sort_by_key(|&e| set.nodes(e as usize).iter().copied().min().unwrap_or(0));
+            order
+        })
+        .collect();
+    // Each column range (one per worker) computes the matrices of the elements that reach
+    // its columns and adds their entries in those columns, in the order above. Every entry's
+    // sum is so formed in the same element order whatever the number of ranges: bit for bit
+    // the serial result. Elements across a range boundary are computed by each range they
+    // reach (a small share), nothing is allocated per element, no element matrix is stored.
+    let kparts = split_by_columns(&mut k.values, &pattern, &bounds);
+    let mparts = if want_mass {
+        split_by_columns(&mut m.values, &pattern, &bounds)
+    } else {
+        (0..ranges).map(|_| &mut [][..]).collect()
+    };
+    kparts
+        .into_par_iter()
+        .zip(mparts)
+        .enumerate()
+        .try_for_each(|(r, (kv, mv))| -> Result<()> {
+            let cols = bounds[r]..bounds[r + 1];
+            let (mut ke, mut me) = (Vec::<f64>::new(), Vec::<f64>::new());
+            for (set, order) in sets.iter().zip(&orders) {
+                let ndpn = set.dofs_per_node();
+                for &e in order {
+                    let e = e as usize;
+                    let nodes = set.nodes(e);
+                    let special = nodes.iter().any(|&a| dofs.special[a as usize]);
+                    // A constrained node's entries go to its masters' columns, anywhere.
+                    let reaches = special
+                        || nodes.iter().any(|&a| {
+                            let a = a as usize;
+                            dofs.first[a] < cols.end && dofs.first[a + 1] > cols.start
+                        });
+                    if !reaches {
+                        continue;
+                    }
+                    let nd = ndpn * nodes.len();
+                    ke.clear();
+                    ke.resize(nd * nd, 0.0);
+                    me.clear();
+                    me.resize(if want_mass { nd * nd } else { 0 }, 0.0);
+                    set.matrices(e, &mut ke, &mut me, want_mass)?;
+                    if special {
+                        scatter_general(&pattern, dofs, nodes, ndpn, &ke, cols.clone(), kv);
+                        if want_mass {
+                            scatter_general(&pattern, dofs, nodes, ndpn, &me, cols.clone(), mv);
+                        }
+                    } else {
+                        scatter(&pattern, dofs, nodes, ndpn, &ke, cols.clone(), kv);
+                        if want_mass {
+                            scatter(&pattern, dofs, nodes, ndpn, &me, cols.clone(), mv);
                         }
                     }
-                });
-        }
-    }
+                }
+            }
+            Ok(())
+        })?;
     Ok(Assembled { k, m })
 }
 
@@ -368,10 +361,16 @@ fn scatter_general(
     }
 }
 
+/// Most nodes an element may have for [`scatter`]'s stack tables (larger elements take
+/// [`scatter_general`]).
+const SCATTER_MAX_NODES: usize = 32;
+
 /// Add one element matrix into global values.
 ///
-/// For each node pair (a, b) and free component of b, the free DOFs of node a are
-/// consecutive in the column, so one binary search per (a, b, component) finds the run.
+/// Every column of a node b lists the same rows (the free DOFs of b's neighbours, in
+/// equation order; [`dof_pattern`]), and a node's equations are consecutive in component
+/// order. So one binary search per node pair (a, b) places node a's rows in all of b's
+/// columns, and the free components of each node are looked up once per element.
 /// Only the columns in `cols` are written; `vals` holds their values (from the first of them).
 fn scatter(
     pattern: &Pattern,
@@ -382,37 +381,57 @@ fn scatter(
     cols: std::ops::Range<usize>,
     vals: &mut [f64],
 ) {
+    if nodes.len() > SCATTER_MAX_NODES {
+        return scatter_general(pattern, dofs, nodes, ndpn, me, cols, vals);
+    }
     let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
+    // Per element node: its free components below `ndpn` as (offset among the node's
+    // equations, component).
+    let mut free = [[(0u8, 0u8); crate::dof::NCOMP]; SCATTER_MAX_NODES];
+    let mut nfree = [0u8; SCATTER_MAX_NODES];
+    for (l, &a) in nodes.iter().enumerate() {
+        let a = a as usize;
+        let (mut k, mut r) = (0usize, 0u8);
+        for c in 0..crate::dof::NCOMP {
+            if dofs.eq_of(a, c).is_some() {
+                if c < ndpn {
+                    free[l][k] = (r, c as u8);
+                    k += 1;
+                }
+                r += 1;
+            }
+        }
+        nfree[l] = k as u8;
+    }
     for (lb, &b) in nodes.iter().enumerate() {
         let b = b as usize;
-        for cb in 0..ndpn {
-            let Some(col) = dofs.eq_of(b, cb) else {
-                continue;
-            };
-            if !cols.contains(&col) {
+        let (fb, eb) = (dofs.first[b], dofs.first[b + 1]);
+        if fb == eb || eb <= cols.start || fb >= cols.end {
+            continue;
+        }
+        let s = pattern.col_ptr[fb];
+        let len = pattern.col_ptr[fb + 1] - s;
+        let rows = &pattern.row_idx[s..s + len];
+        for (la, &a) in nodes.iter().enumerate() {
+            let f0 = dofs.first[a as usize];
+            if nfree[la] == 0 {
                 continue;
             }
-            let s = pattern.col_ptr[col];
-            let rows = &pattern.row_idx[s..pattern.col_ptr[col + 1]];
-            for (la, &a) in nodes.iter().enumerate() {
-                let a = a as usize;
-                let f0 = dofs.first[a];
-                if dofs.first[a + 1] == f0 {
+            let Ok(k0) = rows.binary_search(&f0) else {
+                continue;
+            };
+            for &(jb, cb) in &free[lb][..nfree[lb] as usize] {
+                let col = fb + jb as usize;
+                if !cols.contains(&col) {
                     continue;
                 }
-                let Ok(k0) = rows.binary_search(&f0) else {
-                    continue;
-                };
-                let mut pos = s + k0;
-                for ca in 0..crate::dof::NCOMP {
-                    if let Some(row) = dofs.eq_of(a, ca) {
-                        if ca < ndpn {
-                            debug_assert_eq!(pattern.row_idx[pos], row);
-                            vals[pos - off] += me[(la * ndpn + ca) * nd + lb * ndpn + cb];
-                        }
-                        pos += 1;
-                    }
+                let base = s + jb as usize * len + k0;
+                let mcol = lb * ndpn + cb as usize;
+                for &(ra, ca) in &free[la][..nfree[la] as usize] {
+                    let pos = base + ra as usize;
+                    debug_assert_eq!(pattern.row_idx[pos], f0 + ra as usize);
+                    vals[pos - off] += me[(la * ndpn + ca as usize) * nd + mcol];
                 }
             }
         }

@@ -217,20 +217,13 @@ impl Factor {
             .map_or(0, |s| s.iter().map(|w| 8 * w.capacity()).sum())
     }
 
-    /// Solve `A X = B` in place for a block of right-hand sides (faer's supernodal solve,
-    /// sequential: the same arithmetic for any thread count).
+    /// Solve `A X = B` in place for a block of right-hand sides. Supernodal factors use
+    /// [`supernodal_solve`]: column groups of at most eight, at least one per worker thread, one
+    /// pass over each supernode column per direction, workspaces kept with the factor. Each
+    /// column's arithmetic is the same whatever group it is solved in, so the result does not
+    /// depend on the grouping or the thread count, bit for bit. Simplicial (small or very
+    /// sparse) factors are solved by faer.
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        if rhs.ncols() > 0 {
-            self.solve_faer(rhs);
-        }
-    }
-
-    /// Solve `A X = B` in place with [`supernodal_solve`]: column groups of at most eight, at
-    /// least one per worker thread, one pass over each supernode column per direction,
-    /// workspaces kept with the factor. Its rounding differs from [`Factor::solve_in_place`]
-    /// and with the grouping, so it is not the default (runs must give the same bits whatever
-    /// the thread count).
-    pub fn solve_in_place_grouped(&self, rhs: MatMut<'_, f64>) {
         use rayon::prelude::*;
         let k = rhs.ncols();
         if k == 0 {
@@ -246,6 +239,14 @@ impl Factor {
             self.solve_group(rhs);
         } else {
             rhs.par_col_chunks_mut(per).for_each(|c| self.solve_group(c));
+        }
+    }
+
+    /// faer's own sequential supernodal solve (a reference for tests: it rounds differently
+    /// from [`Factor::solve_in_place`]).
+    pub fn solve_in_place_faer(&self, rhs: MatMut<'_, f64>) {
+        if rhs.ncols() > 0 {
+            self.solve_faer(rhs);
         }
     }
 
