@@ -8,3 +8,4 @@ pub mod factor;
 pub mod ordering;
 pub mod sparse;
 pub mod tall;
+mod tree_solve;

@@ -205,3 +205,45 @@ fn band_search_factorises_once_per_end() {
     assert_eq!(sol.factorizations, 2);
     assert!(sol.memory.factor > 0 && sol.memory.lanczos_basis > 0);
 }
+
+/// Block size 1 on two identical chains joined by a weak spring at one end (1e-6 of the chain
+/// springs): every eigenvalue comes in a pair split by far less than the spacing of the pairs,
+/// which a single-vector Lanczos must still resolve; complete (Sturm) and right against a dense
+/// reference.
+#[test]
+fn close_pairs_with_block_one_are_complete() {
+    let n = 300;
+    let (k0, m0) = chains(n, 2, 1.0e6, 2.0);
+    // Couple node 0 of both copies (indices 0 and 1) with a spring 1e-6 k.
+    let mut kt = Vec::new();
+    for j in 0..k0.n() {
+        let p = &k0.pattern;
+        for q in p.col_ptr[j]..p.col_ptr[j + 1] {
+            let i = p.row_idx[q];
+            if i <= j {
+                kt.push((i, j, k0.values[q]));
+            }
+        }
+    }
+    let kc = 1.0;
+    kt.push((0, 0, kc));
+    kt.push((1, 1, kc));
+    kt.push((0, 1, -kc));
+    let k = SymMatrix::from_triplets(k0.n(), &kt);
+    let m = m0.on_pattern(k.pattern.clone());
+    let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+    let p = EigenParams {
+        target: Target::Nearest(9),
+        block: 1,
+        dense_below: 0,
+        ..Default::default()
+    };
+    let sol = solve(&k, &m, &sym, &p).unwrap();
+    let reference = vibrofem::linalg::dense::eigen_all(&k, &m, -1.0, false).unwrap().0;
+    assert!(sol.sturm.complete, "{:?}", sol.sturm);
+    assert_eq!(sol.lambda.len(), 9);
+    for (i, (&got, &want)) in sol.lambda.iter().zip(&reference).enumerate() {
+        let tol = 1e-9 * want.abs().max(reference[2]);
+        assert!((got - want).abs() <= tol, "mode {i}: {got} vs {want}");
+    }
+}
