@@ -509,16 +509,27 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         let upper_pt = match band {
             Some((_, hi)) => hi,
             None => {
-                // Just above the highest mode found: a small relative step, or half the way to
-                // the next Ritz estimate if that is closer. (Ritz estimates of unconverged
-                // values lie above the true ones, so a far point could pass an eigenvalue that
-                // is simply the next one, costing an extra round of iteration.)
                 let scale = lam_max.abs().max(sigma.abs());
-                let mut step = 1e-4 * scale;
-                if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
-                    step = step.min(0.5 * (nx - lam_max));
+                // The lowest modes: the check need only cover the wanted ones. When converged
+                // pairs beyond them were found too, the point halfway from the last wanted one
+                // to the next one found cannot pass an eigenvalue that is simply the next one.
+                // Otherwise: just above the highest mode found, a small relative step, or half
+                // the way to the next Ritz estimate if that is closer. (Ritz estimates of
+                // unconverged values lie above the true ones, so a far point could pass an
+                // eigenvalue that is simply the next one, costing an extra round of iteration.)
+                let nm = match p.target {
+                    Target::Nearest(nm) if p.shift.is_none() => nm,
+                    _ => usize::MAX,
+                };
+                if nm > 0 && nm < found.len() && found[nm].0 - found[nm - 1].0 > 2e-9 * scale {
+                    0.5 * (found[nm - 1].0 + found[nm].0)
+                } else {
+                    let mut step = 1e-4 * scale;
+                    if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
+                        step = step.min(0.5 * (nx - lam_max));
+                    }
+                    lam_max + step.max(1e-9 * scale)
                 }
-                lam_max + step.max(1e-9 * scale)
             }
         };
         // The basis is not needed for the check: free it before the Sturm factorisations
@@ -557,10 +568,13 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         );
         time_verify += tv.elapsed().as_secs_f64();
         if expected > n_between && attempt < 4 && band.is_none() && !dense {
-            // A mode was missed (or sits just above the last one found): continue the same
-            // iteration for more modes.
+            // A mode was missed (or sits just above the last one found): iterate for more
+            // modes, with the pairs found locked at the start of a new basis (the old one was
+            // freed for the Sturm factorisation).
             want = (want + (expected - n_between) + p.block.min(4)).min(n);
-            log::info!("iterating again for {want} modes");
+            log::info!("iterating again for {want} modes, the {} found locked", lambda.len());
+            lz.set_want(want.max(lambda.len()));
+            lz.restart_from(&lambda, x.as_ref(), m, sigma);
             continue;
         }
         let sturm = SturmCheck {
@@ -757,6 +771,11 @@ pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, 
 }
 
 /// Block Lanczos state.
+/// Basis columns kept per wanted pair before a thick restart (plus four blocks). Three rather
+/// than two: 10–13 % fewer operator applications for 18 modes of the 20k–119k-DOF plates; the
+/// basis is freed before the Sturm factorisation, so it does not raise the memory peak.
+const BASIS_PER_WANTED: usize = 3;
+
 struct Lanczos {
     n: usize,
     b: usize,
@@ -785,7 +804,7 @@ struct Lanczos {
 impl Lanczos {
     fn new(n: usize, want: usize, p: &EigenParams, positive_only: bool) -> Self {
         let b = p.block.max(1).min(n);
-        let m_max = (want * 2 + 4 * b).max(want + 6 * b).min(n);
+        let m_max = (want * BASIS_PER_WANTED + 4 * b).max(want + 6 * b).min(n);
         let m_max = m_max.max(b.min(n));
         Lanczos {
             n,
@@ -956,6 +975,33 @@ impl Lanczos {
         self.pause_after = None;
     }
 
+    /// Start a released iteration from converged pairs (λ, X), X M-orthonormal: they become the
+    /// first columns of the basis, locked (their block of T is diag θ, coupled to nothing), and
+    /// a random block M-orthogonal to them carries the search on. Without room for them and a
+    /// block, or for a small problem, it simply starts anew.
+    fn restart_from(&mut self, lambda: &[f64], x: MatRef<'_, f64>, m: &SymMatrix, sigma: f64) {
+        let (n, b, c) = (self.n, self.b, x.ncols());
+        if self.started || c + 2 * b > self.m_max || c + b >= n {
+            return;
+        }
+        self.v.get_mut(.., 0..c).copy_from(x);
+        m.mul_block(x, self.mv.get_mut(.., 0..c));
+        self.t.fill(0.0);
+        for (k, &l) in lambda.iter().enumerate().take(c) {
+            self.t[(k, k)] = 1.0 / (l - sigma);
+        }
+        let mut w = Mat::from_fn(n, b, |_, _| self.rng.next());
+        let mut mw = Mat::zeros(n, b);
+        m.mul_block(w.as_ref(), mw.as_mut());
+        let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
+        let _ = self.orthogonalise(&mut w, &mut mw, c);
+        let _ = self.normalise(&mut w, &mut mw, m, c, scale2);
+        self.v.get_mut(.., c..c + b).copy_from(&w);
+        self.mv.get_mut(.., c..c + b).copy_from(&mw);
+        self.cur = c;
+        self.started = true;
+    }
+
     /// Grow the wanted count (and the basis capacity), keeping the current state.
     fn set_want(&mut self, want: usize) {
         if want <= self.want && self.started {
@@ -965,7 +1011,7 @@ impl Lanczos {
         let b = self.b;
         // The basis must also hold the current columns plus the next block (a resumed run may
         // end with a full basis).
-        let m_max = (self.want * 2 + 4 * b)
+        let m_max = (self.want * BASIS_PER_WANTED + 4 * b)
             .max(self.want + 6 * b)
             .max(self.cur + b)
             .min(self.n)
@@ -1132,9 +1178,9 @@ fn _assert_send(_: MatMut<'_, f64>) {}
 mod tests {
     use super::*;
 
-    /// A released Lanczos (its basis freed for a Sturm factorisation) iterates again from a new
-    /// start when asked for more modes, and finds them: the path taken when the Sturm check
-    /// says a mode was missed.
+    /// A released Lanczos (its basis freed for a Sturm factorisation), restarted with the pairs
+    /// it found locked, iterates on for more modes and finds them: the path taken when the
+    /// Sturm check says a mode was missed.
     #[test]
     fn released_lanczos_runs_again_for_more_modes() {
         // A fixed–free chain of 200 unit masses and springs: λ_j = 4 sin²((2j − 1)π/(4n + 2)).
@@ -1164,11 +1210,15 @@ mod tests {
         };
         let mut lz = Lanczos::new(n, 4, &p, false);
         let mut apps = 0;
-        let (l1, _) = lz.run(&p, &fa, &m, sigma, &mut apps).unwrap().unwrap();
+        let (l1, x1) = lz.run(&p, &fa, &m, sigma, &mut apps).unwrap().unwrap();
         assert!(l1.len() >= 4);
         lz.release();
         assert_eq!(lz.bytes(), 0);
         lz.set_want(7);
+        // The pairs found are locked at the start of the new basis.
+        let (l1, x1) = refine(&k, &m, &fa, &x1).unwrap();
+        lz.restart_from(&l1, x1.as_ref(), &m, sigma);
+        assert!(lz.started && lz.cur == l1.len());
         let (mut l2, x2) = lz.run(&p, &fa, &m, sigma, &mut apps).unwrap().unwrap();
         assert!(l2.len() >= 7 && x2.ncols() == l2.len());
         l2.sort_by(f64::total_cmp);

@@ -247,3 +247,27 @@ fn close_pairs_with_block_one_are_complete() {
         assert!((got - want).abs() <= tol, "mode {i}: {got} vs {want}");
     }
 }
+
+/// For the lowest modes, when converged pairs beyond the wanted ones were found, the upper
+/// Sturm point lies between the last wanted eigenvalue and the next one, so the check counts
+/// exactly the wanted modes (a point above the highest pair found could pass an unconverged
+/// neighbour and cost a second round of iteration and two more factorisations).
+#[test]
+fn upper_sturm_point_lies_between_the_wanted_and_the_next_mode() {
+    let (k, m) = chains(300, 1, 1.0e6, 2.0);
+    let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+    let ex = exact(300, 1, 1.0e6, 2.0);
+    for nm in [3, 5, 8] {
+        let p = EigenParams {
+            target: Target::Nearest(nm),
+            dense_below: 0,
+            ..Default::default()
+        };
+        let sol = solve(&k, &m, &sym, &p).unwrap();
+        assert!(sol.sturm.complete, "{:?}", sol.sturm);
+        assert_eq!(sol.factorizations, 2, "{nm} modes: one round");
+        let up = sol.sturm.upper.0;
+        assert!(up > ex[nm - 1] && up < ex[nm], "{nm} modes: upper point {up} not in ({}, {})", ex[nm - 1], ex[nm]);
+        assert_eq!((sol.sturm.expected, sol.sturm.found), (nm, nm));
+    }
+}
