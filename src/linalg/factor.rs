@@ -5,7 +5,6 @@
 //! LDLᵀ without pivoting is used for both SPD and indefinite matrices; its count of negative
 //! pivots is the inertia that the Sturm-sequence check needs (Sylvester's law of inertia).
 
-use super::tree_solve::{axpy, dot, madd};
 use crate::linalg::sparse::{Pattern, SymMatrix};
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -27,8 +26,6 @@ pub struct SymbolicFactor {
     pub flops: f64,
     /// Entries of L.
     pub nnz_l: usize,
-    /// The elimination tree split for parallel solves (supernodal factors in postorder).
-    tree: Option<super::tree_solve::SolveTree>,
 }
 
 impl SymbolicFactor {
@@ -41,16 +38,7 @@ impl SymbolicFactor {
         let sym = factorize_symbolic_cholesky(pattern.symbolic(), Side::Upper, ord, CholeskySymbolicParams::default())
             .map_err(|e| Error::Factorization(format!("symbolic analysis: {e:?}")))?;
         let (flops, nnz_l) = count_flops(&sym);
-        let tree = match sym.raw() {
-            SymbolicCholeskyRaw::Supernodal(sn) => super::tree_solve::SolveTree::new(sn),
-            SymbolicCholeskyRaw::Simplicial(_) => None,
-        };
-        Ok(SymbolicFactor {
-            sym,
-            flops,
-            nnz_l,
-            tree,
-        })
+        Ok(SymbolicFactor { sym, flops, nnz_l })
     }
 
     /// Bytes the numeric factor's values will take.
@@ -232,12 +220,12 @@ impl Factor {
             .map_or(0, |s| s.iter().map(|w| 8 * w.capacity()).sum())
     }
 
-    /// Solve `A X = B` in place for a block of right-hand sides. Supernodal factors are solved
-    /// in groups of at most [`MAX_GROUP`] columns, one pass over L per direction and group,
-    /// parallel over the elimination tree ([`super::tree_solve`]), workspaces kept with the
-    /// factor. Each column's arithmetic is the same whatever its group and the thread count, so
-    /// the result is too, bit for bit. Simplicial (small or very sparse) factors are solved by
-    /// faer.
+    /// Solve `A X = B` in place for a block of right-hand sides. Supernodal factors use
+    /// [`supernodal_solve`]: column groups of at most eight, at least one per worker thread, one
+    /// pass over each supernode column per direction, workspaces kept with the factor. Each
+    /// column's arithmetic is the same whatever group it is solved in, so the result does not
+    /// depend on the grouping or the thread count, bit for bit. Simplicial (small or very
+    /// sparse) factors are solved by faer.
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         use rayon::prelude::*;
         let k = rhs.ncols();
@@ -247,18 +235,6 @@ impl Factor {
         let SymbolicCholeskyRaw::Supernodal(_) = self.sym.sym.raw() else {
             return self.solve_faer(rhs);
         };
-        if self.sym.tree.is_some() {
-            let per = k.div_ceil(k.div_ceil(MAX_GROUP));
-            let mut rhs = rhs;
-            let mut c0 = 0;
-            while c0 < k {
-                let c1 = (c0 + per).min(k);
-                self.solve_group(rhs.as_mut().get_mut(.., c0..c1));
-                c0 = c1;
-            }
-            return;
-        }
-        // No tree split (supernodes not in postorder): column groups in parallel instead.
         let threads = rayon::current_num_threads().max(1);
         let groups = threads.max(k.div_ceil(MAX_GROUP)).min(k);
         let per = k.div_ceil(groups);
@@ -269,8 +245,8 @@ impl Factor {
         }
     }
 
-    /// faer's own sequential supernodal solve (a reference for tests: it rounds differently
-    /// from [`Factor::solve_in_place`]).
+    /// faer's own sequential supernodal solve (a reference for tests and benchmarks: it rounds
+    /// differently from [`Factor::solve_in_place`]).
     pub fn solve_in_place_faer(&self, rhs: MatMut<'_, f64>) {
         if rhs.ncols() > 0 {
             self.solve_faer(rhs);
@@ -310,7 +286,7 @@ impl Factor {
         macro_rules! go {
             ($($kk:literal)*) => {
                 match k {
-                    $($kk => supernodal_solve::<$kk>(sn, &self.values, self.sym.tree.as_ref(), x[..need].as_chunks_mut::<$kk>().0),)*
+                    $($kk => supernodal_solve::<$kk>(sn, &self.values, x[..need].as_chunks_mut::<$kk>().0),)*
                     _ => unreachable!("column groups hold at most {MAX_GROUP} columns"),
                 }
             };
@@ -357,6 +333,7 @@ impl Factor {
 }
 
 /// Most right-hand sides solved together by one thread.
+/// (Nine: the 18 columns of the refinement make two groups, one per thread of this machine.)
 const MAX_GROUP: usize = 9;
 
 /// Solve L D Lᵀ x = b in place for `K` right-hand sides stored row by row (`x[i]` holds row i
@@ -364,22 +341,14 @@ const MAX_GROUP: usize = 9;
 /// per direction, contiguously. The rows of a supernode's off-diagonal pattern are gathered
 /// once into a dense buffer (one column per right-hand side), so the work on them is
 /// contiguous multiply–adds and dot products; no packing, nothing allocated per supernode.
-fn supernodal_solve<const K: usize>(
-    sn: &SupernodalSymbolic,
-    values: &[f64],
-    tree: Option<&super::tree_solve::SolveTree>,
-    x: &mut [[f64; K]],
-) {
+fn supernodal_solve<const K: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU has the features the function is compiled for.
-        unsafe { supernodal_solve_fma::<K>(sn, values, tree, x) };
+        unsafe { supernodal_solve_fma::<K>(sn, values, x) };
         return;
     }
-    match tree {
-        Some(t) => super::tree_solve::solve::<K, false>(sn, values, t, x),
-        None => supernodal_solve_body::<K, false>(sn, values, x),
-    }
+    supernodal_solve_body::<K, false>(sn, values, x)
 }
 
 type SupernodalSymbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>;
@@ -387,16 +356,14 @@ type SupernodalSymbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSu
 /// [`supernodal_solve`] compiled for AVX2 with fused multiply–adds.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn supernodal_solve_fma<const K: usize>(
-    sn: &SupernodalSymbolic,
-    values: &[f64],
-    tree: Option<&super::tree_solve::SolveTree>,
-    x: &mut [[f64; K]],
-) {
-    match tree {
-        Some(t) => super::tree_solve::solve::<K, true>(sn, values, t, x),
-        None => supernodal_solve_body::<K, true>(sn, values, x),
-    }
+unsafe fn supernodal_solve_fma<const K: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
+    supernodal_solve_body::<K, true>(sn, values, x)
+}
+
+/// `a·b + c`, fused when `F`.
+#[inline(always)]
+fn madd<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
+    if F { a.mul_add(b, c) } else { a * b + c }
 }
 
 #[inline(always)]
@@ -484,6 +451,33 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
             }
         }
     }
+}
+
+/// `y += a·x`.
+#[inline(always)]
+fn axpy<const F: bool>(y: &mut [f64], x: &[f64], a: f64) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi = madd::<F>(a, *xi, *yi);
+    }
+}
+
+/// `x·y` with eight partial sums (in a fixed order).
+#[inline(always)]
+fn dot<const F: bool>(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len().min(y.len());
+    let (x8, xr) = x[..n].split_at(n - n % 8);
+    let (y8, yr) = y[..n].split_at(n - n % 8);
+    let mut s = [0.0f64; 8];
+    for (a, b) in x8.chunks_exact(8).zip(y8.chunks_exact(8)) {
+        for l in 0..8 {
+            s[l] = madd::<F>(a[l], b[l], s[l]);
+        }
+    }
+    let mut t = ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
+    for (a, b) in xr.iter().zip(yr) {
+        t = madd::<F>(*a, *b, t);
+    }
+    t
 }
 
 /// The pivots D of an LDLᵀ factor (in elimination order).

@@ -8,4 +8,3 @@ pub mod factor;
 pub mod ordering;
 pub mod sparse;
 pub mod tall;
-mod tree_solve;
