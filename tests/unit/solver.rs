@@ -267,7 +267,12 @@ fn upper_sturm_point_lies_between_the_wanted_and_the_next_mode() {
         assert!(sol.sturm.complete, "{:?}", sol.sturm);
         assert_eq!(sol.factorizations, 2, "{nm} modes: one round");
         let up = sol.sturm.upper.0;
-        assert!(up > ex[nm - 1] && up < ex[nm], "{nm} modes: upper point {up} not in ({}, {})", ex[nm - 1], ex[nm]);
+        assert!(
+            up > ex[nm - 1] && up < ex[nm],
+            "{nm} modes: upper point {up} not in ({}, {})",
+            ex[nm - 1],
+            ex[nm]
+        );
         assert_eq!((sol.sturm.expected, sol.sturm.found), (nm, nm));
     }
 }
