@@ -372,15 +372,20 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
     let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
     let cp = sn.col_ptr_for_val();
     let max_p = (0..ns).map(|s| sn.supernode(s).pattern().len()).max().unwrap_or(0);
+    // Supernode s: first row, width, off-diagonal pattern, values (column-major, w + p rows).
+    let block = |s: usize| {
+        (
+            begin[s],
+            end[s] - begin[s],
+            sn.supernode(s).pattern(),
+            &values[cp[s]..cp[s + 1]],
+        )
+    };
     let mut buf = vec![0.0f64; K * max_p];
     // Forward: L y = b.
     for s in 0..ns {
-        let (f, l) = (begin[s], end[s]);
-        let w = l - f;
-        let pat = sn.supernode(s).pattern();
-        let p = pat.len();
-        let nr = w + p;
-        let ls = &values[cp[s]..cp[s + 1]];
+        let (f, w, pat, ls) = block(s);
+        let (l, p, nr) = (f + w, pat.len(), w + pat.len());
         let tmp = &mut buf[..K * p];
         tmp.fill(0.0);
         for j in 0..w {
@@ -408,10 +413,8 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
     }
     // Diagonal: D z = y.
     for s in 0..ns {
-        let (f, l) = (begin[s], end[s]);
-        let w = l - f;
-        let nr = w + sn.supernode(s).pattern().len();
-        let ls = &values[cp[s]..cp[s + 1]];
+        let (f, w, pat, ls) = block(s);
+        let nr = w + pat.len();
         for j in 0..w {
             let dinv = ls[j * nr + j].recip();
             for v in x[f + j].iter_mut() {
@@ -421,12 +424,8 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
     }
     // Backward: Lᵀ x = z.
     for s in (0..ns).rev() {
-        let (f, l) = (begin[s], end[s]);
-        let w = l - f;
-        let pat = sn.supernode(s).pattern();
-        let p = pat.len();
-        let nr = w + p;
-        let ls = &values[cp[s]..cp[s + 1]];
+        let (f, w, pat, ls) = block(s);
+        let (l, p, nr) = (f + w, pat.len(), w + pat.len());
         let g = &mut buf[..K * p];
         for (idx, &r) in pat.iter().enumerate() {
             for c in 0..K {
