@@ -232,12 +232,8 @@ pub fn superpose(
 /// Solve (K − σM) x = f for a complex f with the real LDLᵀ on the system's ordering (real and
 /// imaginary parts as two right-hand sides).
 fn solve_real_shifted(sys: &System, sigma: f64, f: &[c64]) -> Result<Vec<c64>> {
-    let a = if sigma == 0.0 {
-        sys.k().clone()
-    } else {
-        sys.k().sub_scaled(sigma, sys.m()?)
-    };
-    let fac = crate::linalg::factor::Factor::new(sys.symbolic()?.clone(), &a)
+    let shift = if sigma == 0.0 { None } else { Some((sys.m()?, sigma)) };
+    let fac = crate::linalg::factor::Factor::new_shifted(sys.symbolic()?.clone(), sys.k(), shift)
         .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
     let n = f.len();
     let mut b = faer::Mat::from_fn(n, 2, |i, c| if c == 0 { f[i].re } else { f[i].im });

@@ -155,9 +155,9 @@ pub struct EigenMemory {
 }
 
 impl EigenMemory {
-    fn add_factor(&mut self, f: &Factor, n_values: usize) {
+    fn add_factor(&mut self, f: &Factor) {
         self.factor = self.factor.max(f.bytes() as u64);
-        self.shifted_matrix = self.shifted_matrix.max(8 * n_values as u64);
+        self.shifted_matrix = self.shifted_matrix.max(f.shifted_matrix_bytes as u64);
         self.factor_workspace = self.factor_workspace.max(f.factor_workspace_bytes as u64);
         self.solve_workspace = self.solve_workspace.max(f.workspace_bytes() as u64);
         self.numeric_seconds += f.numeric_seconds;
@@ -329,7 +329,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     let mut factorizations = 0;
     let mut memory = EigenMemory::default();
     let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
-    memory.add_factor(&fa, k.values.len());
+    memory.add_factor(&fa);
     let mut backward = fa.probe_residual;
     let mut applications = 0usize;
     // Lanczos started while probing the spectrum (kept when the shift stays), and its result if
@@ -384,7 +384,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
                 probe_lz = None;
                 drop(fa);
                 (fa, sigma) = factor_at(k, m, sym, s_new, &mut factorizations)?;
-                memory.add_factor(&fa, k.values.len());
+                memory.add_factor(&fa);
                 backward = fa.probe_residual;
             }
         }
@@ -402,7 +402,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             let tv = Instant::now();
             log::info!("factorisation at the band's upper end {hi:.6e} for its Sturm count");
             let (fh, s_hi) = factor_at(k, m, sym, hi, &mut factorizations)?;
-            memory.add_factor(&fh, k.values.len());
+            memory.add_factor(&fh);
             backward = backward.max(fh.probe_residual);
             time_verify += tv.elapsed().as_secs_f64();
             upper_known = Some((hi, s_hi, fh.negative_pivots));
@@ -478,6 +478,9 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             let (l, x) = res.ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
             memory.lanczos_basis = memory.lanczos_basis.max(lz.bytes());
             memory.solve_workspace = memory.solve_workspace.max(f.workspace_bytes() as u64);
+            // The basis is not needed past this point (a second round starts a new one from
+            // the pairs found): free it before the refinement's blocks are allocated.
+            lz.release();
             log::info!(
                 "Lanczos: {} pairs converged after {applications} operator applications",
                 l.len()
@@ -547,7 +550,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         } else {
             log::info!("factorisation at {lower_pt:.6e} for the lower Sturm count");
             let (fl, _) = factor_at(k, m, sym, lower_pt, &mut factorizations)?;
-            memory.add_factor(&fl, k.values.len());
+            memory.add_factor(&fl);
             backward = backward.max(fl.probe_residual);
             fl.negative_pivots
         };
@@ -556,7 +559,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             _ => {
                 log::info!("factorisation at {upper_pt:.6e} for the upper Sturm count");
                 let (fu, used) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
-                memory.add_factor(&fu, k.values.len());
+                memory.add_factor(&fu);
                 backward = backward.max(fu.probe_residual);
                 (used, fu.negative_pivots)
             }
@@ -653,10 +656,9 @@ fn factor_at_checked(
     let mut last_err = None;
     for i in 0..4 {
         *count += 1;
-        let a = k.sub_scaled(s, m);
-        match Factor::new(sym.clone(), &a) {
+        match Factor::new_shifted(sym.clone(), k, Some((m, s))) {
             Ok(mut f) if !strict || f.min_rel_pivot > 1e-8 => {
-                f.probe(&a);
+                f.probe_shifted(k, Some((m, s)));
                 if f.probe_residual > 1e-8 {
                     log::warn!(
                         "factorisation of K − σM at σ = {s:.6e}: probe backward error {:.1e}",

@@ -6,6 +6,7 @@
 //! pivots is the inertia that the Sturm-sequence check needs (Sylvester's law of inertia).
 
 use crate::linalg::sparse::{Pattern, SymMatrix};
+use crate::linalg::supernodal;
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -26,6 +27,9 @@ pub struct SymbolicFactor {
     pub flops: f64,
     /// Entries of L.
     pub nnz_l: usize,
+    /// Schedule of the subtree-parallel numeric factorisation ([`supernodal`]), for supernodal
+    /// structures on machines that run its kernel; otherwise faer factorises.
+    plan: Option<supernodal::Plan>,
 }
 
 impl SymbolicFactor {
@@ -38,7 +42,16 @@ impl SymbolicFactor {
         let sym = factorize_symbolic_cholesky(pattern.symbolic(), Side::Upper, ord, CholeskySymbolicParams::default())
             .map_err(|e| Error::Factorization(format!("symbolic analysis: {e:?}")))?;
         let (flops, nnz_l) = count_flops(&sym);
-        Ok(SymbolicFactor { sym, flops, nnz_l })
+        let plan = match sym.raw() {
+            SymbolicCholeskyRaw::Supernodal(sn) if supernodal::available() => Some(supernodal::plan(sn)),
+            _ => None,
+        };
+        Ok(SymbolicFactor {
+            sym,
+            flops,
+            nnz_l,
+            plan,
+        })
     }
 
     /// Bytes the numeric factor's values will take.
@@ -93,59 +106,97 @@ pub struct Factor {
     pub probe_residual: f64,
     /// Bytes of the numeric factorisation's scratch (freed when it returns).
     pub factor_workspace_bytes: usize,
-    /// Seconds of the numeric factorisation itself (faer's LDLᵀ, nothing around it).
+    /// Bytes of the shifted matrix built for the factorisation (0 when it was read from K
+    /// and M directly).
+    pub shifted_matrix_bytes: usize,
+    /// Seconds of the numeric factorisation itself (nothing around it).
     pub numeric_seconds: f64,
     /// Solve workspaces kept between calls (one per concurrent column group).
     scratch: Mutex<Vec<Vec<f64>>>,
 }
 
 impl Factor {
-    /// Factor `a` (stored symmetric, upper triangle read).
+    /// Factor `a` (stored symmetric).
     pub fn new(sym: Arc<SymbolicFactor>, a: &SymMatrix) -> Result<Self> {
+        Self::new_shifted(sym, a, None)
+    }
+
+    /// Factor `K − σM` for `shift = Some((M, σ))` (K alone for `None`). The subtree-parallel
+    /// factorisation reads the entries straight from K and M; faer's (simplicial structures,
+    /// or machines without the kernel) is given the shifted matrix, built for it.
+    pub fn new_shifted(sym: Arc<SymbolicFactor>, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>) -> Result<Self> {
+        Self::factorise(sym, k, shift, true)
+    }
+
+    /// faer's own numeric factorisation of `a` (a reference for tests and benchmarks of the
+    /// subtree-parallel one, which should give the same values).
+    pub fn new_faer(sym: Arc<SymbolicFactor>, a: &SymMatrix) -> Result<Self> {
+        Self::factorise(sym, a, None, false)
+    }
+
+    fn factorise(sym: Arc<SymbolicFactor>, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>, own: bool) -> Result<Self> {
         let t0 = std::time::Instant::now();
-        let mut values = Vec::new();
-        values.try_reserve_exact(sym.sym.len_val()).map_err(|_| {
+        let mut values = zeroed(sym.sym.len_val()).ok_or_else(|| {
             Error::Factorization(format!(
                 "cannot allocate the factor ({:.1} GiB)",
                 sym.factor_bytes() as f64 / (1u64 << 30) as f64
             ))
         })?;
-        values.resize(sym.sym.len_val(), 0.0);
-        let par = Par::rayon(0);
-        let req = sym.sym.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
-        let factor_workspace_bytes = req.unaligned_bytes_required();
-        let mut mem =
-            MemBuffer::try_new(req).map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
-        let stack = MemStack::new(&mut mem);
-        sym.sym
-            .factorize_numeric_ldlt(
-                &mut values,
-                a.as_faer(),
-                Side::Upper,
-                LdltRegularization::default(),
-                par,
-                stack,
-                Default::default(),
-            )
-            .map_err(|e| {
-                // A zero pivot names its column of the permuted matrix: map it back to the
-                // equation so the model layer can name the node and component.
-                let equation = match e {
-                    faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
-                        // faer counts the failing pivot from 1.
-                        let index = index.saturating_sub(1);
-                        Some(match sym.sym.perm() {
-                            Some(p) => p.arrays().0.get(index).copied().unwrap_or(index),
-                            None => index,
-                        })
+        let perm = sym.sym.perm().map(|p| p.arrays());
+        let mut shifted_matrix_bytes = 0;
+        let (factor_workspace_bytes, res) = match (&sym.plan, sym.sym.raw()) {
+            (Some(plan), SymbolicCholeskyRaw::Supernodal(sn)) if own => {
+                let input = supernodal::Input { k, shift, perm };
+                let ws = supernodal::workspace_bytes(k.n(), plan, rayon::current_num_threads()) + plan.bytes();
+                (ws, supernodal::factorize(sn, plan, &input, &mut values))
+            }
+            _ => {
+                let shifted;
+                let a = match shift {
+                    Some((m, sigma)) => {
+                        shifted = k.sub_scaled(sigma, m);
+                        shifted_matrix_bytes = 8 * shifted.values.len();
+                        &shifted
                     }
+                    None => k,
                 };
-                Error::Singular {
-                    equation,
-                    at: None,
-                    msg: format!("LDLᵀ: zero pivot, the matrix is singular ({e:?})"),
+                let par = Par::rayon(0);
+                let req = sym.sym.factorize_numeric_ldlt_scratch::<f64>(par, Default::default());
+                let ws = req.unaligned_bytes_required();
+                let mut mem = MemBuffer::try_new(req)
+                    .map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
+                let stack = MemStack::new(&mut mem);
+                let r = sym
+                    .sym
+                    .factorize_numeric_ldlt(
+                        &mut values,
+                        a.as_faer(),
+                        Side::Upper,
+                        LdltRegularization::default(),
+                        par,
+                        stack,
+                        Default::default(),
+                    )
+                    .map(|_| ());
+                (ws, r)
+            }
+        };
+        res.map_err(|e| {
+            // A zero pivot names its column of the permuted matrix: map it back to the
+            // equation so the model layer can name the node and component.
+            let equation = match e {
+                faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                    // faer counts the failing pivot from 1.
+                    let index = index.saturating_sub(1);
+                    Some(perm.map_or(index, |(fwd, _)| fwd.get(index).copied().unwrap_or(index)))
                 }
-            })?;
+            };
+            Error::Singular {
+                equation,
+                at: None,
+                msg: format!("LDLᵀ: zero pivot, the matrix is singular ({e:?})"),
+            }
+        })?;
         let numeric_seconds = t0.elapsed().as_secs_f64();
         log::info!(
             "factorised K − σM: {} entries in L, {:.3e} flop, {numeric_seconds:.2} s",
@@ -153,7 +204,12 @@ impl Factor {
             sym.flops,
         );
         let d = diagonal(&sym.sym, &values);
-        let adiag = a.diagonal();
+        let mut adiag = k.diagonal();
+        if let Some((m, sigma)) = shift {
+            for (a, b) in adiag.iter_mut().zip(m.diagonal()) {
+                *a -= sigma * b;
+            }
+        }
         let min_rel_pivot = match sym.sym.perm() {
             Some(perm) => {
                 let (fwd, _) = perm.arrays();
@@ -197,6 +253,7 @@ impl Factor {
             min_rel_pivot,
             probe_residual: 0.0,
             factor_workspace_bytes,
+            shifted_matrix_bytes,
             numeric_seconds,
             scratch: Mutex::new(Vec::new()),
         })
@@ -306,7 +363,12 @@ impl Factor {
 
     /// Measure [`Factor::probe_residual`] against the matrix `a` that was factorised.
     pub fn probe(&mut self, a: &SymMatrix) {
-        let n = a.n();
+        self.probe_shifted(a, None)
+    }
+
+    /// [`Factor::probe`] for a factor of `K − σM` (`shift = Some((M, σ))`).
+    pub fn probe_shifted(&mut self, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>) {
+        let n = k.n();
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let x: Vec<f64> = (0..n)
             .map(|_| {
@@ -316,14 +378,28 @@ impl Factor {
                 (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             })
             .collect();
-        let b = a.mul_vec(&x);
+        let apply = |x: &[f64]| {
+            let mut y = k.mul_vec(x);
+            if let Some((m, sigma)) = shift {
+                for (a, b) in y.iter_mut().zip(m.mul_vec(x)) {
+                    *a -= sigma * b;
+                }
+            }
+            y
+        };
+        let b = apply(&x);
         let mut y = faer::Mat::from_fn(n, 1, |i, _| b[i]);
         self.solve_in_place(y.as_mut());
         let yv: Vec<f64> = (0..n).map(|i| y[(i, 0)]).collect();
-        let ay = a.mul_vec(&yv);
+        let ay = apply(&yv);
         let num: f64 = ay.iter().zip(&b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt();
         let den: f64 = b.iter().map(|q| q * q).sum::<f64>().sqrt();
         self.probe_residual = if den > 0.0 { num / den } else { 0.0 };
+    }
+
+    /// The factor's values (faer's layout), for comparisons in tests.
+    pub fn values(&self) -> &[f64] {
+        &self.values
     }
 
     /// The symbolic part.
@@ -477,6 +553,26 @@ fn dot<const F: bool>(x: &[f64], y: &[f64]) -> f64 {
         t = madd::<F>(*a, *b, t);
     }
     t
+}
+
+/// A zeroed vector of `len` values, or `None` when it cannot be allocated. The allocator's
+/// zeroed memory is used, so a large factor's pages are zero-filled by the system when first
+/// written (in parallel, by the workers that factor them) rather than by one pass here.
+fn zeroed(len: usize) -> Option<Vec<f64>> {
+    if len == 0 {
+        return Some(Vec::new());
+    }
+    let layout = std::alloc::Layout::array::<f64>(len).ok()?;
+    // SAFETY: the layout has a non-zero size; the pointer, if not null, is a fresh allocation
+    // of `len` zeroed f64 (all-zero bits are 0.0) with the global allocator and f64's layout,
+    // which is what `Vec::from_raw_parts` requires.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout) as *mut f64;
+        if p.is_null() {
+            return None;
+        }
+        Some(Vec::from_raw_parts(p, len, len))
+    }
 }
 
 /// The pivots D of an LDLᵀ factor (in elimination order).

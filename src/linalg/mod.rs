@@ -7,4 +7,5 @@ pub mod eigen;
 pub mod factor;
 pub mod ordering;
 pub mod sparse;
+pub mod supernodal;
 pub mod tall;

@@ -1,0 +1,498 @@
+//! Numeric supernodal LDLᵀ on faer's symbolic structure, parallel over independent subtrees
+//! of the elimination tree.
+//!
+//! The arithmetic of every supernode is faer's left-looking supernodal LDLᵀ (the same update
+//! kernel, `private_gemm_x86`'s gather–scatter product, in the same order of descendants, the
+//! same dense LDLᵀ and triangular solve), and the values land in faer's layout, so the factor
+//! is solved by [`super::factor`]'s supernodal solve and reads the same pivots. What differs is
+//! the schedule: faer walks the supernodes one after another and is parallel only inside the
+//! dense kernels, which on a mesh's many medium supernodes leaves most threads idle. Here the
+//! elimination tree is cut into independent subtrees that run at once, each with sequential
+//! kernels, and only the supernodes above the cut (the top separators, few and large) run
+//! one after another with parallel kernels. A supernode's result does not depend on which
+//! thread computes it or when, so the factor is the same bit for bit on any thread count.
+//!
+//! The matrix is read straight from K and M (`K − σM` entry by entry, in elimination order):
+//! neither the shifted matrix nor its permuted copy is built.
+
+use crate::linalg::sparse::SymMatrix;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::{
+    LdltError, LdltRegularization, cholesky_in_place, cholesky_in_place_scratch,
+};
+use faer::{MatMut, Par};
+use rayon::prelude::*;
+
+type Symbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>;
+
+/// The part of the schedule that depends on the structure only (computed once per pattern).
+pub struct Plan {
+    /// Descendants whose columns update each supernode, ascending:
+    /// `updaters[upd_ptr[s]..upd_ptr[s + 1]]`.
+    upd_ptr: Vec<usize>,
+    updaters: Vec<u32>,
+    /// Children of each supernode in the supernodal elimination tree:
+    /// `children[child_ptr[s]..child_ptr[s + 1]]`; the roots are listed in `roots`.
+    child_ptr: Vec<usize>,
+    children: Vec<u32>,
+    roots: Vec<u32>,
+    /// Flops of each supernode's own factorisation and updates, and of its whole subtree.
+    subtree_flops: Vec<f64>,
+    /// Widest supernode (for the dense factorisation's scratch).
+    max_width: usize,
+    /// Longest index list of one update (rows of a descendant at or below a supernode).
+    max_rows: usize,
+}
+
+impl Plan {
+    /// Bytes of the plan's own arrays.
+    pub fn bytes(&self) -> usize {
+        8 * (self.upd_ptr.len() + self.child_ptr.len() + self.subtree_flops.len())
+            + 4 * (self.updaters.len() + self.children.len() + self.roots.len())
+    }
+}
+
+/// Build the plan of a supernodal structure.
+pub fn plan(sn: &Symbolic) -> Plan {
+    let ns = sn.n_supernodes();
+    let n = sn.nrows();
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    let mut of_col = vec![0u32; n];
+    for s in 0..ns {
+        for c in &mut of_col[begin[s]..end[s]] {
+            *c = s as u32;
+        }
+    }
+    // Pairs (target, descendant): one per supernode that a descendant's pattern reaches.
+    let mut count = vec![0usize; ns + 1];
+    let mut parent = vec![u32::MAX; ns];
+    let mut own_flops = vec![0.0f64; ns];
+    let mut max_rows = 0;
+    for d in 0..ns {
+        let pat = sn.supernode(d).pattern();
+        max_rows = max_rows.max(pat.len());
+        let w = (end[d] - begin[d]) as f64;
+        let p = pat.len() as f64;
+        // Dense LDLᵀ of the diagonal block, the triangular solve below it, and the updates
+        // this supernode sends to its ancestors (counted at the sender: they read its columns).
+        own_flops[d] = w * w * w / 3.0 + p * w * w + p * p * w;
+        if let Some(&r) = pat.first() {
+            parent[d] = of_col[r];
+        }
+        let mut last = u32::MAX;
+        for &r in pat {
+            let t = of_col[r];
+            if t != last {
+                count[t as usize + 1] += 1;
+                last = t;
+            }
+        }
+    }
+    for s in 0..ns {
+        count[s + 1] += count[s];
+    }
+    let upd_ptr = count.clone();
+    let mut fill = count;
+    let mut updaters = vec![0u32; upd_ptr[ns]];
+    for d in 0..ns {
+        let mut last = u32::MAX;
+        for &r in sn.supernode(d).pattern() {
+            let t = of_col[r];
+            if t != last {
+                updaters[fill[t as usize]] = d as u32;
+                fill[t as usize] += 1;
+                last = t;
+            }
+        }
+    }
+    // Children lists (ascending) and subtree weights; parents come after their children.
+    let mut child_ptr = vec![0usize; ns + 1];
+    let mut roots = Vec::new();
+    for d in 0..ns {
+        match parent[d] {
+            u32::MAX => roots.push(d as u32),
+            p => child_ptr[p as usize + 1] += 1,
+        }
+    }
+    for s in 0..ns {
+        child_ptr[s + 1] += child_ptr[s];
+    }
+    let mut fill = child_ptr.clone();
+    let mut children = vec![0u32; child_ptr[ns]];
+    let mut subtree_flops = own_flops;
+    for d in 0..ns {
+        if parent[d] != u32::MAX {
+            let p = parent[d];
+            debug_assert!((p as usize) > d, "a supernode's parent comes after it");
+            children[fill[p as usize]] = d as u32;
+            fill[p as usize] += 1;
+            let f = subtree_flops[d];
+            subtree_flops[p as usize] += f;
+        }
+    }
+    let max_width = (0..ns).map(|s| end[s] - begin[s]).max().unwrap_or(0);
+    Plan {
+        upd_ptr,
+        updaters,
+        child_ptr,
+        children,
+        roots,
+        subtree_flops,
+        max_width,
+        max_rows,
+    }
+}
+
+/// Whether this machine runs the update kernel (x86-64 with AVX2 and FMA, or AVX-512).
+pub fn available() -> bool {
+    instr_set().is_some()
+}
+
+#[cfg(target_arch = "x86_64")]
+fn instr_set() -> Option<private_gemm_x86::InstrSet> {
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        Some(private_gemm_x86::InstrSet::Avx512)
+    } else if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        Some(private_gemm_x86::InstrSet::Avx256)
+    } else {
+        None
+    }
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn instr_set() -> Option<()> {
+    None
+}
+
+/// The matrix to factor: `K − σM` read from K and (optionally) M on their shared pattern,
+/// permuted by `perm` (`fwd[new] = old`, `inv[old] = new`).
+pub struct Input<'a> {
+    /// K (or the matrix itself), both triangles stored.
+    pub k: &'a SymMatrix,
+    /// M and σ, on K's pattern.
+    pub shift: Option<(&'a SymMatrix, f64)>,
+    /// The elimination order.
+    pub perm: Option<(&'a [usize], &'a [usize])>,
+}
+
+/// The values array shared by the workers: each supernode's block is written by exactly one
+/// task, and read only by its ancestors' tasks, which start after it is complete.
+#[derive(Clone, Copy)]
+struct Shared(*mut f64, usize);
+// SAFETY: see the type's description; the schedule guarantees disjoint writes and
+// reads-after-completion (each task runs after its whole subtree).
+unsafe impl Send for Shared {}
+unsafe impl Sync for Shared {}
+
+/// Per-worker scratch: the global-to-local row map (all "none" between supernodes) and the
+/// index lists of one update.
+struct Work {
+    g2l: Vec<usize>,
+    rows: Vec<usize>,
+    cols: Vec<usize>,
+    mem: MemBuffer,
+}
+
+const NONE: usize = usize::MAX;
+
+impl Work {
+    fn new(n: usize, plan: &Plan) -> Work {
+        Work {
+            g2l: vec![NONE; n],
+            rows: Vec::with_capacity(plan.max_rows),
+            cols: Vec::with_capacity(plan.max_rows),
+            mem: MemBuffer::new(cholesky_in_place_scratch::<f64>(
+                plan.max_width,
+                Par::Seq,
+                Default::default(),
+            )),
+        }
+    }
+    /// Bytes of one worker's scratch.
+    fn bytes(n: usize, plan: &Plan) -> usize {
+        8 * (n + 2 * plan.max_rows + plan.max_width) + 4096
+    }
+}
+
+/// Bytes of the scratch a factorisation with `threads` workers allocates.
+pub fn workspace_bytes(n: usize, plan: &Plan, threads: usize) -> usize {
+    threads.max(1) * Work::bytes(n, plan)
+}
+
+/// Factor into `values` (length `sn.len_val()`, faer's supernodal LDLᵀ layout). A zero pivot
+/// is returned as faer reports it (counted from 1, in elimination order).
+pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f64]) -> Result<(), LdltError> {
+    assert_eq!(values.len(), sn.len_val());
+    let ns = sn.n_supernodes();
+    let n = sn.nrows();
+    let threads = rayon::current_num_threads().max(1);
+    let shared = Shared(values.as_mut_ptr(), values.len());
+    if threads == 1 || ns < 2 {
+        let mut w = Work::new(n, plan);
+        for s in 0..ns {
+            node(sn, plan, input, shared, s, &mut w, Par::Seq)?;
+        }
+        return Ok(());
+    }
+    // Cut the tree: split the heaviest subtree into its children until none is heavier than
+    // a share of the total that keeps every thread busy to the end; the split nodes form the
+    // top, run afterwards one by one with parallel kernels.
+    let total: f64 = plan.roots.iter().map(|&r| plan.subtree_flops[r as usize]).sum();
+    let limit = total / (6 * threads) as f64;
+    let tq = std::time::Instant::now();
+    let mut heap: std::collections::BinaryHeap<(u64, u32)> = plan
+        .roots
+        .iter()
+        .map(|&r| (plan.subtree_flops[r as usize] as u64, r))
+        .collect();
+    let mut top = Vec::new();
+    while let Some(&(w, s)) = heap.peek() {
+        if (w as f64) <= limit {
+            break;
+        }
+        heap.pop();
+        top.push(s as usize);
+        let s = s as usize;
+        for &c in &plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]] {
+            heap.push((plan.subtree_flops[c as usize] as u64, c));
+        }
+    }
+    // Heaviest first, so that the last ones to finish are small.
+    let mut subtrees: Vec<(u64, u32)> = heap.into_vec();
+    subtrees.sort_by(|a, b| b.cmp(a));
+    let pool = std::sync::Mutex::new(Vec::<Work>::new());
+    subtrees.par_iter().with_max_len(1).try_for_each(|&(_, root)| {
+        let mut w = pool
+            .lock()
+            .ok()
+            .and_then(|mut p| p.pop())
+            .unwrap_or_else(|| Work::new(n, plan));
+        // The subtree's supernodes, ascending (children before parents).
+        let mut nodes = Vec::new();
+        let mut stack = vec![root];
+        while let Some(s) = stack.pop() {
+            nodes.push(s);
+            let s = s as usize;
+            stack.extend_from_slice(&plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]]);
+        }
+        nodes.sort_unstable();
+        let r = nodes
+            .iter()
+            .try_for_each(|&s| node(sn, plan, input, shared, s as usize, &mut w, Par::Seq));
+        if let Ok(mut p) = pool.lock() {
+            p.push(w);
+        }
+        r
+    })?;
+    let t_sub = tq.elapsed().as_secs_f64();
+    let ntop = top.len();
+    top.sort_unstable();
+    let mut w = pool
+        .lock()
+        .ok()
+        .and_then(|mut p| p.pop())
+        .unwrap_or_else(|| Work::new(n, plan));
+    for s in top {
+        node(sn, plan, input, shared, s, &mut w, Par::rayon(0))?;
+    }
+    log::debug!(
+        "subtrees {t_sub:.3} s, {ntop} top nodes {:.3} s",
+        tq.elapsed().as_secs_f64() - t_sub
+    );
+    Ok(())
+}
+
+/// Factor supernode `s`: gather its columns of the matrix, subtract the updates of its
+/// descendants (all complete), factor the diagonal block and solve for the rows below.
+fn node(
+    sn: &Symbolic,
+    plan: &Plan,
+    input: &Input<'_>,
+    shared: Shared,
+    s: usize,
+    w: &mut Work,
+    par: Par,
+) -> Result<(), LdltError> {
+    let cp = sn.col_ptr_for_val();
+    let (s_start, s_end) = (sn.supernode_begin()[s], sn.supernode_end()[s]);
+    let s_pattern = sn.supernode(s).pattern();
+    let s_ncols = s_end - s_start;
+    let s_nrows = s_ncols + s_pattern.len();
+    debug_assert!(cp[s + 1] <= shared.1);
+    // SAFETY: supernode s's block is written by this task only (see `Shared`).
+    let ls_vals = unsafe { std::slice::from_raw_parts_mut(shared.0.add(cp[s]), cp[s + 1] - cp[s]) };
+    ls_vals.fill(0.0);
+    for (i, &row) in s_pattern.iter().enumerate() {
+        w.g2l[row] = i + s_ncols;
+    }
+    // The matrix's columns, lower part in elimination order.
+    {
+        let pat = &input.k.pattern;
+        for j in s_start..s_end {
+            let jl = j - s_start;
+            let c_old = input.perm.map_or(j, |(fwd, _)| fwd[j]);
+            for pos in pat.col_ptr[c_old]..pat.col_ptr[c_old + 1] {
+                let i = input.perm.map_or(pat.row_idx[pos], |(_, inv)| inv[pat.row_idx[pos]]);
+                if i < j {
+                    continue;
+                }
+                let mut v = input.k.values[pos];
+                if let Some((m, sigma)) = input.shift {
+                    v -= sigma * m.values[pos];
+                }
+                let il = if i < s_end { i - s_start } else { w.g2l[i] };
+                ls_vals[il + jl * s_nrows] += v;
+            }
+        }
+    }
+    // Updates from the descendants, in ascending order (faer's). (Splitting a top supernode's
+    // updates by column ranges across threads was measured slower than parallel kernels: every
+    // range packs each descendant's block again.)
+    for &d in &plan.updaters[plan.upd_ptr[s]..plan.upd_ptr[s + 1]] {
+        let d = d as usize;
+        let (ld, d_nrows, d_ncols, d_pattern) = block(sn, shared, d);
+        let p0 = d_pattern.partition_point(|&r| r < s_start);
+        let mid = d_pattern[p0..].partition_point(|&r| r < s_end);
+        w.rows.clear();
+        w.cols.clear();
+        for (i, &r) in d_pattern[p0..].iter().enumerate() {
+            w.rows.push(if i < mid { r - s_start } else { w.g2l[r] });
+        }
+        for &r in &d_pattern[p0..p0 + mid] {
+            w.cols.push(r - s_start);
+        }
+        update(
+            ls_vals, s_nrows, s_ncols, ld, d_nrows, d_ncols, p0, mid, &w.rows, &w.cols, par,
+        );
+    }
+    // Dense LDLᵀ of the diagonal block; L below it.
+    let ls = MatMut::from_column_major_slice_mut(ls_vals, s_nrows, s_ncols);
+    let (mut top, mut bot) = ls.split_at_row_mut(s_ncols);
+    let stack = MemStack::new(&mut w.mem);
+    let res = cholesky_in_place(
+        top.as_mut(),
+        LdltRegularization::default(),
+        par,
+        stack,
+        Default::default(),
+    );
+    if let Err(LdltError::ZeroPivot { index }) = res {
+        for &row in s_pattern {
+            w.g2l[row] = NONE;
+        }
+        return Err(LdltError::ZeroPivot { index: index + s_start });
+    }
+    for j in 0..s_ncols {
+        for i in 0..j {
+            top[(i, j)] = 0.0;
+        }
+    }
+    faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+        top.as_ref(),
+        bot.as_mut().transpose_mut(),
+        par,
+    );
+    for j in 0..s_ncols {
+        let d = top[(j, j)].recip();
+        for i in 0..s_pattern.len() {
+            bot[(i, j)] *= d;
+        }
+    }
+    for &row in s_pattern {
+        w.g2l[row] = NONE;
+    }
+    Ok(())
+}
+
+/// A complete descendant's block: values, rows, columns, off-diagonal pattern.
+fn block(sn: &Symbolic, shared: Shared, d: usize) -> (&[f64], usize, usize, &[usize]) {
+    let cp = sn.col_ptr_for_val();
+    let d_pattern = sn.supernode(d).pattern();
+    let d_ncols = sn.supernode_end()[d] - sn.supernode_begin()[d];
+    // SAFETY: only called for descendants of the supernode being factored, all complete
+    // before its task started; only read.
+    let ld = unsafe { std::slice::from_raw_parts(shared.0.add(cp[d]) as *const f64, cp[d + 1] - cp[d]) };
+    (ld, d_ncols + d_pattern.len(), d_ncols, d_pattern)
+}
+
+/// `Ls[rows, cols] −= L_d[p0.., :] · D_d · L_d[p0..p0+mid, :]ᵀ` on the lower triangle (faer's
+/// supernodal update, through the same kernel).
+#[allow(clippy::too_many_arguments)]
+fn update(
+    ls: &mut [f64],
+    s_nrows: usize,
+    s_ncols: usize,
+    ld: &[f64],
+    d_nrows: usize,
+    d_ncols: usize,
+    p0: usize,
+    mid: usize,
+    rows: &[usize],
+    cols: &[usize],
+    par: Par,
+) {
+    let nrows = rows.len();
+    if nrows == 0 || mid == 0 || d_ncols == 0 {
+        return;
+    }
+    debug_assert!(ls.len() >= s_nrows * s_ncols && ld.len() >= d_nrows * d_ncols);
+    let par = if (nrows * mid).saturating_mul(d_ncols) > 32 * 32 * 32 {
+        par
+    } else {
+        Par::Seq
+    };
+    #[cfg(target_arch = "x86_64")]
+    if let Some(instr) = instr_set() {
+        use private_gemm_x86 as pg;
+        let a = ld[d_ncols + p0..].as_ptr(); // rows d_ncols+p0.., column-major, stride d_nrows
+        let minus_one = -1.0f64;
+        // SAFETY: every index is inside the blocks (checked by construction: rows index the
+        // supernode's rows, cols its columns, and the operands are views of d's block); the
+        // kernel reads A (nrows × d_ncols), B = L_d[mid rows]ᵀ (d_ncols × mid) and the
+        // diagonal, and adds into Ls at (rows[i], cols[j]) for rows[i] ≥ cols[j].
+        unsafe {
+            pg::gemm(
+                pg::DType::F64,
+                pg::IType::U64,
+                instr,
+                nrows,
+                mid,
+                d_ncols,
+                ls.as_mut_ptr() as *mut (),
+                1,
+                s_nrows as isize,
+                rows.as_ptr() as *const (),
+                cols.as_ptr() as *const (),
+                pg::DstKind::Lower,
+                pg::Accum::Add,
+                a as *const (),
+                1,
+                d_nrows as isize,
+                false,
+                ld.as_ptr() as *const (),
+                (d_nrows + 1) as isize,
+                a as *const (),
+                d_nrows as isize,
+                1,
+                false,
+                &raw const minus_one as *const (),
+                par.degree(),
+            );
+        }
+        return;
+    }
+    // Portable path (not reached: `available()` gates this module).
+    let a = |i: usize, k: usize| ld[d_ncols + p0 + i + k * d_nrows];
+    for (jj, &cj) in cols.iter().enumerate() {
+        for (ii, &ri) in rows.iter().enumerate() {
+            if ri < cj {
+                continue;
+            }
+            let mut acc = 0.0;
+            for k in 0..d_ncols {
+                acc += a(ii, k) * ld[k * d_nrows + k] * a(jj, k);
+            }
+            ls[ri + cj * s_nrows] -= acc;
+        }
+    }
+}
