@@ -253,28 +253,60 @@ def table(rows: list, dgemm) -> str:
 
 
 def plot(rows: list, path: str) -> bool:
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        return False
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    """Log-log plot of the compared time and the peak memory against DOFs, one line per tool,
+    written as SVG by hand (no plotting package needed). False when there is nothing to plot."""
+    import math
+    colors = {"vibrofem": "#1f77b4", "slepc": "#ff7f0e", "calculix": "#2ca02c", "skfem": "#d62728"}
+    series = {}
     for tool in TOOLS:
         pts = [(row["dofs"], row["tools"][tool]) for row in rows
                if tool in row["tools"] and "wall_s" in row["tools"][tool]]
-        if not pts:
-            continue
-        x = [p[0] for p in pts]
-        ax1.loglog(x, [p[1]["compared_s"] or p[1]["wall_s"] for p in pts], "o-", label=tool)
-        ax2.loglog(x, [(p[1]["peak_bytes"] or 0) / 2 ** 20 for p in pts], "o-", label=tool)
-    ax1.set(xlabel="DOFs", ylabel="time [s]", title="time (compared figure)")
-    ax2.set(xlabel="DOFs", ylabel="peak RSS [MiB]", title="peak memory")
-    for a in (ax1, ax2):
-        a.grid(True, which="both", alpha=0.3)
-        a.legend()
-    fig.tight_layout()
-    fig.savefig(path)
+        if pts:
+            series[tool] = [(d, r.get("compared_s") or r["wall_s"], (r.get("peak_bytes") or 0) / 2 ** 20)
+                            for d, r in pts]
+    if not series:
+        return False
+    W, H, L, R, T, B = 460, 340, 64, 16, 34, 48  # one panel: size and margins (px)
+
+    def decades(vals):
+        lo = math.floor(math.log10(min(vals)))
+        hi = math.ceil(math.log10(max(vals)))
+        return lo, max(hi, lo + 1)
+
+    def panel(x0, title, ylabel, k):
+        xs = [p[0] for s in series.values() for p in s]
+        ys = [p[k] for s in series.values() for p in s if p[k] > 0]
+        (xl, xh), (yl, yh) = decades(xs), decades(ys)
+        px = lambda x: x0 + L + (math.log10(x) - xl) / (xh - xl) * (W - L - R)
+        py = lambda y: T + (yh - math.log10(y)) / (yh - yl) * (H - T - B)
+        out = [f'<text x="{x0 + W / 2}" y="20" text-anchor="middle" font-size="14">{title}</text>',
+               f'<rect x="{x0 + L}" y="{T}" width="{W - L - R}" height="{H - T - B}" fill="none" stroke="#444"/>']
+        for e in range(xl, xh + 1):
+            x = px(10 ** e)
+            out.append(f'<line x1="{x:.1f}" y1="{T}" x2="{x:.1f}" y2="{H - B}" stroke="#ddd"/>')
+            out.append(f'<text x="{x:.1f}" y="{H - B + 16}" text-anchor="middle" font-size="11">1e{e}</text>')
+        for e in range(yl, yh + 1):
+            y = py(10 ** e)
+            out.append(f'<line x1="{x0 + L}" y1="{y:.1f}" x2="{x0 + W - R}" y2="{y:.1f}" stroke="#ddd"/>')
+            out.append(f'<text x="{x0 + L - 6}" y="{y + 4:.1f}" text-anchor="end" font-size="11">1e{e}</text>')
+        out.append(f'<text x="{x0 + L + (W - L - R) / 2}" y="{H - 10}" text-anchor="middle" font-size="12">DOFs</text>')
+        out.append(f'<text x="{x0 + 14}" y="{T + (H - T - B) / 2}" font-size="12" text-anchor="middle" '
+                   f'transform="rotate(-90 {x0 + 14} {T + (H - T - B) / 2})">{ylabel}</text>')
+        for i, (tool, pts) in enumerate(series.items()):
+            c = colors.get(tool, "#000")
+            xy = [(px(p[0]), py(p[k])) for p in pts if p[k] > 0]
+            if len(xy) > 1:
+                out.append(f'<polyline fill="none" stroke="{c}" stroke-width="2" points="'
+                           + " ".join(f"{x:.1f},{y:.1f}" for x, y in xy) + '"/>')
+            out += [f'<circle cx="{x:.1f}" cy="{y:.1f}" r="3.5" fill="{c}"/>' for x, y in xy]
+            out.append(f'<text x="{x0 + L + 8}" y="{T + 16 + 15 * i}" font-size="12" fill="{c}">{tool}</text>')
+        return out
+
+    body = panel(0, "time (compared figure)", "time [s]", 1) + panel(W, "peak memory", "peak RSS [MiB]", 2)
+    with open(path, "w") as fh:
+        fh.write(f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * W}" height="{H}" '
+                 f'font-family="sans-serif">\n<rect width="100%" height="100%" fill="white"/>\n'
+                 + "\n".join(body) + "\n</svg>\n")
     return True
 
 
