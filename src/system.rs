@@ -423,8 +423,10 @@ fn check_estimate(source: &str, budget: &Option<MemoryBudget>, bytes: u64, detai
 /// the matrices would not fit in `limit` bytes (`--max-memory`) or, without a limit, in the memory
 /// the system has available — a clear error with the estimate instead of being killed.
 pub fn check_memory(source: &str, sym: &SymbolicFactor, pattern: &Pattern, limit: Option<u64>) -> Result<()> {
-    // Factor values, K, M, the shifted copy and faer's permuted copy (values + indices).
-    let need = sym.factor_bytes() as u64 + 4 * 16 * pattern.nnz() as u64;
+    // Factor values and K, M (values and their shared indices); with faer's factorisation also
+    // the shifted copy and faer's permuted copy (values + indices).
+    let per_entry = if sym.reads_k_and_m() { 32 } else { 64 };
+    let need = sym.factor_bytes() as u64 + per_entry * pattern.nnz() as u64;
     let Some(MemoryBudget { bytes: lim, what }) = memory_budget(limit) else {
         return Ok(());
     };

@@ -167,6 +167,9 @@ impl EigenMemory {
 
 /// Largest model solved densely when a request asks for a quarter of its modes or more (faer's dense solver takes ~20 s at 3200 DOFs; Lanczos for 1000 of them ran past ten minutes).
 const DENSE_MAX: usize = 4000;
+/// Smallest ratio of the extreme eigenvalues of a new block's M-Gram matrix for which the block
+/// is normalised without another orthogonalisation pass against the basis.
+const WELL_CONDITIONED: f64 = 1e-4;
 /// Largest block size chosen automatically for models of several unconnected parts.
 const MAX_AUTO_BLOCK: usize = 60;
 
@@ -870,6 +873,7 @@ impl Lanczos {
             let gs = nalgebra::DMatrix::from_fn(bw, bw, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
             let eig = nalgebra::SymmetricEigen::new(gs);
             let smax = eig.eigenvalues.iter().fold(0.0f64, |a, &s| a.max(s));
+            let smin = eig.eigenvalues.iter().fold(f64::INFINITY, |a, &s| a.min(s));
             let floor = if pass == 0 && scale2 > 0.0 {
                 scale2 * 1e-20
             } else {
@@ -904,7 +908,10 @@ impl Lanczos {
                     }
                 }
                 m.mul_block(w.as_ref(), mw.as_mut());
-            } else if pass >= 1 {
+            } else if pass >= 1 || smin >= WELL_CONDITIONED * smax {
+                // The block was orthogonal to the basis to rounding (two Gram–Schmidt passes);
+                // scaling a well-conditioned block amplifies that rounding by at most
+                // √(smax/smin) ≤ 100, so another pass against the basis buys nothing.
                 break;
             }
             // Second pass: clean rounding (and orthogonalise random replacements).

@@ -54,6 +54,12 @@ impl SymbolicFactor {
         })
     }
 
+    /// Whether numeric factorisations of `K − σM` read K and M directly (the subtree-parallel
+    /// factorisation) rather than a shifted matrix built for them (faer's).
+    pub fn reads_k_and_m(&self) -> bool {
+        self.plan.is_some()
+    }
+
     /// Bytes the numeric factor's values will take.
     pub fn factor_bytes(&self) -> usize {
         self.sym.len_val() * std::mem::size_of::<f64>()
