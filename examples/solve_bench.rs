@@ -1,4 +1,5 @@
-//! Times one factorisation of K − σM and solves with it for blocks of 1, 6, 12 and 18
+//! Times the numeric factorisation of K − σM, vibrofem's subtree-parallel one against faer's,
+//! on one thread and on all, and solves with the factor for blocks of 1, 6, 12 and 18
 //! right-hand sides: vibrofem's block solve against faer's own sequential solve (medians of
 //! three). A development aid for the solver; the numbers are printed, never asserted.
 //!
@@ -20,14 +21,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (k, m) = (sys.k(), sys.m()?);
     // A small negative shift, as the eigen solver's default for a free body.
     let a = k.sub_scaled(-1e5, m);
-    let t = Instant::now();
-    let f = Factor::new(sys.symbolic()?.clone(), &a)?;
-    println!(
-        "{} DOFs: factorised in {:.2} s ({:.2} s numeric)",
-        k.n(),
-        t.elapsed().as_secs_f64(),
-        f.numeric_seconds
-    );
+    let sym = sys.symbolic()?.clone();
+    let all = rayon::current_num_threads();
+    println!("{} DOFs, {} entries in L, {:.3e} flop", k.n(), sym.nnz_l, sym.flops);
+    for threads in [1, all] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+        for (name, own) in [("vibrofem", true), ("faer", false)] {
+            let mut ts = vec![];
+            for _ in 0..3 {
+                let f = pool.install(|| {
+                    if own {
+                        Factor::new_shifted(sym.clone(), k, Some((m, -1e5)))
+                    } else {
+                        Factor::new_faer(sym.clone(), &a)
+                    }
+                })?;
+                ts.push(f.numeric_seconds);
+            }
+            ts.sort_by(f64::total_cmp);
+            println!(
+                "factorisation, {threads} thread(s), {name:<8}: {:.2} s ({:.1} GFLOP/s)",
+                ts[1],
+                sym.flops / ts[1] / 1e9
+            );
+        }
+    }
+    let f = Factor::new_shifted(sym.clone(), k, Some((m, -1e5)))?;
     let n = k.n();
     for cols in [1usize, 6, 12, 18] {
         let b = faer::Mat::from_fn(n, cols, |i, j| ((i * 7 + j * 13) % 17) as f64 - 8.0);
