@@ -242,9 +242,9 @@ def table(rows: list, dgemm) -> str:
                 diff = max(abs(a - b) / b for a, b in zip(sorted(fr)[6:N_MODES], sorted(ref)[6:N_MODES]))
             note = {True: "verified", False: "verification failed"}.get(r.get("verified"), "")
             lines.append(
-                f"| {row['dofs']:,} | {tool} | {r.get('runs', 1)} | {f(r['wall_s'])} | {f(r.get('compared_s'))} "
+                f"| {format(row['dofs'], ',').replace(',', ' ')} | {tool} | {r.get('runs', 1)} | {f(r['wall_s'])} | {f(r.get('compared_s'))} "
                 f"| {f(r['peak_bytes'] / 2 ** 20 if r.get('peak_bytes') else None, '{:.0f}')} "
-                f"| {f(r.get('factor_gflops'), '{:.1f}')} | {f(diff, '{:.1e}')} | {note} |".replace(",", " ", 1))
+                f"| {f(r.get('factor_gflops'), '{:.1f}')} | {f(diff, '{:.1e}')} | {note} |")
     lines.append("")
     lines.append(f"DGEMM on this machine (numpy, 2000², best of 3): {f(dgemm, '{:.1f}')} GFLOP/s. "
                  "'compared': vibrofem's whole run, SLEPc's eigen solve alone (load + EPSSolve with "
