@@ -367,12 +367,8 @@ impl Factor {
         }
     }
 
-    /// Measure [`Factor::probe_residual`] against the matrix `a` that was factorised.
-    pub fn probe(&mut self, a: &SymMatrix) {
-        self.probe_shifted(a, None)
-    }
-
-    /// [`Factor::probe`] for a factor of `K − σM` (`shift = Some((M, σ))`).
+    /// Measure [`Factor::probe_residual`] against the matrix that was factorised: `K − σM` for
+    /// `shift = Some((M, σ))`, K alone for `None`.
     pub fn probe_shifted(&mut self, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>) {
         let n = k.n();
         let mut state = 0x9e37_79b9_7f4a_7c15u64;

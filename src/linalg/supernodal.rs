@@ -261,12 +261,14 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
     let mut subtrees: Vec<(u64, u32)> = heap.into_vec();
     subtrees.sort_by(|a, b| b.cmp(a));
     let pool = std::sync::Mutex::new(Vec::<Work>::new());
-    subtrees.par_iter().with_max_len(1).try_for_each(|&(_, root)| {
-        let mut w = pool
-            .lock()
+    let take = || {
+        pool.lock()
             .ok()
             .and_then(|mut p| p.pop())
-            .unwrap_or_else(|| Work::new(n, plan));
+            .unwrap_or_else(|| Work::new(n, plan))
+    };
+    subtrees.par_iter().with_max_len(1).try_for_each(|&(_, root)| {
+        let mut w = take();
         // The subtree's supernodes, ascending (children before parents).
         let mut nodes = Vec::new();
         let mut stack = vec![root];
@@ -287,11 +289,7 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
     let t_sub = tq.elapsed().as_secs_f64();
     let ntop = top.len();
     top.sort_unstable();
-    let mut w = pool
-        .lock()
-        .ok()
-        .and_then(|mut p| p.pop())
-        .unwrap_or_else(|| Work::new(n, plan));
+    let mut w = take();
     for s in top {
         node(sn, plan, input, shared, s, &mut w, Par::rayon(0))?;
     }
@@ -365,6 +363,10 @@ fn node(
             ls_vals, s_nrows, s_ncols, ld, d_nrows, d_ncols, p0, mid, &w.rows, &w.cols, par,
         );
     }
+    // The row map is not needed past the updates: leave it all "none" for the next supernode.
+    for &row in s_pattern {
+        w.g2l[row] = NONE;
+    }
     // Dense LDLᵀ of the diagonal block; L below it.
     let ls = MatMut::from_column_major_slice_mut(ls_vals, s_nrows, s_ncols);
     let (mut top, mut bot) = ls.split_at_row_mut(s_ncols);
@@ -377,9 +379,6 @@ fn node(
         Default::default(),
     );
     if let Err(LdltError::ZeroPivot { index }) = res {
-        for &row in s_pattern {
-            w.g2l[row] = NONE;
-        }
         return Err(LdltError::ZeroPivot { index: index + s_start });
     }
     for j in 0..s_ncols {
@@ -397,9 +396,6 @@ fn node(
         for i in 0..s_pattern.len() {
             bot[(i, j)] *= d;
         }
-    }
-    for &row in s_pattern {
-        w.g2l[row] = NONE;
     }
     Ok(())
 }

@@ -130,18 +130,23 @@ fn dense_path_agrees_with_lanczos() {
     }
 }
 
+/// The system of a hex20 box solid (default steel, free), `size` in metres, `cells` per edge.
+fn hex20_box(size: [f64; 3], cells: [usize; 3]) -> vibrofem::system::System {
+    use vibrofem::mesh::{CellKind, generate::box_mesh};
+    use vibrofem::model::{Model, ModelSpec};
+    use vibrofem::system::{System, SystemOptions};
+    let mesh = box_mesh(CellKind::Hex20, size, cells);
+    let model = Model::build(&mesh, &ModelSpec::default(), "box").unwrap();
+    System::build(model, &SystemOptions::default(), "box").unwrap()
+}
+
 /// The supernodal block solve against its definition: for an indefinite K − σM of a hex20
 /// solid (σ inside the spectrum), ‖A X − B‖ / ‖B‖ stays at rounding level for a block of 13
 /// right-hand sides (split into column groups), and every column of the block is bit for bit
 /// the solve of that column alone (the grouping, hence the thread count, changes nothing).
 #[test]
 fn block_solve_matches_single_columns_and_has_small_residual() {
-    use vibrofem::mesh::{CellKind, generate::box_mesh};
-    use vibrofem::model::{Model, ModelSpec};
-    use vibrofem::system::{System, SystemOptions};
-    let mesh = box_mesh(CellKind::Hex20, [0.3, 0.2, 0.1], [6, 4, 3]);
-    let model = Model::build(&mesh, &ModelSpec::default(), "box").unwrap();
-    let sys = System::build(model, &SystemOptions::default(), "box").unwrap();
+    let sys = hex20_box([0.3, 0.2, 0.1], [6, 4, 3]);
     let (k, m) = (sys.k(), sys.m().unwrap());
     // A shift between the 20th and 21st eigenvalues (dense reference): A is indefinite.
     let ev = vibrofem::linalg::dense::eigen_all(k, m, -1.0, false).unwrap().0;
@@ -195,12 +200,7 @@ fn block_solve_matches_single_columns_and_has_small_residual() {
 /// is its inertia.
 #[test]
 fn subtree_parallel_factor_equals_faers_bit_for_bit() {
-    use vibrofem::mesh::{CellKind, generate::box_mesh};
-    use vibrofem::model::{Model, ModelSpec};
-    use vibrofem::system::{System, SystemOptions};
-    let mesh = box_mesh(CellKind::Hex20, [0.6, 0.3, 0.1], [12, 6, 3]);
-    let model = Model::build(&mesh, &ModelSpec::default(), "box").unwrap();
-    let sys = System::build(model, &SystemOptions::default(), "box").unwrap();
+    let sys = hex20_box([0.6, 0.3, 0.1], [12, 6, 3]);
     let (k, m) = (sys.k(), sys.m().unwrap());
     let sym = sys.symbolic().unwrap().clone();
     // A shift among the low modes (estimated from the default shift's scale): indefinite.
