@@ -69,6 +69,8 @@ pub struct System {
     /// `None` for a system assembled for another solver ([`System::assemble_only`]).
     symbolic: Option<Arc<SymbolicFactor>>,
     ordering: Ordering,
+    /// The corner space of the model, built on first use ([`System::coarse_space`]).
+    coarse: std::sync::OnceLock<Option<crate::linalg::coarse::Prolongation>>,
     /// Time spent building.
     pub timings: SystemTimings,
 }
@@ -160,6 +162,7 @@ impl System {
             m: opts.mass.then_some(km.m),
             symbolic: Some(Arc::new(symbolic)),
             ordering: opts.ordering,
+            coarse: Default::default(),
             timings: SystemTimings {
                 assemble: t_assemble,
                 order: t_order,
@@ -197,6 +200,7 @@ impl System {
             k: km.k,
             m: Some(km.m),
             symbolic: None,
+            coarse: Default::default(),
             ordering: Ordering::Natural,
             timings: SystemTimings {
                 assemble: t.elapsed().as_secs_f64(),
@@ -264,6 +268,12 @@ impl System {
                 self.source
             ))
         })
+    }
+
+    /// The corner space of a quadratic mesh ([`Model::corner_space`]), which the eigen solver
+    /// uses to place its shift above the wanted modes; `None` for linear meshes.
+    pub fn coarse_space(&self) -> Option<&crate::linalg::coarse::Prolongation> {
+        self.coarse.get_or_init(|| self.model.corner_space()).as_ref()
     }
 
     /// The ordering used.

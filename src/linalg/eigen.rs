@@ -28,6 +28,7 @@
 //! for free–free models (six rigid-body modes, K singular), and the lowest modes are sought.
 //! A user shift finds the modes nearest to it.
 
+use super::coarse::Prolongation;
 use super::factor::{Factor, SymbolicFactor};
 use super::tall;
 use crate::linalg::sparse::SymMatrix;
@@ -272,6 +273,36 @@ impl Rng {
 /// Solve K x = λ M x for the requested modes, verified. `sym` is the symbolic factorisation of
 /// the shared pattern (ordering included), reused for every numeric factorisation.
 pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenParams) -> Result<EigenSolution> {
+    solve_inner(k, m, sym, p, None, true)
+}
+
+/// [`solve`], with a coarse subspace of the DOFs ([`Prolongation`], e.g. the corner space of a
+/// quadratic mesh) for the lowest modes: the Galerkin model on it bounds the wanted
+/// eigenvalues from above, which places one shift U just above them. The inertia of K − UM
+/// counts every eigenvalue below U, and Lanczos on that same factorisation finds them all: a
+/// complete, verified solve with one factorisation instead of two (shift and upper Sturm
+/// point). When the count falls outside what the estimate promised, the solve goes on as
+/// [`solve`] does (said in `-v`).
+pub fn solve_with(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    p: &EigenParams,
+    coarse: Option<&Prolongation>,
+) -> Result<EigenSolution> {
+    solve_inner(k, m, sym, p, coarse, true)
+}
+
+/// The solver. Without `check`, the Sturm count is skipped (the coarse estimate of
+/// [`solve_with`] needs eigenvalues, not their proof); its `sturm` is then not a check.
+fn solve_inner(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    p: &EigenParams,
+    coarse: Option<&Prolongation>,
+    check: bool,
+) -> Result<EigenSolution> {
     let n = k.n();
     if n == 0 {
         return Err(Error::InvalidInput("the model has no free degree of freedom".into()));
@@ -331,6 +362,18 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     };
     let mut factorizations = 0;
     let mut memory = EigenMemory::default();
+    if let (Some(pr), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
+        if n > p.dense_below && nm < n && !big_request(nm) {
+            let est = Estimate {
+                t0,
+                factorizations: &mut factorizations,
+                memory: &mut memory,
+            };
+            if let Some(sol) = solve_below_bound(k, m, sym, p, pr, nm, est, &notes)? {
+                return Ok(sol);
+            }
+        }
+    }
     let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
     memory.add_factor(&fa);
     let mut backward = fa.probe_residual;
@@ -353,7 +396,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
                 // Estimates past the block: several free parts put more than six rigid-body
                 // modes first, and the first elastic scale must be among the estimates.
                 let nb = (nm + 6).min(12.max(p.block + 6)).min(n);
-                let mut lz = Lanczos::new(n, nm.min(n), p, false);
+                let mut lz = Lanczos::new(n, nm.min(n), p, Side::Both);
                 lz.pause_after = Some(nb.div_ceil(lz.b).max(3));
                 let tp = Instant::now();
                 early = lz.run(p, &fa, m, sigma, &mut applications)?;
@@ -450,7 +493,12 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
     }
     let mut lz = match probe_lz.take() {
         Some(lz) if !dense => lz,
-        _ => Lanczos::new(n, if dense { 1 } else { want }, p, band.is_some()),
+        _ => Lanczos::new(
+            n,
+            if dense { 1 } else { want },
+            p,
+            if band.is_some() { Side::Above } else { Side::Both },
+        ),
     };
     // The shift factor is dropped before each Sturm factorisation, so that two factors never
     // coexist in memory; it is rebuilt only if the check asks for more iteration.
@@ -548,7 +596,7 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         } else {
             lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6)
         };
-        let lower_count = if lower_pt == sigma {
+        let lower_count = if lower_pt == sigma || !check {
             lower_count_at_shift
         } else {
             log::info!("factorisation at {lower_pt:.6e} for the lower Sturm count");
@@ -559,6 +607,11 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         };
         let (upper_pt, upper_count) = match upper_known {
             Some((asked, used, count)) if asked == upper_pt => (used, count),
+            // No proof asked for: the count is taken as what was found.
+            _ if !check => (
+                upper_pt,
+                lower_count + found.iter().filter(|(l, _)| *l > lower_pt && *l < upper_pt).count(),
+            ),
             _ => {
                 log::info!("factorisation at {upper_pt:.6e} for the upper Sturm count");
                 let (fu, used) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
@@ -569,9 +622,11 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
         };
         let n_between = found.iter().filter(|(l, _)| *l > lower_pt && *l < upper_pt).count();
         let expected = upper_count.saturating_sub(lower_count);
-        log::info!(
-            "Sturm check: {expected} eigenvalues in ({lower_pt:.6e}, {upper_pt:.6e}) rad²/s², {n_between} found"
-        );
+        if check {
+            log::info!(
+                "Sturm check: {expected} eigenvalues in ({lower_pt:.6e}, {upper_pt:.6e}) rad²/s², {n_between} found"
+            );
+        }
         time_verify += tv.elapsed().as_secs_f64();
         if expected > n_between && attempt < 4 && band.is_none() && !dense {
             // A mode was missed (or sits just above the last one found): iterate for more
@@ -629,6 +684,187 @@ pub fn solve(k: &SymMatrix, m: &SymMatrix, sym: &Arc<SymbolicFactor>, p: &EigenP
             memory,
         };
         return Ok(sol);
+    }
+}
+
+/// What [`solve_below_bound`] shares with the solve that called it.
+struct Estimate<'a> {
+    /// Start of the solve.
+    t0: Instant,
+    /// Factorisations done so far.
+    factorizations: &'a mut usize,
+    /// Large allocations so far.
+    memory: &'a mut EigenMemory,
+}
+
+/// The one-factorisation solve of [`solve_with`] for the `nm` lowest modes: Galerkin model on
+/// `pr`, its eigenvalues λ̃ᵢ ≥ λᵢ, one shift U just above λ̃_nm, Lanczos on K − UM for every
+/// eigenvalue below U (θ = 1/(λ − U) < 0), whose number is the factor's inertia. `Ok(None)`
+/// when the estimate cannot be used (the caller then solves from its default shift).
+#[allow(clippy::too_many_arguments)]
+fn solve_below_bound(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    p: &EigenParams,
+    pr: &Prolongation,
+    nm: usize,
+    est: Estimate<'_>,
+    notes: &[String],
+) -> Result<Option<EigenSolution>> {
+    let n = k.n();
+    if pr.n_fine != n || pr.n_coarse <= nm {
+        return Ok(None);
+    }
+    let tc = Instant::now();
+    let (kc, mc) = pr.galerkin(k, m);
+    let t_galerkin = tc.elapsed().as_secs_f64();
+    let symc = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
+    log::debug!(
+        "coarse model: PᵀKP and PᵀMP {t_galerkin:.3} s, ordering {:.3} s, {} entries in L",
+        tc.elapsed().as_secs_f64() - t_galerkin,
+        symc.nnz_l
+    );
+    // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error
+    // of a Ritz value is of the order of its residual squared): ample for placing a shift.
+    let pc = EigenParams {
+        target: Target::Nearest(nm + 1),
+        tol: 1e-6,
+        ..p.clone()
+    };
+    let coarse = match solve_inner(&kc, &mc, &symc, &pc, None, false) {
+        Ok(c) => c,
+        Err(e) => {
+            log::info!("coarse estimate failed ({e}): solving from the default shift");
+            return Ok(None);
+        }
+    };
+    log::debug!(
+        "coarse solve: factor {:.3} s, iterate {:.3} s, verify {:.3} s, {} applications",
+        coarse.time_factor,
+        coarse.time_iterate,
+        coarse.time_verify,
+        coarse.applications
+    );
+    let mut lc = coarse.lambda.clone();
+    lc.sort_by(f64::total_cmp);
+    if lc.len() <= nm || !(lc[nm] > 0.0) {
+        return Ok(None);
+    }
+    let (a, b) = (lc[nm - 1], lc[nm]);
+    // Just above the bound of the last wanted eigenvalue: every wanted one lies below, and
+    // few others (the coarse gap to the next is no promise for the model's). When the wanted
+    // ones are rigid-body modes (a ≈ 0), halfway to the first elastic bound.
+    let u = if a <= 1e-6 * b {
+        0.5 * b
+    } else {
+        a + (0.5 * (b - a)).min(0.02 * a).max(1e-4 * a)
+    };
+    log::info!(
+        "coarse estimate ({} DOFs, {:.2} s): mode {nm} at most {:.6e} rad²/s², the next at most {:.6e}; one factorisation at U = {u:.6e}",
+        pr.n_coarse,
+        tc.elapsed().as_secs_f64(),
+        a,
+        b
+    );
+    let (fa, u) = factor_at(k, m, sym, u, est.factorizations)?;
+    est.memory.add_factor(&fa);
+    let count = fa.negative_pivots;
+    if count < nm || count > 2 * nm + 12 {
+        log::info!(
+            "{count} eigenvalues below U (the {nm} lowest wanted): solving from the default shift instead (another factorisation)"
+        );
+        return Ok(None);
+    }
+    let time_factor = est.t0.elapsed().as_secs_f64();
+    let ti = Instant::now();
+    let mut lz = Lanczos::new(n, count, p, Side::Below);
+    // Start from the coarse modes, prolongated: the start block then has large components
+    // in the wanted modes (66 instead of 90 operator applications for 12 modes of a 119k-DOF
+    // tet10 plate); its random part keeps every other mode reachable, and the count at U
+    // proves that none was missed.
+    {
+        let cv = &coarse.vectors;
+        let mut st = Mat::zeros(n, cv.ncols());
+        for j in 0..cv.ncols() {
+            let xc: Vec<f64> = (0..cv.nrows()).map(|i| cv[(i, j)]).collect();
+            for (i, v) in pr.apply(&xc).into_iter().enumerate() {
+                st[(i, j)] = v;
+            }
+        }
+        lz.start = Some(st);
+    }
+    let mut applications = 0usize;
+    let mut want = count;
+    let mut attempt = 0;
+    loop {
+        attempt += 1;
+        lz.set_want(want);
+        let (l, x) = lz
+            .run(p, &fa, m, u, &mut applications)?
+            .ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
+        est.memory.lanczos_basis = est.memory.lanczos_basis.max(lz.bytes());
+        est.memory.solve_workspace = est.memory.solve_workspace.max(fa.workspace_bytes() as u64);
+        lz.release();
+        log::info!(
+            "Lanczos: {} pairs below U converged after {applications} operator applications",
+            l.len()
+        );
+        applications += x.ncols();
+        let (lambda, x) = refine(k, m, &fa, &x)?;
+        let mut below: Vec<usize> = (0..lambda.len()).filter(|&i| lambda[i] < u).collect();
+        below.sort_by(|&i, &j| lambda[i].total_cmp(&lambda[j]));
+        if below.len() < count && attempt < 4 {
+            // A cluster wider than the block, or a pair that had not converged: iterate on,
+            // with the pairs found locked at the start of a new basis.
+            want = (want + (count - below.len()) + p.block.min(4)).min(n);
+            log::info!(
+                "{} of the {count} eigenvalues below U found: iterating for more, the pairs found locked",
+                below.len()
+            );
+            lz.set_want(want.max(lambda.len()));
+            lz.restart_from(&lambda, x.as_ref(), m, u);
+            continue;
+        }
+        let time_iterate = ti.elapsed().as_secs_f64();
+        log::info!(
+            "Sturm check: {count} eigenvalues below {u:.6e} rad²/s², {} found",
+            below.len()
+        );
+        let tv = Instant::now();
+        let keep = &below[..nm.min(below.len())];
+        let mut vectors = Mat::zeros(n, keep.len());
+        let mut lam = Vec::with_capacity(keep.len());
+        for (c, &i) in keep.iter().enumerate() {
+            vectors.col_mut(c).copy_from(x.col(i));
+            lam.push(lambda[i]);
+        }
+        let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), u);
+        let backward_error = backward_errors(k, m, &lam, vectors.as_ref());
+        return Ok(Some(EigenSolution {
+            lambda: lam,
+            vectors,
+            rel_residual,
+            backward_error,
+            notes: notes.to_vec(),
+            m_orthonormality: m_orth,
+            // Below −∞ there is nothing: the count at U alone is the whole check.
+            sturm: SturmCheck {
+                lower: (f64::NEG_INFINITY, 0),
+                upper: (u, count),
+                expected: count,
+                found: below.len(),
+                complete: below.len() == count,
+            },
+            shift: u,
+            applications,
+            factorizations: *est.factorizations,
+            time_factor,
+            time_iterate,
+            time_verify: tv.elapsed().as_secs_f64(),
+            factor_backward_error: fa.probe_residual,
+            memory: *est.memory,
+        }));
     }
 }
 
@@ -781,6 +1017,28 @@ pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, 
 /// basis is freed before the Sturm factorisation, so it does not raise the memory peak.
 const BASIS_PER_WANTED: usize = 3;
 
+/// The side of the shift whose eigenvalues a Lanczos run wants.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Side {
+    /// The nearest, on either side (largest |θ|).
+    Both,
+    /// Above σ only (θ > 0, largest first): band searches from the band's lower end.
+    Above,
+    /// Below σ only (θ < 0, most negative first): every eigenvalue under a shift placed above
+    /// the wanted ones.
+    Below,
+}
+
+impl Side {
+    fn wants(self, theta: f64) -> bool {
+        match self {
+            Side::Both => true,
+            Side::Above => theta > 0.0,
+            Side::Below => theta < 0.0,
+        }
+    }
+}
+
 struct Lanczos {
     n: usize,
     b: usize,
@@ -796,18 +1054,21 @@ struct Lanczos {
     /// Columns whose operator image is in `t`.
     cur: usize,
     rng: Rng,
-    /// Only positive θ (eigenvalues above σ) are wanted (band searches).
-    positive_only: bool,
+    /// Which Ritz values θ = 1/(λ − σ) are wanted.
+    side: Side,
     /// Last Ritz values θ, for estimates of the next eigenvalue.
     last_theta: Vec<f64>,
     /// The start block has been built.
     started: bool,
     /// Return (`Ok(None)`) after this many more block steps, to look at the Ritz values.
     pause_after: Option<usize>,
+    /// Approximations of the wanted modes to start from (columns summed into the start
+    /// block, with a random part so that no eigenvector is missing from it).
+    start: Option<Mat<f64>>,
 }
 
 impl Lanczos {
-    fn new(n: usize, want: usize, p: &EigenParams, positive_only: bool) -> Self {
+    fn new(n: usize, want: usize, p: &EigenParams, side: Side) -> Self {
         let b = p.block.max(1).min(n);
         let m_max = (want * BASIS_PER_WANTED + 4 * b).max(want + 6 * b).min(n);
         let m_max = m_max.max(b.min(n));
@@ -821,10 +1082,11 @@ impl Lanczos {
             t: Mat::zeros(m_max + b, m_max + b),
             cur: 0,
             rng: Rng(p.seed | 1),
-            positive_only,
+            side,
             last_theta: Vec::new(),
             started: false,
             pause_after: None,
+            start: None,
         }
     }
 
@@ -930,7 +1192,11 @@ impl Lanczos {
         let ts = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (self.t[(i, j)] + self.t[(j, i)]));
         let eig = nalgebra::SymmetricEigen::new(ts);
         let mut order: Vec<usize> = (0..c).collect();
-        let key = |th: f64| if self.positive_only { th } else { th.abs() };
+        let key = |th: f64| match self.side {
+            Side::Both => th.abs(),
+            Side::Above => th,
+            Side::Below => -th,
+        };
         order.sort_by(|&a, &b| key(eig.eigenvalues[b]).total_cmp(&key(eig.eigenvalues[a])));
         let theta: Vec<f64> = order.iter().map(|&k| eig.eigenvalues[k]).collect();
         let y = Mat::from_fn(c, c, |i, j| eig.eigenvectors[(i, order[j])]);
@@ -959,6 +1225,24 @@ impl Lanczos {
         for j in 0..b {
             for i in 0..n {
                 x0[(i, j)] = self.rng.next();
+            }
+        }
+        if let Some(st) = self.start.take() {
+            // Each start column: a sum of approximate modes (every b-th), plus a random part
+            // of a hundredth of its size.
+            for j in 0..b {
+                let mut col = vec![0.0; n];
+                for c in (j..st.ncols()).step_by(b) {
+                    for (i, v) in col.iter_mut().enumerate() {
+                        *v += st[(i, c)];
+                    }
+                }
+                let amax = col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                if amax > 0.0 {
+                    for (i, v) in col.iter().enumerate() {
+                        x0[(i, j)] = v + 0.01 * amax * x0[(i, j)];
+                    }
+                }
             }
         }
         let mut w = Self::apply(fa, m, x0.as_ref(), apps);
@@ -1096,16 +1380,14 @@ impl Lanczos {
                 resid[k] = s2.sqrt();
             }
             let converged = |k: usize| resid[k] <= p.tol * theta[k].abs().max(f64::MIN_POSITIVE);
-            let all_wanted = c >= self.want && (0..nw).all(|k| converged(k) && (!self.positive_only || theta[k] > 0.0));
+            let all_wanted = c >= self.want && (0..nw).all(|k| converged(k) && self.side.wants(theta[k]));
             // Everything there is to find has been found (tiny problems).
             let exhausted = c >= n;
             if all_wanted || exhausted {
                 // Take every converged pair (wanted ones first) so that clusters straddling
                 // the cut are complete.
                 let mut take: Vec<usize> = (0..c).filter(|&k| converged(k) || (exhausted && k < nw)).collect();
-                if self.positive_only {
-                    take.retain(|&k| theta[k] > 0.0);
-                }
+                take.retain(|&k| self.side.wants(theta[k]));
                 let mut x = Mat::zeros(n, take.len());
                 let mut lam = Vec::with_capacity(take.len());
                 let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
@@ -1217,7 +1499,7 @@ mod tests {
             block: 2,
             ..Default::default()
         };
-        let mut lz = Lanczos::new(n, 4, &p, false);
+        let mut lz = Lanczos::new(n, 4, &p, Side::Both);
         let mut apps = 0;
         let (l1, x1) = lz.run(&p, &fa, &m, sigma, &mut apps).unwrap().unwrap();
         assert!(l1.len() >= 4);

@@ -2,6 +2,7 @@
 //! ([`ordering`]), the LDLᵀ factorisation with inertia ([`factor`]), a dense oracle ([`dense`])
 //! and the verified shift-invert block Lanczos eigen solver ([`eigen`]). Nothing here knows a
 //! mesh: indices are equations, mapped to nodes and components by [`crate::dof::DofMap`].
+pub mod coarse;
 pub mod dense;
 pub mod eigen;
 pub mod factor;

@@ -129,6 +129,20 @@ impl CellKind {
         }
     }
 
+    /// The linear kind on this kind's corner nodes (which are its first nodes, in gmsh
+    /// order): `Tet10` → `Tet4`, `Hex20`/`Hex27` → `Hex8`; a linear kind is its own.
+    pub const fn linear(self) -> CellKind {
+        match self {
+            CellKind::Line3 => CellKind::Line2,
+            CellKind::Tri6 => CellKind::Tri3,
+            CellKind::Quad8 | CellKind::Quad9 => CellKind::Quad4,
+            CellKind::Tet10 => CellKind::Tet4,
+            CellKind::Hex20 | CellKind::Hex27 => CellKind::Hex8,
+            CellKind::Wedge15 => CellKind::Wedge6,
+            k => k,
+        }
+    }
+
     /// gmsh element type id.
     pub const fn gmsh_type(self) -> i32 {
         match self {

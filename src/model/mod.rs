@@ -5,6 +5,7 @@
 //! the DOF map, in the named steps of [`build`].
 
 mod build;
+mod coarse;
 mod orient;
 pub mod sets;
 pub mod spec;
