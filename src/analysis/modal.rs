@@ -309,7 +309,8 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
         max_applications: opts.max_applications,
         ..Default::default()
     };
-    let sol = eigen::solve_with(k_mat, m_mat, sym, &params, sys.coarse_space()).map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
+    let sol = eigen::solve_with(k_mat, m_mat, sym, &params, sys.coarse_space())
+        .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
     tm.factor = sol.time_factor;
     tm.solve = sol.time_iterate;
     tm.verify = sol.time_verify;

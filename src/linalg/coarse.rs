@@ -36,7 +36,10 @@ impl Prolongation {
         let (mut col, mut w) = (Vec::new(), Vec::new());
         for r in rows {
             for &(c, v) in r {
-                assert!((c as usize) < n_coarse, "prolongation column {c} out of range {n_coarse}");
+                assert!(
+                    (c as usize) < n_coarse,
+                    "prolongation column {c} out of range {n_coarse}"
+                );
                 col.push(c);
                 w.push(v);
             }
@@ -54,18 +57,29 @@ impl Prolongation {
     /// The entries of fine row `i`.
     pub fn row(&self, i: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
         let r = self.ptr[i]..self.ptr[i + 1];
-        self.col[r.clone()].iter().map(|&c| c as usize).zip(self.w[r].iter().copied())
+        self.col[r.clone()]
+            .iter()
+            .map(|&c| c as usize)
+            .zip(self.w[r].iter().copied())
     }
 
     /// y = P x.
     pub fn apply(&self, x: &[f64]) -> Vec<f64> {
-        (0..self.n_fine).map(|i| self.row(i).map(|(c, w)| w * x[c]).sum()).collect()
+        (0..self.n_fine)
+            .map(|i| self.row(i).map(|(c, w)| w * x[c]).sum())
+            .collect()
     }
 
     /// PᵀKP and PᵀMP on one pattern (K and M share theirs). Coarse columns are computed in
     /// parallel, each with its own accumulator; the result does not depend on the threads.
     pub fn galerkin(&self, k: &SymMatrix, m: &SymMatrix) -> (SymMatrix, SymMatrix) {
-        assert_eq!(k.n(), self.n_fine, "Galerkin projection: K has {} rows, P {}", k.n(), self.n_fine);
+        assert_eq!(
+            k.n(),
+            self.n_fine,
+            "Galerkin projection: K has {} rows, P {}",
+            k.n(),
+            self.n_fine
+        );
         let nc = self.n_coarse;
         // Pᵀ by rows: the fine rows each coarse unknown reaches.
         let mut tptr = vec![0usize; nc + 1];
@@ -131,7 +145,11 @@ impl Prolongation {
         let nnz: usize = cols.iter().map(|c| c.1.len()).sum();
         let mut col_ptr = Vec::with_capacity(nc + 1);
         col_ptr.push(0);
-        let (mut row_idx, mut kv, mut mv) = (Vec::with_capacity(nnz), Vec::with_capacity(nnz), Vec::with_capacity(nnz));
+        let (mut row_idx, mut kv, mut mv) = (
+            Vec::with_capacity(nnz),
+            Vec::with_capacity(nnz),
+            Vec::with_capacity(nnz),
+        );
         for (counts, ri, vk, vm) in cols {
             for c in counts {
                 col_ptr.push(col_ptr.last().copied().unwrap_or(0) + c);

@@ -399,9 +399,16 @@ fn one_factorisation_solve_equals_the_two_factorisation_solve() {
             // than 1e-9 of the first elastic one (rigid-body λ ≈ 0 compared absolutely).
             let scale = two.lambda[6];
             for (i, (a, b)) in one.lambda.iter().zip(&two.lambda).enumerate() {
-                assert!((a - b).abs() <= 1e-9 * b.abs().max(scale), "{size:?} mode {i}: {a} vs {b}");
+                assert!(
+                    (a - b).abs() <= 1e-9 * b.abs().max(scale),
+                    "{size:?} mode {i}: {a} vs {b}"
+                );
             }
-            assert!(one.backward_error.iter().all(|&e| e <= 1e-10), "{:?}", one.backward_error);
+            assert!(
+                one.backward_error.iter().all(|&e| e <= 1e-10),
+                "{:?}",
+                one.backward_error
+            );
             assert!(one.m_orthonormality <= 1e-10);
         }
     }
