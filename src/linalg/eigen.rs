@@ -722,37 +722,42 @@ fn solve_below_bound(
         return Ok(None);
     }
     let tc = Instant::now();
-    let (kc, mc) = pr.galerkin(k, m);
-    let t_galerkin = tc.elapsed().as_secs_f64();
-    let symc = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
-    log::debug!(
-        "coarse model: PᵀKP and PᵀMP {t_galerkin:.3} s, ordering {:.3} s, {} entries in L",
-        tc.elapsed().as_secs_f64() - t_galerkin,
-        symc.nnz_l
-    );
-    // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error
-    // of a Ritz value is of the order of its residual squared): ample for placing a shift.
-    let pc = EigenParams {
-        target: Target::Nearest(nm + 1),
-        tol: 1e-6,
-        ..p.clone()
+    // The coarse model lives only here: its matrices and factor are freed before the model's
+    // factorisation (at 1M DOFs they would be ~0.5 GB at the peak).
+    let (lc, start) = {
+        let (kc, mc) = pr.galerkin(k, m);
+        let t_galerkin = tc.elapsed().as_secs_f64();
+        let symc = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
+        log::debug!(
+            "coarse model: PᵀKP and PᵀMP {t_galerkin:.3} s, ordering {:.3} s, {} entries in L",
+            tc.elapsed().as_secs_f64() - t_galerkin,
+            symc.nnz_l
+        );
+        // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error
+        // of a Ritz value is of the order of its residual squared): ample for placing a shift.
+        let pc = EigenParams {
+            target: Target::Nearest(nm + 1),
+            tol: 1e-6,
+            ..p.clone()
+        };
+        let coarse = match solve_inner(&kc, &mc, &symc, &pc, None, false) {
+            Ok(c) => c,
+            Err(e) => {
+                log::info!("coarse estimate failed ({e}): solving from the default shift");
+                return Ok(None);
+            }
+        };
+        log::debug!(
+            "coarse solve: factor {:.3} s, iterate {:.3} s, verify {:.3} s, {} applications",
+            coarse.time_factor,
+            coarse.time_iterate,
+            coarse.time_verify,
+            coarse.applications
+        );
+        let mut lc = coarse.lambda.clone();
+        lc.sort_by(f64::total_cmp);
+        (lc, coarse.vectors)
     };
-    let coarse = match solve_inner(&kc, &mc, &symc, &pc, None, false) {
-        Ok(c) => c,
-        Err(e) => {
-            log::info!("coarse estimate failed ({e}): solving from the default shift");
-            return Ok(None);
-        }
-    };
-    log::debug!(
-        "coarse solve: factor {:.3} s, iterate {:.3} s, verify {:.3} s, {} applications",
-        coarse.time_factor,
-        coarse.time_iterate,
-        coarse.time_verify,
-        coarse.applications
-    );
-    let mut lc = coarse.lambda.clone();
-    lc.sort_by(f64::total_cmp);
     if lc.len() <= nm || !(lc[nm] > 0.0) {
         return Ok(None);
     }
@@ -795,7 +800,7 @@ fn solve_below_bound(
     // tet10 plate); its random part keeps every other mode reachable, and the count at U
     // proves that none was missed.
     {
-        let cv = &coarse.vectors;
+        let cv = &start;
         let mut st = Mat::zeros(n, cv.ncols());
         for j in 0..cv.ncols() {
             let xc: Vec<f64> = (0..cv.nrows()).map(|i| cv[(i, j)]).collect();
