@@ -831,7 +831,7 @@ fn solve_below_bound(
         // (against |λ − σ|/|λ_h − σ| from a shift below them), which left residuals of
         // rigid-body and low modes 10–1000× above the two-factorisation solve's.
         applications += 2 * x.ncols();
-        let (lambda, x) = refine(k, m, &fa, &x)?;
+        let (_, x) = refine(k, m, &fa, &x)?;
         let (lambda, x) = refine(k, m, &fa, &x)?;
         let mut below: Vec<usize> = (0..lambda.len()).filter(|&i| lambda[i] < u).collect();
         below.sort_by(|&i, &j| lambda[i].total_cmp(&lambda[j]));
