@@ -657,12 +657,7 @@ fn solve_inner(
             Target::Band(..) => found.iter().map(|x| x.1).collect(),
         };
         let tv = Instant::now();
-        let mut vectors = Mat::zeros(n, keep.len());
-        let mut lam = Vec::with_capacity(keep.len());
-        for (c, &i) in keep.iter().enumerate() {
-            vectors.col_mut(c).copy_from(x.col(i));
-            lam.push(lambda[i]);
-        }
+        let (lam, vectors) = select(&lambda, &x, &keep);
         let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), sigma);
         let backward_error = backward_errors(k, m, &lam, vectors.as_ref());
         time_verify += tv.elapsed().as_secs_f64();
@@ -685,6 +680,15 @@ fn solve_inner(
         };
         return Ok(sol);
     }
+}
+
+/// The pairs `keep` of (λ, X), in that order.
+fn select(lambda: &[f64], x: &Mat<f64>, keep: &[usize]) -> (Vec<f64>, Mat<f64>) {
+    let mut vectors = Mat::zeros(x.nrows(), keep.len());
+    for (c, &i) in keep.iter().enumerate() {
+        vectors.col_mut(c).copy_from(x.col(i));
+    }
+    (keep.iter().map(|&i| lambda[i]).collect(), vectors)
 }
 
 /// Largest relative residual the one-factorisation solve returns; above it (singular mass
@@ -853,13 +857,7 @@ fn solve_below_bound(
             below.len()
         );
         let tv = Instant::now();
-        let keep = &below[..nm.min(below.len())];
-        let mut vectors = Mat::zeros(n, keep.len());
-        let mut lam = Vec::with_capacity(keep.len());
-        for (c, &i) in keep.iter().enumerate() {
-            vectors.col_mut(c).copy_from(x.col(i));
-            lam.push(lambda[i]);
-        }
+        let (lam, vectors) = select(&lambda, &x, &below[..nm.min(below.len())]);
         let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), u);
         let worst = rel_residual.iter().fold(0.0f64, |a, &r| a.max(r));
         if worst > RESIDUAL_FALLBACK {
