@@ -758,9 +758,8 @@ fn solve_below_bound(
             coarse.time_verify,
             coarse.applications
         );
-        let mut lc = coarse.lambda.clone();
-        lc.sort_by(f64::total_cmp);
-        (lc, coarse.vectors)
+        // Ascending, as every solve returns them, with the vectors in the same order.
+        (coarse.lambda, coarse.vectors)
     };
     if lc.len() <= nm || !(lc[nm] > 0.0) {
         return Ok(None);
