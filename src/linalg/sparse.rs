@@ -114,44 +114,46 @@ impl SymMatrix {
             .collect()
     }
     /// `y = A x` for a block of vectors (columns of `x`). Parallel over rows, deterministic.
+    /// Columns go in chunks of at most eight with the width known at compile time (the
+    /// accumulators of a row stay in registers); each column's sums are the same in any chunk.
     pub fn mul_block(&self, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) {
         let n = self.n();
         let b = x.ncols();
         assert!(x.nrows() == n && y.nrows() == n && y.ncols() == b);
-        // Row-major copies: each row of x is then contiguous, and each parallel task writes
-        // one contiguous chunk of the output.
-        let mut xr = vec![0.0f64; n * b];
-        for c in 0..b {
-            for (i, v) in x.col(c).iter().enumerate() {
-                xr[i * b + c] = *v;
-            }
-        }
-        let mut tmp = vec![0.0f64; n * b];
         let p = &*self.pattern;
         let vals = &self.values;
-        match b {
-            6 => gather_rows::<6>(p, vals, &xr, &mut tmp),
-            12 => gather_rows::<12>(p, vals, &xr, &mut tmp),
-            1 => gather_rows::<1>(p, vals, &xr, &mut tmp),
-            _ => tmp
-                .par_chunks_mut(b)
-                .enumerate()
-                .with_min_len(256)
-                .for_each(|(j, out)| {
-                    // Symmetric: row j of A equals column j.
-                    let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
-                    for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
-                        let xi = &xr[i * b..i * b + b];
-                        for (o, &xv) in out.iter_mut().zip(xi) {
-                            *o += a * xv;
-                        }
-                    }
-                }),
-        }
-        for c in 0..b {
-            for (j, v) in y.as_mut().col_mut(c).iter_mut().enumerate() {
-                *v = tmp[j * b + c];
+        let mut xr = Vec::new();
+        let mut tmp = Vec::new();
+        let mut c0 = 0;
+        while c0 < b {
+            let w = (b - c0).min(8);
+            // Row-major copies: each row of the chunk is then contiguous, and each parallel
+            // task writes one contiguous piece of the output.
+            xr.clear();
+            xr.resize(n * w, 0.0);
+            for c in 0..w {
+                for (i, v) in x.col(c0 + c).iter().enumerate() {
+                    xr[i * w + c] = *v;
+                }
             }
+            tmp.clear();
+            tmp.resize(n * w, 0.0);
+            match w {
+                1 => gather_rows::<1>(p, vals, &xr, &mut tmp),
+                2 => gather_rows::<2>(p, vals, &xr, &mut tmp),
+                3 => gather_rows::<3>(p, vals, &xr, &mut tmp),
+                4 => gather_rows::<4>(p, vals, &xr, &mut tmp),
+                5 => gather_rows::<5>(p, vals, &xr, &mut tmp),
+                6 => gather_rows::<6>(p, vals, &xr, &mut tmp),
+                7 => gather_rows::<7>(p, vals, &xr, &mut tmp),
+                _ => gather_rows::<8>(p, vals, &xr, &mut tmp),
+            }
+            for c in 0..w {
+                for (j, v) in y.as_mut().col_mut(c0 + c).iter_mut().enumerate() {
+                    *v = tmp[j * w + c];
+                }
+            }
+            c0 += w;
         }
     }
     /// `‖|A|·|x_c|‖₂` for each column `x_c` of `x` (|A|: the entries' magnitudes), the scale of
