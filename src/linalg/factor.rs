@@ -349,12 +349,12 @@ impl Factor {
         macro_rules! go {
             ($($kk:literal)*) => {
                 match k {
-                    $($kk => supernodal_solve::<$kk>(sn, &self.values, x[..need].as_chunks_mut::<$kk>().0),)*
+                    $($kk => supernodal_solve::<$kk, { jb($kk) }>(sn, &self.values, x[..need].as_chunks_mut::<$kk>().0),)*
                     _ => unreachable!("column groups hold at most {MAX_GROUP} columns"),
                 }
             };
         }
-        go!(1 2 3 4 5 6 7 8 9);
+        go!(1 2 3 4 5 6 7 8 9 10 11 12);
         for c in 0..k {
             let mut col = rhs.as_mut().col_mut(c);
             for i in 0..n {
@@ -410,23 +410,43 @@ impl Factor {
     }
 }
 
+/// Supernode columns per pass of the off-diagonal products for `k` right-hand sides: the
+/// backward pass holds JB·K four-lane accumulators, K vectors of the gathered rows and one of
+/// L, within the sixteen vector registers of AVX2.
+const fn jb(k: usize) -> usize {
+    let j = 15 / k;
+    if j <= 2 {
+        1
+    } else if j > 9 {
+        8
+    } else {
+        j - 1
+    }
+}
+
 /// Most right-hand sides solved together by one thread.
-/// (Nine: the 18 columns of the refinement make two groups, one per thread of this machine.)
-const MAX_GROUP: usize = 9;
+/// (Twelve: the 19–21 columns of a refinement make two groups, one per thread of this machine.)
+const MAX_GROUP: usize = 12;
 
 /// Solve L D Lᵀ x = b in place for `K` right-hand sides stored row by row (`x[i]` holds row i
 /// of the block, in the factor's elimination order). Each column of a supernode is read once
 /// per direction, contiguously. The rows of a supernode's off-diagonal pattern are gathered
-/// once into a dense buffer (one column per right-hand side), so the work on them is
-/// contiguous multiply–adds and dot products; no packing, nothing allocated per supernode.
-fn supernodal_solve<const K: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
+/// once into a dense buffer (one column per right-hand side); the products with the
+/// off-diagonal block run `JB` supernode columns at a time over four rows (one vector) at a
+/// time, all `K` right-hand sides per vector, so each value of L is loaded once and used K
+/// times from registers. No packing, nothing allocated per supernode.
+///
+/// Every entry's arithmetic is a fixed sequence (forward: multiply–adds over the supernode's
+/// columns in order; backward: four lanes over the rows in order, summed in a fixed order),
+/// whatever `K` and `JB` are: a column solved alone equals the same column solved in a group.
+fn supernodal_solve<const K: usize, const JB: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU has the features the function is compiled for.
-        unsafe { supernodal_solve_fma::<K>(sn, values, x) };
+        unsafe { supernodal_solve_fma::<K, JB>(sn, values, x) };
         return;
     }
-    supernodal_solve_body::<K, false>(sn, values, x)
+    supernodal_solve_body::<K, JB, false>(sn, values, x)
 }
 
 type SupernodalSymbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>;
@@ -434,8 +454,12 @@ type SupernodalSymbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSu
 /// [`supernodal_solve`] compiled for AVX2 with fused multiply–adds.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn supernodal_solve_fma<const K: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
-    supernodal_solve_body::<K, true>(sn, values, x)
+unsafe fn supernodal_solve_fma<const K: usize, const JB: usize>(
+    sn: &SupernodalSymbolic,
+    values: &[f64],
+    x: &mut [[f64; K]],
+) {
+    supernodal_solve_body::<K, JB, true>(sn, values, x)
 }
 
 /// `a·b + c`, fused when `F`.
@@ -445,7 +469,11 @@ fn madd<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
 }
 
 #[inline(always)]
-fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
+fn supernodal_solve_body<const K: usize, const JB: usize, const F: bool>(
+    sn: &SupernodalSymbolic,
+    values: &[f64],
+    x: &mut [[f64; K]],
+) {
     let ns = sn.n_supernodes();
     let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
     let cp = sn.col_ptr_for_val();
@@ -464,8 +492,7 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
     for s in 0..ns {
         let (f, w, pat, ls) = block(s);
         let (l, p, nr) = (f + w, pat.len(), w + pat.len());
-        let tmp = &mut buf[..K * p];
-        tmp.fill(0.0);
+        // The diagonal block, column by column.
         for j in 0..w {
             let col = &ls[j * nr..(j + 1) * nr];
             let xj = x[f + j];
@@ -474,13 +501,18 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
                     xi[c] = madd::<F>(-a, xj[c], xi[c]);
                 }
             }
-            let bot = &col[w..];
-            for c in 0..K {
-                let v = xj[c];
-                if v != 0.0 {
-                    axpy::<F>(&mut tmp[c * p..(c + 1) * p], bot, v);
-                }
-            }
+        }
+        // tmp = L_off · x_s: per entry, multiply–adds over the columns in order.
+        let tmp = &mut buf[..K * p];
+        tmp.fill(0.0);
+        let mut j0 = 0;
+        while j0 + JB <= w {
+            forward_cols::<K, JB, F>(ls, nr, w, j0, &x[f + j0..f + j0 + JB], tmp, p);
+            j0 += JB;
+        }
+        while j0 < w {
+            forward_cols::<K, 1, F>(ls, nr, w, j0, &x[f + j0..f + j0 + 1], tmp, p);
+            j0 += 1;
         }
         for (idx, &r) in pat.iter().enumerate() {
             let xr = &mut x[r];
@@ -510,6 +542,19 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
                 g[c * p + idx] = x[r][c];
             }
         }
+        let g = &buf[..K * p];
+        // off[j] = L_off(:, j)ᵀ · g for every column of the supernode: four lanes over the
+        // rows, summed as (l0 + l1) + (l2 + l3), then the remaining rows in order.
+        let mut j0 = 0;
+        while j0 + JB <= w {
+            backward_cols::<K, JB, F>(ls, nr, w, j0, &mut x[f + j0..f + j0 + JB], g, p);
+            j0 += JB;
+        }
+        while j0 < w {
+            backward_cols::<K, 1, F>(ls, nr, w, j0, &mut x[f + j0..f + j0 + 1], g, p);
+            j0 += 1;
+        }
+        // The diagonal block, last column first.
         for j in (0..w).rev() {
             let col = &ls[j * nr..(j + 1) * nr];
             let mut acc = [0.0f64; K];
@@ -517,10 +562,6 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
                 for c in 0..K {
                     acc[c] = madd::<F>(a, xi[c], acc[c]);
                 }
-            }
-            let bot = &col[w..];
-            for c in 0..K {
-                acc[c] += dot::<F>(bot, &g[c * p..(c + 1) * p]);
             }
             let xj = &mut x[f + j];
             for c in 0..K {
@@ -530,31 +571,92 @@ fn supernodal_solve_body<const K: usize, const F: bool>(sn: &SupernodalSymbolic,
     }
 }
 
-/// `y += a·x`.
+/// `tmp[c·p + i] += Σ_t L_off[i, j0 + t] · xs[t][c]` for `J` columns of a supernode (values
+/// `ls`, `nr` rows, the off-diagonal rows from `w` on): four rows at a time, all right-hand
+/// sides per row vector, the columns' multiply–adds in order.
 #[inline(always)]
-fn axpy<const F: bool>(y: &mut [f64], x: &[f64], a: f64) {
-    for (yi, xi) in y.iter_mut().zip(x) {
-        *yi = madd::<F>(a, *xi, *yi);
+fn forward_cols<const K: usize, const J: usize, const F: bool>(
+    ls: &[f64],
+    nr: usize,
+    w: usize,
+    j0: usize,
+    xs: &[[f64; K]],
+    tmp: &mut [f64],
+    p: usize,
+) {
+    let xs: [[f64; K]; J] = std::array::from_fn(|t| xs[t]);
+    let cols: [&[f64]; J] = std::array::from_fn(|t| &ls[(j0 + t) * nr + w..(j0 + t + 1) * nr]);
+    let p4 = p - p % 4;
+    let mut i = 0;
+    while i < p4 {
+        let mut acc = [[0.0f64; 4]; K];
+        for c in 0..K {
+            acc[c].copy_from_slice(&tmp[c * p + i..c * p + i + 4]);
+        }
+        for t in 0..J {
+            let a: &[f64; 4] = cols[t][i..i + 4].try_into().expect("four rows");
+            for c in 0..K {
+                for r in 0..4 {
+                    acc[c][r] = madd::<F>(a[r], xs[t][c], acc[c][r]);
+                }
+            }
+        }
+        for c in 0..K {
+            tmp[c * p + i..c * p + i + 4].copy_from_slice(&acc[c]);
+        }
+        i += 4;
+    }
+    for i in p4..p {
+        for t in 0..J {
+            let a = cols[t][i];
+            for c in 0..K {
+                tmp[c * p + i] = madd::<F>(a, xs[t][c], tmp[c * p + i]);
+            }
+        }
     }
 }
 
-/// `x·y` with eight partial sums (in a fixed order).
+/// `xs[t][c] −= L_off[:, j0 + t]ᵀ · g[c]` for `J` columns of a supernode: four lanes over the
+/// rows, summed as (l0 + l1) + (l2 + l3), then the remaining rows in order.
 #[inline(always)]
-fn dot<const F: bool>(x: &[f64], y: &[f64]) -> f64 {
-    let n = x.len().min(y.len());
-    let (x8, xr) = x[..n].split_at(n - n % 8);
-    let (y8, yr) = y[..n].split_at(n - n % 8);
-    let mut s = [0.0f64; 8];
-    for (a, b) in x8.chunks_exact(8).zip(y8.chunks_exact(8)) {
-        for l in 0..8 {
-            s[l] = madd::<F>(a[l], b[l], s[l]);
+fn backward_cols<const K: usize, const J: usize, const F: bool>(
+    ls: &[f64],
+    nr: usize,
+    w: usize,
+    j0: usize,
+    xs: &mut [[f64; K]],
+    g: &[f64],
+    p: usize,
+) {
+    let cols: [&[f64]; J] = std::array::from_fn(|t| &ls[(j0 + t) * nr + w..(j0 + t + 1) * nr]);
+    let p4 = p - p % 4;
+    let mut acc = [[[0.0f64; 4]; K]; J];
+    let mut i = 0;
+    while i < p4 {
+        let mut gv = [[0.0f64; 4]; K];
+        for c in 0..K {
+            gv[c].copy_from_slice(&g[c * p + i..c * p + i + 4]);
+        }
+        for t in 0..J {
+            let a: &[f64; 4] = cols[t][i..i + 4].try_into().expect("four rows");
+            for c in 0..K {
+                for r in 0..4 {
+                    acc[t][c][r] = madd::<F>(a[r], gv[c][r], acc[t][c][r]);
+                }
+            }
+        }
+        i += 4;
+    }
+    for t in 0..J {
+        for c in 0..K {
+            let v = &acc[t][c];
+            let mut sum = (v[0] + v[1]) + (v[2] + v[3]);
+            for i in p4..p {
+                sum = madd::<F>(cols[t][i], g[c * p + i], sum);
+            }
+            xs[t][c] -= sum;
         }
     }
-    let mut t = ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
-    for (a, b) in xr.iter().zip(yr) {
-        t = madd::<F>(*a, *b, t);
-    }
-    t
 }
 
 /// A zeroed vector of `len` values, or `None` when it cannot be allocated. The allocator's
