@@ -694,7 +694,11 @@ fn select(lambda: &[f64], x: &Mat<f64>, keep: &[usize]) -> (Vec<f64>, Mat<f64>) 
 /// Largest relative residual the one-factorisation solve returns; above it (singular mass
 /// matrices, stiffness contrasts, where the shift above the modes purifies less) the solve is
 /// done again from the default shift, whose residuals are those of the verified reference path.
-const RESIDUAL_FALLBACK: f64 = 1e-9;
+/// The relative residual ‖Kx − λMx‖/‖Kx‖ of a low mode has a rounding floor of about
+/// ε·‖K‖/λ·(U/gap): 1.5e-9 on the first elastic mode of the 66k-DOF plate, where the backward
+/// error is 4e-15 and the frequencies agree with the reference path to 1e-13. The bar sits
+/// above that floor and at the tests' own bar for a verified mode.
+const RESIDUAL_FALLBACK: f64 = 1e-8;
 
 /// What [`solve_below_bound`] shares with the solve that called it.
 struct Estimate<'a> {
@@ -816,7 +820,7 @@ fn solve_below_bound(
     let mut applications = 0usize;
     let mut want = count;
     let mut attempt = 0;
-    loop {
+    'lanczos: loop {
         attempt += 1;
         lz.set_want(want);
         let (l, x) = lz
@@ -829,67 +833,79 @@ fn solve_below_bound(
             "Lanczos: {} pairs below U converged after {applications} operator applications",
             l.len()
         );
-        // Two steps of inverse iteration with Rayleigh–Ritz: with the shift above the modes,
-        // one step damps a high-frequency error component at λ_h only by |λ − U|/|λ_h − U|
-        // (against |λ − σ|/|λ_h − σ| from a shift below them), which left residuals of
-        // rigid-body and low modes 10–1000× above the two-factorisation solve's.
-        applications += 2 * x.ncols();
-        let (_, x) = refine(k, m, &fa, &x)?;
-        let (lambda, x) = refine(k, m, &fa, &x)?;
-        let mut below: Vec<usize> = (0..lambda.len()).filter(|&i| lambda[i] < u).collect();
-        below.sort_by(|&i, &j| lambda[i].total_cmp(&lambda[j]));
-        if below.len() < count && attempt < 4 {
-            // A cluster wider than the block, or a pair that had not converged: iterate on,
-            // with the pairs found locked at the start of a new basis.
-            want = (want + (count - below.len()) + p.block.min(4)).min(n);
+        // Inverse iteration with Rayleigh–Ritz at U purifies the modes. With the shift above
+        // them, one step damps a high-frequency error component at λ_h only by
+        // |λ − U|/|λ_h − U| (against |λ − σ|/|λ_h − σ| from a shift below them): a second step
+        // is taken when the first leaves a residual above RESIDUAL_FALLBACK (one step gave
+        // at most 1.5e-9 on the 20k–119k-DOF plates, and a second 4× less where it was above
+        // the rounding floor: not worth its solve).
+        applications += x.ncols();
+        let (mut lambda, mut x) = refine(k, m, &fa, &x)?;
+        let mut steps = 1;
+        loop {
+            let mut below: Vec<usize> = (0..lambda.len()).filter(|&i| lambda[i] < u).collect();
+            below.sort_by(|&i, &j| lambda[i].total_cmp(&lambda[j]));
+            if below.len() < count && attempt < 4 {
+                // A cluster wider than the block, or a pair that had not converged: iterate on,
+                // with the pairs found locked at the start of a new basis.
+                want = (want + (count - below.len()) + p.block.min(4)).min(n);
+                log::info!(
+                    "{} of the {count} eigenvalues below U found: iterating for more, the pairs found locked",
+                    below.len()
+                );
+                lz.set_want(want.max(lambda.len()));
+                lz.restart_from(&lambda, x.as_ref(), m, u);
+                continue 'lanczos;
+            }
+            let tv = Instant::now();
+            let (lam, vectors) = select(&lambda, &x, &below[..nm.min(below.len())]);
+            let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), u);
+            let worst = rel_residual.iter().fold(0.0f64, |a, &r| a.max(r));
+            if worst > RESIDUAL_FALLBACK && steps == 1 {
+                log::debug!("after one refinement: largest relative residual {worst:.1e}, refining again");
+                applications += x.ncols();
+                (lambda, x) = refine(k, m, &fa, &x)?;
+                steps += 1;
+                continue;
+            }
+            let time_iterate = ti.elapsed().as_secs_f64() - tv.elapsed().as_secs_f64();
             log::info!(
-                "{} of the {count} eigenvalues below U found: iterating for more, the pairs found locked",
-                below.len()
+                "Sturm check: {count} eigenvalues below {u:.6e} rad²/s², {} found ({steps} refinement step{})",
+                below.len(),
+                if steps == 1 { "" } else { "s" }
             );
-            lz.set_want(want.max(lambda.len()));
-            lz.restart_from(&lambda, x.as_ref(), m, u);
-            continue;
+            if worst > RESIDUAL_FALLBACK {
+                log::info!(
+                    "one-factorisation solve: largest relative residual {worst:.1e} (above {RESIDUAL_FALLBACK:.0e}): solving again from the default shift"
+                );
+                return Ok(None);
+            }
+            let backward_error = backward_errors(k, m, &lam, vectors.as_ref());
+            return Ok(Some(EigenSolution {
+                lambda: lam,
+                vectors,
+                rel_residual,
+                backward_error,
+                notes: notes.to_vec(),
+                m_orthonormality: m_orth,
+                // Below −∞ there is nothing: the count at U alone is the whole check.
+                sturm: SturmCheck {
+                    lower: (f64::NEG_INFINITY, 0),
+                    upper: (u, count),
+                    expected: count,
+                    found: below.len(),
+                    complete: below.len() == count,
+                },
+                shift: u,
+                applications,
+                factorizations: *est.factorizations,
+                time_factor,
+                time_iterate,
+                time_verify: tv.elapsed().as_secs_f64(),
+                factor_backward_error: fa.probe_residual,
+                memory: *est.memory,
+            }));
         }
-        let time_iterate = ti.elapsed().as_secs_f64();
-        log::info!(
-            "Sturm check: {count} eigenvalues below {u:.6e} rad²/s², {} found",
-            below.len()
-        );
-        let tv = Instant::now();
-        let (lam, vectors) = select(&lambda, &x, &below[..nm.min(below.len())]);
-        let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), u);
-        let worst = rel_residual.iter().fold(0.0f64, |a, &r| a.max(r));
-        if worst > RESIDUAL_FALLBACK {
-            log::info!(
-                "one-factorisation solve: largest relative residual {worst:.1e} (above {RESIDUAL_FALLBACK:.0e}): solving again from the default shift"
-            );
-            return Ok(None);
-        }
-        let backward_error = backward_errors(k, m, &lam, vectors.as_ref());
-        return Ok(Some(EigenSolution {
-            lambda: lam,
-            vectors,
-            rel_residual,
-            backward_error,
-            notes: notes.to_vec(),
-            m_orthonormality: m_orth,
-            // Below −∞ there is nothing: the count at U alone is the whole check.
-            sturm: SturmCheck {
-                lower: (f64::NEG_INFINITY, 0),
-                upper: (u, count),
-                expected: count,
-                found: below.len(),
-                complete: below.len() == count,
-            },
-            shift: u,
-            applications,
-            factorizations: *est.factorizations,
-            time_factor,
-            time_iterate,
-            time_verify: tv.elapsed().as_secs_f64(),
-            factor_backward_error: fa.probe_residual,
-            memory: *est.memory,
-        }));
     }
 }
 

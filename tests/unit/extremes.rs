@@ -462,7 +462,10 @@ fn stiffness_contrast_approaches_the_rigid_limit_or_says_so() {
         ..Default::default()
     };
     let rr = modal(&mesh, "rigid limit", rigid, ModalTarget::Modes(6), None);
-    assert_verified("rigid-limit reference", &rr, 1e-10);
+    // The reference is compared at 1e-4 below. Its relative residuals are those of the
+    // one-factorisation solve after one inverse-iteration step (measured 1.1e-9; the bar is the
+    // solver's own, 1e-8): a Rayleigh quotient's error is of the order of the residual squared.
+    assert_verified("rigid-limit reference", &rr, 1e-8);
     let stiff = |ratio: f64| ModelSpec {
         material: Material::steel(),
         group_materials: vec![("right".into(), mat(2.1e11 * ratio, 0.3, rho))],
