@@ -284,7 +284,7 @@ impl Factor {
     }
 
     /// Solve `A X = B` in place for a block of right-hand sides. Supernodal factors use
-    /// [`supernodal_solve`]: column groups of at most eight, at least one per worker thread, one
+    /// [`supernodal_solve`]: column groups of at most [`MAX_GROUP`], at least one per worker thread, one
     /// pass over each supernode column per direction, workspaces kept with the factor. Each
     /// column's arithmetic is the same whatever group it is solved in, so the result does not
     /// depend on the grouping or the thread count, bit for bit. Simplicial (small or very
