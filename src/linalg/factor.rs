@@ -571,6 +571,12 @@ fn supernodal_solve_body<const K: usize, const JB: usize, const F: bool>(
     }
 }
 
+/// The off-diagonal parts (rows `w..nr`) of supernode columns `j0..j0 + J` of `ls`.
+#[inline(always)]
+fn off_diagonal_cols<const J: usize>(ls: &[f64], nr: usize, w: usize, j0: usize) -> [&[f64]; J] {
+    std::array::from_fn(|t| &ls[(j0 + t) * nr + w..(j0 + t + 1) * nr])
+}
+
 /// `tmp[c·p + i] += Σ_t L_off[i, j0 + t] · xs[t][c]` for `J` columns of a supernode (values
 /// `ls`, `nr` rows, the off-diagonal rows from `w` on): four rows at a time, all right-hand
 /// sides per row vector, the columns' multiply–adds in order.
@@ -585,7 +591,7 @@ fn forward_cols<const K: usize, const J: usize, const F: bool>(
     p: usize,
 ) {
     let xs: [[f64; K]; J] = std::array::from_fn(|t| xs[t]);
-    let cols: [&[f64]; J] = std::array::from_fn(|t| &ls[(j0 + t) * nr + w..(j0 + t + 1) * nr]);
+    let cols = off_diagonal_cols::<J>(ls, nr, w, j0);
     let p4 = p - p % 4;
     let mut i = 0;
     while i < p4 {
@@ -628,7 +634,7 @@ fn backward_cols<const K: usize, const J: usize, const F: bool>(
     g: &[f64],
     p: usize,
 ) {
-    let cols: [&[f64]; J] = std::array::from_fn(|t| &ls[(j0 + t) * nr + w..(j0 + t + 1) * nr]);
+    let cols = off_diagonal_cols::<J>(ls, nr, w, j0);
     let p4 = p - p % 4;
     let mut acc = [[[0.0f64; 4]; K]; J];
     let mut i = 0;
