@@ -361,7 +361,7 @@ pub fn finish(
         })
         .collect();
     tm.post = t.elapsed().as_secs_f64();
-    tm.total = t_all.elapsed().as_secs_f64() + tm.assemble + tm.order;
+    tm.total = t_all.elapsed().as_secs_f64() + sys.timings.wall;
     let (volume, solid_mass) = model.volume_and_mass()?;
     let mass = solid_mass + model.discrete_mass();
 

@@ -1106,6 +1106,9 @@ struct Lanczos {
     /// Approximations of the wanted modes to start from (columns summed into the start
     /// block, with a random part so that no eigenvector is missing from it).
     start: Option<Mat<f64>>,
+    /// Wall time of the iteration's parts, seconds: solves, M products, orthogonalisation
+    /// against the basis, block normalisation, Rayleigh–Ritz (and restarts).
+    times: [f64; 5],
 }
 
 impl Lanczos {
@@ -1128,6 +1131,7 @@ impl Lanczos {
             started: false,
             pause_after: None,
             start: None,
+            times: [0.0; 5],
         }
     }
 
@@ -1381,17 +1385,27 @@ impl Lanczos {
         let b = self.b;
         loop {
             let blk = self.cur;
+            let mut tick = Instant::now();
+            let mut lap = |times: &mut [f64; 5], k: usize| {
+                let now = Instant::now();
+                times[k] += (now - tick).as_secs_f64();
+                tick = now;
+            };
             // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
             let mut w = self.mv.get(.., blk..blk + b).to_owned();
             fa.solve_in_place(w.as_mut());
             *apps += b;
+            lap(&mut self.times, 0);
             let mut mw = Mat::zeros(n, b);
             m.mul_block(w.as_ref(), mw.as_mut());
+            lap(&mut self.times, 1);
             let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
             let coef = self.orthogonalise(&mut w, &mut mw, blk + b);
             // Column block `blk` of T: rows 0..blk+b.
             self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
+            lap(&mut self.times, 2);
             let r = self.normalise(&mut w, &mut mw, m, blk + b, scale2);
+            lap(&mut self.times, 3);
             self.cur = blk + b;
             // The new block goes after the basis; R is T's subdiagonal block.
             let nb = self.cur;
@@ -1436,6 +1450,16 @@ impl Lanczos {
                 for &k in &take {
                     lam.push(sigma + 1.0 / theta[k]);
                 }
+                lap(&mut self.times, 4);
+                let t = self.times;
+                log::debug!(
+                    "Lanczos: solves {:.3} s, M products {:.3} s, orthogonalisation {:.3} s, normalisation {:.3} s, Rayleigh–Ritz and restarts {:.3} s",
+                    t[0],
+                    t[1],
+                    t[2],
+                    t[3],
+                    t[4]
+                );
                 return Ok(Some((lam, x)));
             }
             if *apps > p.max_applications {
@@ -1477,6 +1501,7 @@ impl Lanczos {
                 self.t.get_mut(0..keep, keep..keep + b).copy_from(coup.transpose());
                 self.cur = keep;
             }
+            lap(&mut self.times, 4);
             if let Some(left) = self.pause_after {
                 if left <= 1 {
                     self.pause_after = None;
