@@ -1109,6 +1109,8 @@ struct Lanczos {
     /// Wall time of the iteration's parts, seconds: solves, M products, orthogonalisation
     /// against the basis, block normalisation, Rayleigh–Ritz (and restarts).
     times: [f64; 5],
+    /// Largest [`Lanczos::bytes`] seen, recorded before the basis is freed.
+    peak_bytes: std::cell::Cell<u64>,
 }
 
 impl Lanczos {
@@ -1132,13 +1134,17 @@ impl Lanczos {
             pause_after: None,
             start: None,
             times: [0.0; 5],
+            peak_bytes: std::cell::Cell::new(0),
         }
     }
 
-    /// Bytes of the basis, its M-image and the projected matrix.
+    /// Bytes of the basis, its M-image and the projected matrix: the most they held so far
+    /// (a converged run frees them as it hands back its Ritz vectors).
     fn bytes(&self) -> u64 {
-        8 * (self.v.nrows() * self.v.ncols() + self.mv.nrows() * self.mv.ncols() + self.t.nrows() * self.t.ncols())
-            as u64
+        let now = 8
+            * (self.v.nrows() * self.v.ncols() + self.mv.nrows() * self.mv.ncols() + self.t.nrows() * self.t.ncols())
+                as u64;
+        self.peak_bytes.get().max(now)
     }
 
     /// Apply Op = A⁻¹M to a block: W = A⁻¹ (M X).
@@ -1304,6 +1310,7 @@ impl Lanczos {
     /// Free the basis and the projected matrix (before a Sturm factorisation, so that they do
     /// not add to its memory peak). A later [`Lanczos::run`] starts a new iteration.
     fn release(&mut self) {
+        self.peak_bytes.set(self.bytes());
         self.v = Mat::zeros(0, 0);
         self.mv = Mat::zeros(0, 0);
         self.t = Mat::zeros(0, 0);
@@ -1443,10 +1450,15 @@ impl Lanczos {
                 // the cut are complete.
                 let mut take: Vec<usize> = (0..c).filter(|&k| converged(k) || (exhausted && k < nw)).collect();
                 take.retain(|&k| self.side.wants(theta[k]));
-                let mut x = Mat::zeros(n, take.len());
                 let mut lam = Vec::with_capacity(take.len());
                 let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
-                tall::mul(x.as_mut(), Accum::Replace, self.v.get(.., 0..c), yk.as_ref(), 1.0);
+                // The Ritz vectors in place of the basis, copied out once its M-image is
+                // freed: the basis is spent (every caller releases it next).
+                tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
+                self.peak_bytes.set(self.bytes());
+                self.mv = Mat::zeros(0, 0);
+                let x = self.v.get(.., 0..take.len()).to_owned();
+                self.release();
                 for &k in &take {
                     lam.push(sigma + 1.0 / theta[k]);
                 }
@@ -1473,10 +1485,6 @@ impl Lanczos {
                 // Thick restart: keep the best Ritz vectors, continue from the last block.
                 let keep = (self.want + b).min(c.saturating_sub(b)).max(1);
                 let yk = y.get(.., 0..keep).to_owned();
-                let mut xk = Mat::zeros(n, keep);
-                let mut mxk = Mat::zeros(n, keep);
-                tall::mul(xk.as_mut(), Accum::Replace, self.v.get(.., 0..c), yk.as_ref(), 1.0);
-                tall::mul(mxk.as_mut(), Accum::Replace, self.mv.get(.., 0..c), yk.as_ref(), 1.0);
                 // R·E_lastᵀ·Y: coupling of the kept Ritz vectors to the next block.
                 let mut coup = Mat::zeros(b, keep);
                 matmul(
@@ -1487,12 +1495,14 @@ impl Lanczos {
                     1.0,
                     Par::Seq,
                 );
-                let nextv = self.v.get(.., nb..nb + b).to_owned();
-                let nextmv = self.mv.get(.., nb..nb + b).to_owned();
-                self.v.get_mut(.., 0..keep).copy_from(&xk);
-                self.mv.get_mut(.., 0..keep).copy_from(&mxk);
-                self.v.get_mut(.., keep..keep + b).copy_from(&nextv);
-                self.mv.get_mut(.., keep..keep + b).copy_from(&nextmv);
+                // In place (no copies of the basis at the memory peak): the Ritz vectors into
+                // the first columns, then the next block after them (keep + b ≤ c = nb).
+                tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
+                tall::combine_columns_in_place(self.mv.as_mut(), yk.as_ref());
+                for mat in [&mut self.v, &mut self.mv] {
+                    let (head, tail) = mat.as_mut().split_at_col_mut(nb);
+                    head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
+                }
                 self.t.fill(0.0);
                 for k in 0..keep {
                     self.t[(k, k)] = theta[k];

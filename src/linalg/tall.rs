@@ -24,6 +24,29 @@ pub fn mul(out: MatMut<'_, f64>, accum: Accum, a: MatRef<'_, f64>, b: MatRef<'_,
     });
 }
 
+/// `a[:, 0..k] = a[:, 0..c]·y` in place for `y` (c × k, k ≤ c): each chunk of rows is
+/// multiplied into a small buffer and written back, so no second tall matrix is allocated
+/// (a thick restart of the Lanczos basis, and its final Ritz vectors, at the memory peak).
+pub fn combine_columns_in_place(a: MatMut<'_, f64>, y: MatRef<'_, f64>) {
+    let (c, k) = (y.nrows(), y.ncols());
+    assert!(k <= c && c <= a.ncols());
+    if k == 0 {
+        return;
+    }
+    a.par_row_chunks_mut(ROWS).for_each(|rows| {
+        let mut tmp = Mat::zeros(rows.nrows(), k);
+        matmul(
+            tmp.as_mut(),
+            Accum::Replace,
+            rows.as_ref().get(.., 0..c),
+            y,
+            1.0,
+            Par::Seq,
+        );
+        rows.get_mut(.., 0..k).copy_from(&tmp);
+    });
+}
+
 /// `aᵀ·b` for tall `a` (n × k) and `b` (n × m): per-chunk products summed in chunk order.
 pub fn gram(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let n = a.nrows();
