@@ -7,6 +7,7 @@
 
 use crate::linalg::sparse::{Pattern, SymMatrix};
 use crate::linalg::supernodal;
+use crate::linalg::trisolve::{self, SolvePlan};
 use crate::{Error, Result};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
@@ -30,6 +31,8 @@ pub struct SymbolicFactor {
     /// Schedule of the subtree-parallel numeric factorisation ([`supernodal`]), for supernodal
     /// structures on machines that run its kernel; otherwise faer factorises.
     plan: Option<supernodal::Plan>,
+    /// The elimination tree's cut for block solves ([`trisolve`]), built on first use.
+    solve_plan: std::sync::OnceLock<SolvePlan>,
 }
 
 impl SymbolicFactor {
@@ -51,6 +54,7 @@ impl SymbolicFactor {
             flops,
             nnz_l,
             plan,
+            solve_plan: std::sync::OnceLock::new(),
         })
     }
 
@@ -265,7 +269,7 @@ impl Factor {
         })
     }
 
-    /// True for a supernodal factor (solved by [`supernodal_solve`]); small or very sparse
+    /// True for a supernodal factor (solved by [`trisolve`]); small or very sparse
     /// factors are simplicial (solved by faer).
     pub fn is_supernodal(&self) -> bool {
         matches!(self.sym.sym.raw(), SymbolicCholeskyRaw::Supernodal(_))
@@ -276,6 +280,15 @@ impl Factor {
         self.values.len() * std::mem::size_of::<f64>()
     }
 
+    /// How block solves with this factor are split between threads (`None` for a simplicial
+    /// factor, solved by faer).
+    pub fn solve_layout(&self) -> Option<trisolve::SolveLayout> {
+        let SymbolicCholeskyRaw::Supernodal(sn) = self.sym.sym.raw() else {
+            return None;
+        };
+        Some(self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn)).layout)
+    }
+
     /// Bytes of the solve workspaces kept between calls.
     pub fn workspace_bytes(&self) -> usize {
         self.scratch
@@ -284,13 +297,12 @@ impl Factor {
     }
 
     /// Solve `A X = B` in place for a block of right-hand sides. Supernodal factors use
-    /// [`supernodal_solve`]: column groups of at most [`MAX_GROUP`], at least one per worker thread, one
-    /// pass over each supernode column per direction, workspaces kept with the factor. Each
-    /// column's arithmetic is the same whatever group it is solved in, so the result does not
-    /// depend on the grouping or the thread count, bit for bit. Simplicial (small or very
-    /// sparse) factors are solved by faer.
+    /// [`trisolve`]: column groups of at most [`MAX_GROUP`] one after the other, each solved by
+    /// all worker threads with one pass over the factor per direction, workspaces kept with the
+    /// factor. Each column's arithmetic is the same whatever group it is solved in and whatever
+    /// the thread count, bit for bit. Simplicial (small or very sparse) factors are solved by
+    /// faer.
     pub fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
-        use rayon::prelude::*;
         let k = rhs.ncols();
         if k == 0 {
             return;
@@ -298,13 +310,13 @@ impl Factor {
         let SymbolicCholeskyRaw::Supernodal(_) = self.sym.sym.raw() else {
             return self.solve_faer(rhs);
         };
-        let threads = rayon::current_num_threads().max(1);
-        let groups = threads.max(k.div_ceil(MAX_GROUP)).min(k);
-        let per = k.div_ceil(groups);
-        if per == k {
-            self.solve_group(rhs);
-        } else {
-            rhs.par_col_chunks_mut(per).for_each(|c| self.solve_group(c));
+        let per = k.div_ceil(k.div_ceil(MAX_GROUP));
+        let mut rhs = rhs;
+        let mut c0 = 0;
+        while c0 < k {
+            let cols = per.min(k - c0);
+            self.solve_group(rhs.as_mut().subcols_mut(c0, cols));
+            c0 += cols;
         }
     }
 
@@ -338,6 +350,7 @@ impl Factor {
             Some(pool.swap_remove(i))
         });
         let mut x = pooled.unwrap_or_else(|| vec![0.0; need]);
+        let plan = self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn));
         let perm = self.sym.sym.perm().map(|p| p.arrays());
         for c in 0..k {
             let col = rhs.as_ref().col(c);
@@ -349,7 +362,7 @@ impl Factor {
         macro_rules! go {
             ($($kk:literal)*) => {
                 match k {
-                    $($kk => supernodal_solve::<$kk, { jb($kk) }>(sn, &self.values, x[..need].as_chunks_mut::<$kk>().0),)*
+                    $($kk => trisolve::solve::<$kk>(sn, plan, &self.values, x[..need].as_chunks_mut::<$kk>().0),)*
                     _ => unreachable!("column groups hold at most {MAX_GROUP} columns"),
                 }
             };
@@ -410,260 +423,9 @@ impl Factor {
     }
 }
 
-/// Supernode columns per pass of the off-diagonal products for `k` right-hand sides: the
-/// backward pass holds JB·K four-lane accumulators, K vectors of the gathered rows and one of
-/// L, within the sixteen vector registers of AVX2.
-const fn jb(k: usize) -> usize {
-    let j = 15 / k;
-    if j <= 2 {
-        1
-    } else if j > 9 {
-        8
-    } else {
-        j - 1
-    }
-}
-
-/// Most right-hand sides solved together by one thread.
-/// (Twelve: the 19–21 columns of a refinement make two groups, one per thread of this machine.)
+/// Most right-hand sides solved together (one pass over the factor per direction): the 19–21
+/// columns of a refinement make two groups.
 const MAX_GROUP: usize = 12;
-
-/// Solve L D Lᵀ x = b in place for `K` right-hand sides stored row by row (`x[i]` holds row i
-/// of the block, in the factor's elimination order). Each column of a supernode is read once
-/// per direction, contiguously. The rows of a supernode's off-diagonal pattern are gathered
-/// once into a dense buffer (one column per right-hand side); the products with the
-/// off-diagonal block run `JB` supernode columns at a time over four rows (one vector) at a
-/// time, all `K` right-hand sides per vector, so each value of L is loaded once and used K
-/// times from registers. No packing, nothing allocated per supernode.
-///
-/// Every entry's arithmetic is a fixed sequence (forward: multiply–adds over the supernode's
-/// columns in order; backward: four lanes over the rows in order, summed in a fixed order),
-/// whatever `K` and `JB` are: a column solved alone equals the same column solved in a group.
-fn supernodal_solve<const K: usize, const JB: usize>(sn: &SupernodalSymbolic, values: &[f64], x: &mut [[f64; K]]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-        // SAFETY: the CPU has the features the function is compiled for.
-        unsafe { supernodal_solve_fma::<K, JB>(sn, values, x) };
-        return;
-    }
-    supernodal_solve_body::<K, JB, false>(sn, values, x)
-}
-
-type SupernodalSymbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>;
-
-/// [`supernodal_solve`] compiled for AVX2 with fused multiply–adds.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn supernodal_solve_fma<const K: usize, const JB: usize>(
-    sn: &SupernodalSymbolic,
-    values: &[f64],
-    x: &mut [[f64; K]],
-) {
-    supernodal_solve_body::<K, JB, true>(sn, values, x)
-}
-
-/// `a·b + c`, fused when `F`.
-#[inline(always)]
-fn madd<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
-    if F { a.mul_add(b, c) } else { a * b + c }
-}
-
-#[inline(always)]
-fn supernodal_solve_body<const K: usize, const JB: usize, const F: bool>(
-    sn: &SupernodalSymbolic,
-    values: &[f64],
-    x: &mut [[f64; K]],
-) {
-    let ns = sn.n_supernodes();
-    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
-    let cp = sn.col_ptr_for_val();
-    let max_p = (0..ns).map(|s| sn.supernode(s).pattern().len()).max().unwrap_or(0);
-    // Supernode s: first row, width, off-diagonal pattern, values (column-major, w + p rows).
-    let block = |s: usize| {
-        (
-            begin[s],
-            end[s] - begin[s],
-            sn.supernode(s).pattern(),
-            &values[cp[s]..cp[s + 1]],
-        )
-    };
-    let mut buf = vec![0.0f64; K * max_p];
-    // Forward: L y = b.
-    for s in 0..ns {
-        let (f, w, pat, ls) = block(s);
-        let (l, p, nr) = (f + w, pat.len(), w + pat.len());
-        // The diagonal block, column by column.
-        for j in 0..w {
-            let col = &ls[j * nr..(j + 1) * nr];
-            let xj = x[f + j];
-            for (xi, &a) in x[f + j + 1..l].iter_mut().zip(&col[j + 1..w]) {
-                for c in 0..K {
-                    xi[c] = madd::<F>(-a, xj[c], xi[c]);
-                }
-            }
-        }
-        // tmp = L_off · x_s: per entry, multiply–adds over the columns in order.
-        let tmp = &mut buf[..K * p];
-        tmp.fill(0.0);
-        let mut j0 = 0;
-        while j0 + JB <= w {
-            forward_cols::<K, JB, F>(ls, nr, w, j0, &x[f + j0..f + j0 + JB], tmp, p);
-            j0 += JB;
-        }
-        while j0 < w {
-            forward_cols::<K, 1, F>(ls, nr, w, j0, &x[f + j0..f + j0 + 1], tmp, p);
-            j0 += 1;
-        }
-        for (idx, &r) in pat.iter().enumerate() {
-            let xr = &mut x[r];
-            for c in 0..K {
-                xr[c] -= tmp[c * p + idx];
-            }
-        }
-    }
-    // Diagonal: D z = y.
-    for s in 0..ns {
-        let (f, w, pat, ls) = block(s);
-        let nr = w + pat.len();
-        for j in 0..w {
-            let dinv = ls[j * nr + j].recip();
-            for v in x[f + j].iter_mut() {
-                *v *= dinv;
-            }
-        }
-    }
-    // Backward: Lᵀ x = z.
-    for s in (0..ns).rev() {
-        let (f, w, pat, ls) = block(s);
-        let (l, p, nr) = (f + w, pat.len(), w + pat.len());
-        let g = &mut buf[..K * p];
-        for (idx, &r) in pat.iter().enumerate() {
-            for c in 0..K {
-                g[c * p + idx] = x[r][c];
-            }
-        }
-        let g = &buf[..K * p];
-        // off[j] = L_off(:, j)ᵀ · g for every column of the supernode: four lanes over the
-        // rows, summed as (l0 + l1) + (l2 + l3), then the remaining rows in order.
-        let mut j0 = 0;
-        while j0 + JB <= w {
-            backward_cols::<K, JB, F>(ls, nr, w, j0, &mut x[f + j0..f + j0 + JB], g, p);
-            j0 += JB;
-        }
-        while j0 < w {
-            backward_cols::<K, 1, F>(ls, nr, w, j0, &mut x[f + j0..f + j0 + 1], g, p);
-            j0 += 1;
-        }
-        // The diagonal block, last column first.
-        for j in (0..w).rev() {
-            let col = &ls[j * nr..(j + 1) * nr];
-            let mut acc = [0.0f64; K];
-            for (xi, &a) in x[f + j + 1..l].iter().zip(&col[j + 1..w]) {
-                for c in 0..K {
-                    acc[c] = madd::<F>(a, xi[c], acc[c]);
-                }
-            }
-            let xj = &mut x[f + j];
-            for c in 0..K {
-                xj[c] -= acc[c];
-            }
-        }
-    }
-}
-
-/// The off-diagonal parts (rows `w..nr`) of supernode columns `j0..j0 + J` of `ls`.
-#[inline(always)]
-fn off_diagonal_cols<const J: usize>(ls: &[f64], nr: usize, w: usize, j0: usize) -> [&[f64]; J] {
-    std::array::from_fn(|t| &ls[(j0 + t) * nr + w..(j0 + t + 1) * nr])
-}
-
-/// `tmp[c·p + i] += Σ_t L_off[i, j0 + t] · xs[t][c]` for `J` columns of a supernode (values
-/// `ls`, `nr` rows, the off-diagonal rows from `w` on): four rows at a time, all right-hand
-/// sides per row vector, the columns' multiply–adds in order.
-#[inline(always)]
-fn forward_cols<const K: usize, const J: usize, const F: bool>(
-    ls: &[f64],
-    nr: usize,
-    w: usize,
-    j0: usize,
-    xs: &[[f64; K]],
-    tmp: &mut [f64],
-    p: usize,
-) {
-    let xs: [[f64; K]; J] = std::array::from_fn(|t| xs[t]);
-    let cols = off_diagonal_cols::<J>(ls, nr, w, j0);
-    let p4 = p - p % 4;
-    let mut i = 0;
-    while i < p4 {
-        let mut acc = [[0.0f64; 4]; K];
-        for c in 0..K {
-            acc[c].copy_from_slice(&tmp[c * p + i..c * p + i + 4]);
-        }
-        for t in 0..J {
-            let a: &[f64; 4] = cols[t][i..i + 4].try_into().expect("four rows");
-            for c in 0..K {
-                for r in 0..4 {
-                    acc[c][r] = madd::<F>(a[r], xs[t][c], acc[c][r]);
-                }
-            }
-        }
-        for c in 0..K {
-            tmp[c * p + i..c * p + i + 4].copy_from_slice(&acc[c]);
-        }
-        i += 4;
-    }
-    for i in p4..p {
-        for t in 0..J {
-            let a = cols[t][i];
-            for c in 0..K {
-                tmp[c * p + i] = madd::<F>(a, xs[t][c], tmp[c * p + i]);
-            }
-        }
-    }
-}
-
-/// `xs[t][c] −= L_off[:, j0 + t]ᵀ · g[c]` for `J` columns of a supernode: four lanes over the
-/// rows, summed as (l0 + l1) + (l2 + l3), then the remaining rows in order.
-#[inline(always)]
-fn backward_cols<const K: usize, const J: usize, const F: bool>(
-    ls: &[f64],
-    nr: usize,
-    w: usize,
-    j0: usize,
-    xs: &mut [[f64; K]],
-    g: &[f64],
-    p: usize,
-) {
-    let cols = off_diagonal_cols::<J>(ls, nr, w, j0);
-    let p4 = p - p % 4;
-    let mut acc = [[[0.0f64; 4]; K]; J];
-    let mut i = 0;
-    while i < p4 {
-        let mut gv = [[0.0f64; 4]; K];
-        for c in 0..K {
-            gv[c].copy_from_slice(&g[c * p + i..c * p + i + 4]);
-        }
-        for t in 0..J {
-            let a: &[f64; 4] = cols[t][i..i + 4].try_into().expect("four rows");
-            for c in 0..K {
-                for r in 0..4 {
-                    acc[t][c][r] = madd::<F>(a[r], gv[c][r], acc[t][c][r]);
-                }
-            }
-        }
-        i += 4;
-    }
-    for t in 0..J {
-        for c in 0..K {
-            let v = &acc[t][c];
-            let mut sum = (v[0] + v[1]) + (v[2] + v[3]);
-            for i in p4..p {
-                sum = madd::<F>(cols[t][i], g[c * p + i], sum);
-            }
-            xs[t][c] -= sum;
-        }
-    }
-}
 
 /// A zeroed vector of `len` values, or `None` when it cannot be allocated. The allocator's
 /// zeroed memory is used, so a large factor's pages are zero-filled by the system when first

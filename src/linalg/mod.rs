@@ -10,3 +10,4 @@ pub mod ordering;
 pub mod sparse;
 pub mod supernodal;
 pub mod tall;
+pub mod trisolve;
