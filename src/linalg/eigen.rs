@@ -171,6 +171,9 @@ const DENSE_MAX: usize = 4000;
 /// Smallest ratio of the extreme eigenvalues of a new block's M-Gram matrix for which the block
 /// is normalised without another orthogonalisation pass against the basis.
 const WELL_CONDITIONED: f64 = 1e-4;
+/// Smallest ratio of a new block's least M-norm² after orthogonalisation to its largest before
+/// it for which the block's M-image is updated along rather than recomputed.
+const IMAGE_KEPT: f64 = 1e-6;
 /// Largest block size chosen automatically for models of several unconnected parts.
 const MAX_AUTO_BLOCK: usize = 60;
 
@@ -1181,6 +1184,7 @@ impl Lanczos {
     fn normalise(&mut self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize, scale2: f64) -> Mat<f64> {
         let bw = w.ncols();
         let mut r_total = Mat::<f64>::identity(bw, bw);
+        let mut fresh = true;
         for pass in 0..3 {
             let g = tall::gram(w.as_ref(), mw.as_ref());
             let gs = nalgebra::DMatrix::from_fn(bw, bw, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
@@ -1225,6 +1229,10 @@ impl Lanczos {
                 // The block was orthogonal to the basis to rounding (two Gram–Schmidt passes);
                 // scaling a well-conditioned block amplifies that rounding by at most
                 // √(smax/smin) ≤ 100, so another pass against the basis buys nothing.
+                // Its M-image, updated along (M·W − MV·C, then scaled), carries the rounding of
+                // the unscaled terms amplified by at most √(scale2/smin): below 1e3, it is
+                // accurate to ~1e-13 and is kept rather than recomputed.
+                fresh = !(pass == 0 && scale2 > 0.0 && smin >= IMAGE_KEPT * scale2);
                 break;
             }
             // Second pass: clean rounding (and orthogonalise random replacements).
@@ -1232,7 +1240,9 @@ impl Lanczos {
         }
         // A fresh M-image: the algebraic updates above lose accuracy when a block is nearly
         // in the span of the basis (its scaling amplifies their rounding).
-        m.mul_block(w.as_ref(), mw.as_mut());
+        if fresh {
+            m.mul_block(w.as_ref(), mw.as_mut());
+        }
         r_total
     }
 
