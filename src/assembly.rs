@@ -175,13 +175,18 @@ pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Result<Pattern> {
         }
     }
     let nnz = *col_ptr.last().unwrap_or(&0);
-    let mut row_idx: Vec<usize> = Vec::new();
+    if u32::try_from(n).is_err() {
+        return Err(crate::Error::InvalidInput(format!(
+            "{n} equations: more than the 2³² − 1 that the sparse structure indexes"
+        )));
+    }
+    let mut row_idx: Vec<u32> = Vec::new();
     row_idx
         .try_reserve_exact(nnz)
-        .map_err(|_| crate::Error::out_of_memory("the sparsity pattern", 8 * nnz as u64))?;
+        .map_err(|_| crate::Error::out_of_memory("the sparsity pattern", 4 * nnz as u64))?;
     row_idx.resize(nnz, 0);
     // Fill per node in parallel: the columns of node b are a contiguous slice of row_idx.
-    let mut slices: Vec<&mut [usize]> = Vec::with_capacity(n_nodes);
+    let mut slices: Vec<&mut [u32]> = Vec::with_capacity(n_nodes);
     let mut rest = row_idx.as_mut_slice();
     for b in 0..n_nodes {
         let len = counts[b] * (dofs.first[b + 1] - dofs.first[b]);
@@ -199,7 +204,8 @@ pub fn dof_pattern(graph: &NodeGraph, dofs: &DofMap) -> Result<Pattern> {
             let mut k = c * len;
             for &a in graph.neighbours(b) {
                 for e in dofs.first[a as usize]..dofs.first[a as usize + 1] {
-                    out[k] = e;
+                    // Below n, checked above.
+                    out[k] = e as u32;
                     k += 1;
                 }
             }
@@ -418,7 +424,7 @@ fn scatter(
             if nfree[la] == 0 {
                 continue;
             }
-            let Ok(k0) = rows.binary_search(&f0) else {
+            let Ok(k0) = rows.binary_search(&(f0 as u32)) else {
                 continue;
             };
             for &(jb, cb) in &free[lb][..nfree[lb] as usize] {
@@ -430,7 +436,7 @@ fn scatter(
                 let mcol = lb * ndpn + cb as usize;
                 for &(ra, ca) in &free[la][..nfree[la] as usize] {
                     let pos = base + ra as usize;
-                    debug_assert_eq!(pattern.row_idx[pos], f0 + ra as usize);
+                    debug_assert_eq!(pattern.row_idx[pos] as usize, f0 + ra as usize);
                     vals[pos - off] += me[(la * ndpn + ca as usize) * nd + mcol];
                 }
             }

@@ -261,7 +261,13 @@ pub fn direct(sys: &System, load: &[c64], omega: f64, damping: &Damping) -> Resu
         .zip(&m.values)
         .map(|(&kv, &mv)| ck * kv - cm * mv)
         .collect();
-    let symbolic = SymbolicSparseColMat::new_checked(n, n, p.col_ptr.clone(), None, p.row_idx.clone());
+    let symbolic = SymbolicSparseColMat::new_checked(
+        n,
+        n,
+        p.col_ptr.clone(),
+        None,
+        p.row_idx.iter().map(|&i| i as usize).collect(),
+    );
     let a = SparseColMat::new(symbolic, values);
     let lu = a.sp_lu().map_err(|e| Error::Singular {
         equation: None,

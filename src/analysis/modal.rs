@@ -443,7 +443,7 @@ pub fn finish(
             },
             k_and_m: {
                 let pat = sys.pattern();
-                (8 * (pat.col_ptr.len() + pat.row_idx.len()) + k_mat.value_bytes() + m_mat.value_bytes()) as u64
+                (8 * pat.col_ptr.len() + 4 * pat.row_idx.len() + k_mat.value_bytes() + m_mat.value_bytes()) as u64
             },
             factor: sol.memory.factor,
             shifted_matrix: sol.memory.shifted_matrix,

@@ -46,7 +46,7 @@ pub fn write_petsc(path: &Path, a: &SymMatrix) -> Result<()> {
             .map_err(io)?;
     }
     for &i in &p.row_idx {
-        w.write_all(&int32("index", path, i)?).map_err(io)?;
+        w.write_all(&int32("index", path, i as usize)?).map_err(io)?;
     }
     for v in &a.values {
         w.write_all(&v.to_be_bytes()).map_err(io)?;
@@ -64,7 +64,7 @@ pub fn write_matrix_market(path: &Path, a: &SymMatrix, comment: &str) -> Result<
         .map(|j| {
             p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]]
                 .iter()
-                .filter(|&&i| i >= j)
+                .filter(|&&i| i as usize >= j)
                 .count()
         })
         .sum();
@@ -75,7 +75,7 @@ pub fn write_matrix_market(path: &Path, a: &SymMatrix, comment: &str) -> Result<
     writeln!(w, "{} {} {}", p.n, p.n, lower).map_err(io)?;
     for j in 0..p.n {
         for q in p.col_ptr[j]..p.col_ptr[j + 1] {
-            let i = p.row_idx[q];
+            let i = p.row_idx[q] as usize;
             if i >= j {
                 writeln!(w, "{} {} {:e}", i + 1, j + 1, a.values[q]).map_err(io)?;
             }

@@ -102,7 +102,7 @@ impl Prolongation {
         }
         let pat = &*k.pattern;
         let chunk = nc.div_ceil(4 * rayon::current_num_threads().max(1)).max(64);
-        let cols: Vec<(Vec<usize>, Vec<usize>, Vec<f64>, Vec<f64>)> = (0..nc)
+        let cols: Vec<(Vec<usize>, Vec<u32>, Vec<f64>, Vec<f64>)> = (0..nc)
             .collect::<Vec<_>>()
             .par_chunks(chunk)
             .map(|js| {
@@ -116,7 +116,7 @@ impl Prolongation {
                     for t in tptr[j]..tptr[j + 1] {
                         let (e, we) = (trow[t] as usize, tw[t]);
                         for q in pat.col_ptr[e]..pat.col_ptr[e + 1] {
-                            let r = pat.row_idx[q];
+                            let r = pat.row_idx[q] as usize;
                             let (a, b) = (we * k.values[q], we * m.values[q]);
                             for (i, wr) in self.row(r) {
                                 if !mark[i] {
@@ -131,7 +131,8 @@ impl Prolongation {
                     rows.sort_unstable();
                     counts.push(rows.len());
                     for &i in &rows {
-                        ri.push(i);
+                        // Below the coarse dimension, itself below the fine one.
+                        ri.push(i as u32);
                         vk.push(acc_k[i]);
                         vm.push(acc_m[i]);
                         acc_k[i] = 0.0;

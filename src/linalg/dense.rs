@@ -16,7 +16,7 @@ pub fn to_dense(a: &SymMatrix) -> DMatrix<f64> {
     let p = &a.pattern;
     for j in 0..n {
         for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-            d[(p.row_idx[k], j)] = a.values[k];
+            d[(p.row_idx[k] as usize, j)] = a.values[k];
         }
     }
     d
@@ -116,7 +116,7 @@ fn to_faer(a: &SymMatrix) -> Mat<f64> {
     let p = &a.pattern;
     for j in 0..n {
         for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-            d[(p.row_idx[k], j)] = a.values[k];
+            d[(p.row_idx[k] as usize, j)] = a.values[k];
         }
     }
     d

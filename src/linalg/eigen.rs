@@ -191,7 +191,7 @@ fn components(k: &SymMatrix, min_size: usize) -> usize {
     }
     for j in 0..n {
         for &i in &p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]] {
-            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            let (a, b) = (find(&mut parent, i as usize), find(&mut parent, j));
             if a != b {
                 parent[a.max(b)] = a.min(b);
             }

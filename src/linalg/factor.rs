@@ -42,7 +42,8 @@ impl SymbolicFactor {
             Some((fwd, inv)) => SymmetricOrdering::Custom(PermRef::new_checked(fwd, inv, pattern.n)),
             None => SymmetricOrdering::Amd,
         };
-        let sym = factorize_symbolic_cholesky(pattern.symbolic(), Side::Upper, ord, CholeskySymbolicParams::default())
+        let structure = pattern.to_faer();
+        let sym = factorize_symbolic_cholesky(structure.as_ref(), Side::Upper, ord, CholeskySymbolicParams::default())
             .map_err(|e| Error::Factorization(format!("symbolic analysis: {e:?}")))?;
         let (flops, nnz_l) = count_flops(&sym);
         let plan = match sym.raw() {
@@ -176,11 +177,12 @@ impl Factor {
                 let mut mem = MemBuffer::try_new(req)
                     .map_err(|_| Error::Factorization("cannot allocate factor workspace".into()))?;
                 let stack = MemStack::new(&mut mem);
+                let structure = a.pattern.to_faer();
                 let r = sym
                     .sym
                     .factorize_numeric_ldlt(
                         &mut values,
-                        a.as_faer(),
+                        faer::sparse::SparseColMatRef::new(structure.as_ref(), &a.values),
                         Side::Upper,
                         LdltRegularization::default(),
                         par,

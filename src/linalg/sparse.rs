@@ -4,7 +4,7 @@
 //! values but makes the matrix–vector product a parallel, deterministic gather (each output
 //! row is a dot product of one column), and faer's factorisation reads just the upper triangle.
 
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::sparse::SymbolicSparseColMat;
 use faer::{MatMut, MatRef};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -16,8 +16,9 @@ pub struct Pattern {
     pub n: usize,
     /// Column pointers, length `n + 1`.
     pub col_ptr: Vec<usize>,
-    /// Row indices.
-    pub row_idx: Vec<usize>,
+    /// Row indices (32-bit: half the memory of the structure, and of the traffic of every
+    /// sparse product; a model has fewer than 2³² equations).
+    pub row_idx: Vec<u32>,
 }
 
 impl Pattern {
@@ -25,14 +26,17 @@ impl Pattern {
     pub fn nnz(&self) -> usize {
         self.row_idx.len()
     }
-    /// faer view of the structure.
-    pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
-        SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
+    /// The structure with faer's index type (a copy of the row indices, for its symbolic
+    /// analysis).
+    pub fn to_faer(&self) -> SymbolicSparseColMat<usize> {
+        let rows: Vec<usize> = self.row_idx.iter().map(|&i| i as usize).collect();
+        SymbolicSparseColMat::new_checked(self.n, self.n, self.col_ptr.clone(), None, rows)
     }
     /// Position of entry `(row, col)` in the value array, if stored.
     pub fn position(&self, row: usize, col: usize) -> Option<usize> {
         let s = self.col_ptr[col];
         let rows = &self.row_idx[s..self.col_ptr[col + 1]];
+        let row = u32::try_from(row).ok()?;
         rows.binary_search(&row).ok().map(|k| s + k)
     }
 }
@@ -47,6 +51,7 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: &mut 
             let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
             let mut acc = [0.0f64; B];
             for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+                let i = i as usize;
                 let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
                 for c in 0..B {
                     acc[c] += a * xi[c];
@@ -88,10 +93,6 @@ impl SymMatrix {
     /// Dimension.
     pub fn n(&self) -> usize {
         self.pattern.n
-    }
-    /// faer view.
-    pub fn as_faer(&self) -> SparseColMatRef<'_, usize, f64> {
-        SparseColMatRef::new(self.pattern.symbolic(), &self.values)
     }
     /// `self − s·other` (same pattern).
     pub fn sub_scaled(&self, s: f64, other: &SymMatrix) -> SymMatrix {
@@ -180,7 +181,7 @@ impl SymMatrix {
                     acc.fill(0.0);
                     let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
                     for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
-                        let a = a.abs();
+                        let (i, a) = (i as usize, a.abs());
                         for (o, &xv) in acc.iter_mut().zip(&xr[i * b..i * b + b]) {
                             *o += a * xv;
                         }
@@ -213,7 +214,7 @@ impl SymMatrix {
             .map(|j| {
                 let mut s = 0.0;
                 for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-                    s += self.values[k] * x[p.row_idx[k]];
+                    s += self.values[k] * x[p.row_idx[k] as usize];
                 }
                 s
             })
@@ -242,7 +243,7 @@ impl SymMatrix {
                 if last == Some(i) {
                     *values.last_mut().unwrap() += v;
                 } else {
-                    row_idx.push(i);
+                    row_idx.push(u32::try_from(i).expect("a dimension below 2³²"));
                     values.push(v);
                     last = Some(i);
                 }
@@ -261,7 +262,7 @@ impl SymMatrix {
         let p = &*self.pattern;
         for j in 0..p.n {
             for k in p.col_ptr[j]..p.col_ptr[j + 1] {
-                if let Some(pos) = pattern.position(p.row_idx[k], j) {
+                if let Some(pos) = pattern.position(p.row_idx[k] as usize, j) {
                     out.values[pos] = self.values[k];
                 }
             }

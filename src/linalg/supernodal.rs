@@ -330,7 +330,9 @@ fn node(
             let jl = j - s_start;
             let c_old = input.perm.map_or(j, |(fwd, _)| fwd[j]);
             for pos in pat.col_ptr[c_old]..pat.col_ptr[c_old + 1] {
-                let i = input.perm.map_or(pat.row_idx[pos], |(_, inv)| inv[pat.row_idx[pos]]);
+                let i = input
+                    .perm
+                    .map_or(pat.row_idx[pos] as usize, |(_, inv)| inv[pat.row_idx[pos] as usize]);
                 if i < j {
                     continue;
                 }

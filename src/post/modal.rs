@@ -222,7 +222,7 @@ pub fn rigid_analysis(
     let pat = &k.pattern;
     for j in 0..pat.n {
         for &i in &pat.row_idx[pat.col_ptr[j]..pat.col_ptr[j + 1]] {
-            let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+            let (a, b) = (find(&mut parent, i as usize), find(&mut parent, j));
             if a != b {
                 parent[a.max(b)] = a.min(b);
             }

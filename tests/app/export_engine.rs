@@ -60,7 +60,7 @@ fn export_writes_matrices_that_read_back_exactly() {
         let mut lower = 0;
         for j in 0..p.n {
             for q in p.col_ptr[j]..p.col_ptr[j + 1] {
-                let i = p.row_idx[q];
+                let i = p.row_idx[q] as usize;
                 if i >= j {
                     lower += 1;
                     // Shortest round-trip formatting: the values read back bit for bit.
@@ -81,7 +81,7 @@ fn export_writes_matrices_that_read_back_exactly() {
             assert_eq!(x.to_bits(), v.to_bits());
         }
         for k in 0..p.nnz() {
-            assert_eq!(int(4 + p.n + k), p.row_idx[k]);
+            assert_eq!(int(4 + p.n + k), p.row_idx[k] as usize);
         }
     }
     let csv = std::fs::read_to_string(dir.join("dofs.csv")).unwrap();

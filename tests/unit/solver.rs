@@ -321,7 +321,7 @@ fn close_pairs_with_block_one_are_complete() {
     for j in 0..k0.n() {
         let p = &k0.pattern;
         for q in p.col_ptr[j]..p.col_ptr[j + 1] {
-            let i = p.row_idx[q];
+            let i = p.row_idx[q] as usize;
             if i <= j {
                 kt.push((i, j, k0.values[q]));
             }
