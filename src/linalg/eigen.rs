@@ -530,7 +530,7 @@ fn solve_inner(
                 None => lz.run(p, f, m, sigma, &mut applications)?,
             };
             let (l, x) = res.ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
-            memory.lanczos_basis = memory.lanczos_basis.max(lz.bytes());
+            memory.lanczos_basis = memory.lanczos_basis.max(lz.peak_bytes());
             memory.solve_workspace = memory.solve_workspace.max(f.workspace_bytes() as u64);
             // The basis is not needed past this point (a second round starts a new one from
             // the pairs found): free it before the refinement's blocks are allocated.
@@ -829,7 +829,7 @@ fn solve_below_bound(
         let (l, x) = lz
             .run(p, &fa, m, u, &mut applications)?
             .ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
-        est.memory.lanczos_basis = est.memory.lanczos_basis.max(lz.bytes());
+        est.memory.lanczos_basis = est.memory.lanczos_basis.max(lz.peak_bytes());
         est.memory.solve_workspace = est.memory.solve_workspace.max(fa.workspace_bytes() as u64);
         lz.release();
         log::info!(
@@ -1141,13 +1141,16 @@ impl Lanczos {
         }
     }
 
-    /// Bytes of the basis, its M-image and the projected matrix: the most they held so far
-    /// (a converged run frees them as it hands back its Ritz vectors).
+    /// Bytes of the basis, its M-image and the projected matrix held now.
     fn bytes(&self) -> u64 {
-        let now = 8
-            * (self.v.nrows() * self.v.ncols() + self.mv.nrows() * self.mv.ncols() + self.t.nrows() * self.t.ncols())
-                as u64;
-        self.peak_bytes.get().max(now)
+        8 * (self.v.nrows() * self.v.ncols() + self.mv.nrows() * self.mv.ncols() + self.t.nrows() * self.t.ncols())
+            as u64
+    }
+
+    /// The most [`Lanczos::bytes`] held so far (a converged run frees them as it hands back
+    /// its Ritz vectors).
+    fn peak_bytes(&self) -> u64 {
+        self.peak_bytes.get().max(self.bytes())
     }
 
     /// Apply Op = A⁻¹M to a block: W = A⁻¹ (M X).
@@ -1320,7 +1323,7 @@ impl Lanczos {
     /// Free the basis and the projected matrix (before a Sturm factorisation, so that they do
     /// not add to its memory peak). A later [`Lanczos::run`] starts a new iteration.
     fn release(&mut self) {
-        self.peak_bytes.set(self.bytes());
+        self.peak_bytes.set(self.peak_bytes());
         self.v = Mat::zeros(0, 0);
         self.mv = Mat::zeros(0, 0);
         self.t = Mat::zeros(0, 0);
@@ -1465,7 +1468,7 @@ impl Lanczos {
                 // The Ritz vectors in place of the basis, copied out once its M-image is
                 // freed: the basis is spent (every caller releases it next).
                 tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
-                self.peak_bytes.set(self.bytes());
+                self.peak_bytes.set(self.peak_bytes());
                 self.mv = Mat::zeros(0, 0);
                 let x = self.v.get(.., 0..take.len()).to_owned();
                 self.release();
