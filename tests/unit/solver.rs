@@ -140,6 +140,30 @@ fn hex20_box(size: [f64; 3], cells: [usize; 3]) -> vibrofem::system::System {
     System::build(model, &SystemOptions::default(), "box").unwrap()
 }
 
+/// A block of pseudo-random entries in [−0.5, 0.5) (xorshift64 from `state`).
+fn random_block(n: usize, cols: usize, mut state: u64) -> faer::Mat<f64> {
+    faer::Mat::from_fn(n, cols, |_, _| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    })
+}
+
+/// ‖A xᶜ − bᶜ‖ / ‖bᶜ‖ for every column c.
+fn column_residuals(a: &SymMatrix, x: &faer::Mat<f64>, b: &faer::Mat<f64>) -> Vec<f64> {
+    let (n, cols) = (b.nrows(), b.ncols());
+    let mut ax = faer::Mat::zeros(n, cols);
+    a.mul_block(x.as_ref(), ax.as_mut());
+    (0..cols)
+        .map(|c| {
+            let r: f64 = (0..n).map(|i| (ax[(i, c)] - b[(i, c)]).powi(2)).sum::<f64>().sqrt();
+            let nb: f64 = (0..n).map(|i| b[(i, c)].powi(2)).sum::<f64>().sqrt();
+            r / nb
+        })
+        .collect()
+}
+
 /// The parallel block solve (subtrees at once, wide top supernodes as 64-column panels whose
 /// products two tasks share) on a model large enough to use every one of those paths: blocks
 /// of 1, 6 and 11 right-hand sides give the same bits with one worker thread and with two,
@@ -156,13 +180,7 @@ fn parallel_block_solve_is_bit_identical_across_threads() {
         "the model must exercise subtrees, panels and split products: {layout:?}"
     );
     let n = k.n();
-    let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    let b = faer::Mat::from_fn(n, 11, |_, _| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    });
+    let b = random_block(n, 11, 0x9e37_79b9_7f4a_7c15);
     let solve_on = |threads: usize, cols: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let mut x = b.get(.., 0..cols).to_owned();
@@ -171,14 +189,10 @@ fn parallel_block_solve_is_bit_identical_across_threads() {
     };
     let one = solve_on(1, 11);
     let two = solve_on(2, 11);
-    let mut ax = faer::Mat::zeros(n, 11);
-    a.mul_block(two.as_ref(), ax.as_mut());
-    for c in 0..11 {
-        let r: f64 = (0..n).map(|i| (ax[(i, c)] - b[(i, c)]).powi(2)).sum::<f64>().sqrt();
-        let nb: f64 = (0..n).map(|i| b[(i, c)].powi(2)).sum::<f64>().sqrt();
+    for (c, r) in column_residuals(&a, &two, &b).into_iter().enumerate() {
         // Positive definite (σ below every eigenvalue), well-scaled: rounding times a modest
         // growth.
-        assert!(r / nb < 1e-10, "column {c}: relative residual {:.1e}", r / nb);
+        assert!(r < 1e-10, "column {c}: relative residual {r:.1e}");
     }
     for cols in [1, 6] {
         let part = solve_on(2, cols);
@@ -219,23 +233,15 @@ fn block_solve_matches_single_columns_and_has_small_residual() {
     assert!(f.is_supernodal(), "the test must exercise the supernodal solve");
     assert_eq!(f.negative_pivots, 20);
     let n = k.n();
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let b = faer::Mat::from_fn(n, 13, |_, _| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    });
+    let b = random_block(n, 13, 0x2545_f491_4f6c_dd1d);
     let mut x = b.clone();
     f.solve_in_place(x.as_mut());
-    let mut ax = faer::Mat::zeros(n, 13);
-    a.mul_block(x.as_ref(), ax.as_mut());
+    let residuals = column_residuals(&a, &x, &b);
     for c in 0..13 {
-        let r: f64 = (0..n).map(|i| (ax[(i, c)] - b[(i, c)]).powi(2)).sum::<f64>().sqrt();
-        let nb: f64 = (0..n).map(|i| b[(i, c)].powi(2)).sum::<f64>().sqrt();
+        let r = residuals[c];
         // Backward stable LDLᵀ: the residual is rounding times the growth of the entries of
         // L·D·Lᵀ (at most ~1e3 here, an unpivoted indefinite factor of a well-spread shift).
-        assert!(r / nb < 1e-10, "column {c}: relative residual {:.1e}", r / nb);
+        assert!(r < 1e-10, "column {c}: relative residual {r:.1e}");
         let mut one = faer::Mat::from_fn(n, 1, |i, _| b[(i, c)]);
         f.solve_in_place(one.as_mut());
         for i in 0..n {
