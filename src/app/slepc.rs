@@ -399,8 +399,7 @@ pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<Mod
         }
         lambda.push(lam_all[i]);
     }
-    let (rel_residual, m_orth) = eigen::verify(k, m, &lambda, x.as_ref(), sigma);
-    let backward_error = eigen::backward_errors(k, m, &lambda, x.as_ref());
+    let (rel_residual, m_orth, backward_error) = eigen::verify_with_backward_errors(k, m, &lambda, x.as_ref(), sigma);
     let found = lambda.iter().filter(|&&l| l > info.lower.0 && l < info.upper.0).count();
     let expected = info.upper.1.saturating_sub(info.lower.1);
     let sturm = SturmCheck {

@@ -213,12 +213,44 @@ fn components(k: &SymMatrix, min_size: usize) -> usize {
 /// with the conditioning of slender or thin parts (where Kx is a small difference of large
 /// terms).
 pub fn backward_errors(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>) -> Vec<f64> {
-    let n = x.nrows();
-    let nc = x.ncols();
+    let (kx, mx) = products(k, m, x);
+    backward_errors_of(k, m, lambda, x, &kx, &mx)
+}
+
+/// K·X and M·X.
+fn products(k: &SymMatrix, m: &SymMatrix, x: MatRef<'_, f64>) -> (Mat<f64>, Mat<f64>) {
+    let (n, nc) = (x.nrows(), x.ncols());
     let mut kx = Mat::zeros(n, nc);
     let mut mx = Mat::zeros(n, nc);
     k.mul_block(x, kx.as_mut());
     m.mul_block(x, mx.as_mut());
+    (kx, mx)
+}
+
+/// [`verify`] and [`backward_errors`] of the same pairs, with K·X and M·X formed once:
+/// (relative residuals, M-orthonormality, backward errors).
+pub fn verify_with_backward_errors(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    lambda: &[f64],
+    x: MatRef<'_, f64>,
+    sigma: f64,
+) -> (Vec<f64>, f64, Vec<f64>) {
+    let (kx, mx) = products(k, m, x);
+    let (res, orth) = verify_of(lambda, x, &kx, &mx, sigma);
+    (res, orth, backward_errors_of(k, m, lambda, x, &kx, &mx))
+}
+
+/// [`backward_errors`] from K·X and M·X.
+fn backward_errors_of(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    lambda: &[f64],
+    x: MatRef<'_, f64>,
+    kx: &Mat<f64>,
+    mx: &Mat<f64>,
+) -> Vec<f64> {
+    let nc = x.ncols();
     let ak = k.abs_mul_norms(x);
     let am = m.abs_mul_norms(x);
     use rayon::prelude::*;
@@ -668,8 +700,7 @@ fn solve_inner(
         let tv = Instant::now();
         let (lam, vectors) = select(&lambda, &x, &keep);
         let (rel_residual, m_orth, backward_error) = if check {
-            let (r, o) = verify(k, m, &lam, vectors.as_ref(), sigma);
-            (r, o, backward_errors(k, m, &lam, vectors.as_ref()))
+            verify_with_backward_errors(k, m, &lam, vectors.as_ref(), sigma)
         } else {
             (vec![f64::NAN; lam.len()], f64::NAN, vec![f64::NAN; lam.len()])
         };
@@ -872,7 +903,7 @@ fn solve_below_bound(
             }
             let tv = Instant::now();
             let (lam, vectors) = select(&lambda, &x, &below[..nm.min(below.len())]);
-            let (rel_residual, m_orth) = verify(k, m, &lam, vectors.as_ref(), u);
+            let (rel_residual, m_orth, backward_error) = verify_with_backward_errors(k, m, &lam, vectors.as_ref(), u);
             let worst = rel_residual.iter().fold(0.0f64, |a, &r| a.max(r));
             if worst > RESIDUAL_FALLBACK && steps == 1 {
                 log::debug!("after one refinement: largest relative residual {worst:.1e}, refining again");
@@ -893,7 +924,6 @@ fn solve_below_bound(
                 );
                 return Ok(None);
             }
-            let backward_error = backward_errors(k, m, &lam, vectors.as_ref());
             return Ok(Some(EigenSolution {
                 lambda: lam,
                 vectors,
@@ -1028,12 +1058,13 @@ fn refine(k: &SymMatrix, m: &SymMatrix, fa: &Factor, x: &Mat<f64>) -> Result<(Ve
 
 /// Residuals and M-orthonormality of computed modes.
 pub fn verify(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>, sigma: f64) -> (Vec<f64>, f64) {
-    let n = x.nrows();
-    let nc = x.ncols();
-    let mut kx = Mat::zeros(n, nc);
-    let mut mx = Mat::zeros(n, nc);
-    k.mul_block(x, kx.as_mut());
-    m.mul_block(x, mx.as_mut());
+    let (kx, mx) = products(k, m, x);
+    verify_of(lambda, x, &kx, &mx, sigma)
+}
+
+/// [`verify`] from K·X and M·X.
+fn verify_of(lambda: &[f64], x: MatRef<'_, f64>, kx: &Mat<f64>, mx: &Mat<f64>, sigma: f64) -> (Vec<f64>, f64) {
+    let (n, nc) = (x.nrows(), x.ncols());
     // Scale of the spectrum found (a far shift must not make elastic modes look rigid).
     let lam_ref = lambda.iter().fold(1e-3 * sigma.abs(), |a, l| a.max(l.abs()));
     let mut res = Vec::with_capacity(nc);
