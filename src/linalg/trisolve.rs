@@ -167,6 +167,15 @@ unsafe impl<const K: usize> Send for Rows<K> {}
 unsafe impl<const K: usize> Sync for Rows<K> {}
 
 impl<const K: usize> Rows<K> {
+    /// A view of `x` for the tasks of one parallel phase. A fresh view per phase: `x` itself is
+    /// used between the phases, which a view taken before would not survive.
+    fn of(x: &mut [[f64; K]]) -> Self {
+        Rows {
+            ptr: x.as_mut_ptr(),
+            len: x.len(),
+        }
+    }
+
     /// Rows `a..b`, mutably.
     ///
     /// # Safety
@@ -260,10 +269,7 @@ fn at(len: usize, i: usize, c: usize) -> usize {
 pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, values: &[f64], x: &mut [[f64; K]]) {
     assert_eq!(x.len(), sn.nrows());
     let kern = Kernels::<K>::new();
-    let rows = Rows {
-        ptr: x.as_mut_ptr(),
-        len: x.len(),
-    };
+    let rows = Rows::of(x);
     let end = sn.supernode_end();
     let buf_len = K * (plan.max_p + plan.max_w);
     // Forward, subtrees: each returns what it sends to the top, by position in its root's pattern.
@@ -369,6 +375,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
         }
     }
     // Backward, subtrees.
+    let rows = Rows::of(x);
     plan.subtrees.par_iter().with_max_len(1).for_each(|nodes| {
         let mut g = vec![0.0f64; buf_len];
         for &s in nodes.iter().rev() {
