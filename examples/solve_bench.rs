@@ -24,7 +24,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sym = sys.symbolic()?.clone();
     let all = rayon::current_num_threads();
     println!("{} DOFs, {} entries in L, {:.3e} flop", k.n(), sym.nnz_l, sym.flops);
-    for threads in [1, all] {
+    // A second argument `solves` skips the factorisation timings.
+    let factorisations = std::env::args().nth(2).as_deref() != Some("solves");
+    for threads in [1, all].into_iter().filter(|_| factorisations) {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
         for (name, own) in [("vibrofem", true), ("faer", false)] {
             let mut ts = vec![];
