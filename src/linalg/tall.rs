@@ -47,6 +47,19 @@ pub fn combine_columns_in_place(a: MatMut<'_, f64>, y: MatRef<'_, f64>) {
     });
 }
 
+/// `out[:, j] += s[j]·a[:, j]` for tall `out` and `a` of the same shape.
+pub fn add_scaled_columns(out: MatMut<'_, f64>, a: MatRef<'_, f64>, s: &[f64]) {
+    assert!(out.nrows() == a.nrows() && out.ncols() == a.ncols() && a.ncols() == s.len());
+    out.par_row_chunks_mut(ROWS).enumerate().for_each(|(c, mut o)| {
+        let a = a.subrows(c * ROWS, o.nrows());
+        for (j, &sj) in s.iter().enumerate() {
+            for i in 0..o.nrows() {
+                o[(i, j)] += sj * a[(i, j)];
+            }
+        }
+    });
+}
+
 /// `aᵀ·b` for tall `a` (n × k) and `b` (n × m): per-chunk products summed in chunk order.
 pub fn gram(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let n = a.nrows();
