@@ -248,7 +248,8 @@ def table(rows: list, dgemm) -> str:
     lines.append("")
     lines.append(f"DGEMM on this machine (numpy, 2000², best of 3): {f(dgemm, '{:.1f}')} GFLOP/s. "
                  "'compared': vibrofem's whole run, SLEPc's eigen solve alone (load + EPSSolve with "
-                 "MUMPS), the whole process for CalculiX and scikit-fem.")
+                 "MUMPS), the whole process for CalculiX and scikit-fem. The peers' BLAS: "
+                 f"{os.path.realpath('/usr/lib/x86_64-linux-gnu/libblas.so.3')}.")
     return "\n".join(lines)
 
 
@@ -372,7 +373,8 @@ def main(argv=None) -> int:
     dgemm = dgemm_gflops()
     report = {"case": "S2 plate 0.9 x 0.4 x 0.116 m, tet10, free-free, steel, 18 modes",
               "machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
-                          "loadavg_at_end": os.getloadavg(), "dgemm_gflops": dgemm},
+                          "loadavg_at_end": os.getloadavg(), "dgemm_gflops": dgemm,
+                          "peer_blas": os.path.realpath("/usr/lib/x86_64-linux-gnu/libblas.so.3")},
               "rows": rows}
     with open(os.path.join(OUT, "bench_peers.json"), "w") as fh:
         json.dump(report, fh, indent=1)
