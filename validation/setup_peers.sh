@@ -15,12 +15,18 @@ for a in "$@"; do
         *) echo "setup_peers.sh: unknown option $a" >&2; exit 2 ;;
     esac
 done
-if [ "$want_ccx" = 1 ] && ! command -v ccx >/dev/null 2>&1; then
+# apt_install PKG WHAT: install a Debian package as root; 1 when this user cannot.
+apt_install() {
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
-        echo "setup_peers.sh: installing calculix-ccx" >&2
+        echo "setup_peers.sh: installing $1 ($2)" >&2
         apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends calculix-ccx >/dev/null
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$1" >/dev/null
     else
+        return 1
+    fi
+}
+if [ "$want_ccx" = 1 ] && ! command -v ccx >/dev/null 2>&1; then
+    if ! apt_install calculix-ccx "CalculiX"; then
         echo "setup_peers.sh: install Debian's calculix-ccx (as root: apt-get install calculix-ccx)" >&2
         exit 1
     fi
@@ -32,11 +38,7 @@ fi
 # the alternative). Without it SLEPc + MUMPS's eigen solve at 119k DOFs takes 38 s instead of
 # ~16 s: a comparison against an untuned installation.
 if ! dpkg -s libopenblas0-pthread >/dev/null 2>&1; then
-    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
-        echo "setup_peers.sh: installing libopenblas0-pthread (the BLAS of the peers)" >&2
-        apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends libopenblas0-pthread >/dev/null
-    else
+    if ! apt_install libopenblas0-pthread "the BLAS of the peers"; then
         echo "setup_peers.sh: the peers will run on the reference BLAS (as root: apt-get install libopenblas0-pthread)" >&2
     fi
 fi
