@@ -919,7 +919,7 @@ fn solve_below_bound(
             let (rel_residual, m_orth, backward_error) = verify_with_backward_errors(k, m, &lam, vectors.as_ref(), u);
             let worst = rel_residual.iter().fold(0.0f64, |a, &r| a.max(r));
             if worst > RESIDUAL_FALLBACK && steps < 3 {
-                log::debug!("after one refinement: largest relative residual {worst:.1e}, refining again");
+                log::debug!("after {steps} refinement step(s): largest relative residual {worst:.1e}, refining again");
                 applications += x.ncols();
                 (lambda, x) = refine(k, m, &fa, &x)?;
                 steps += 1;
@@ -1027,10 +1027,15 @@ fn factor_at_checked(
 /// Rayleigh–Ritz refinement of approximate eigenvectors X: Y = A⁻¹MX, then the k×k pencil
 /// (YᵀKY, YᵀMY) gives eigenvalues and M-orthonormal vectors in span(Y), ascending.
 fn refine(k: &SymMatrix, m: &SymMatrix, fa: &Factor, x: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
+    rayleigh_ritz(k, m, inverse_images(m, fa, x.as_ref()))
+}
+
+/// Y = A⁻¹MX, one block solve.
+fn inverse_images(m: &SymMatrix, fa: &Factor, x: MatRef<'_, f64>) -> Mat<f64> {
     let mut y = Mat::zeros(x.nrows(), x.ncols());
-    m.mul_block(x.as_ref(), y.as_mut());
+    m.mul_block(x, y.as_mut());
     fa.solve_in_place(y.as_mut());
-    rayleigh_ritz(k, m, y)
+    y
 }
 
 /// Indices of the (at most) `count` lowest eigenvalues above `zero` (the elastic ones).
@@ -1050,11 +1055,8 @@ fn image_with_solves(m: &SymMatrix, fa: &Factor, x: &Mat<f64>, mut image: Mat<f6
     if solved.is_empty() {
         return image;
     }
-    let n = x.nrows();
-    let xs = Mat::from_fn(n, solved.len(), |i, j| x[(i, solved[j])]);
-    let mut ys = Mat::zeros(n, solved.len());
-    m.mul_block(xs.as_ref(), ys.as_mut());
-    fa.solve_in_place(ys.as_mut());
+    let xs = Mat::from_fn(x.nrows(), solved.len(), |i, j| x[(i, solved[j])]);
+    let ys = inverse_images(m, fa, xs.as_ref());
     for (j, &c) in solved.iter().enumerate() {
         image.col_mut(c).copy_from(ys.col(j));
     }
