@@ -53,6 +53,8 @@ pub(crate) struct SolvePlan {
     max_w: usize,
     /// Its summary.
     pub layout: SolveLayout,
+    /// Where each supernode's values start in the packed layout ([`pack`]).
+    offsets: Vec<usize>,
 }
 
 impl SolvePlan {
@@ -148,6 +150,7 @@ impl SolvePlan {
             top,
             max_p: (0..ns).map(|s| sn.supernode(s).pattern().len()).max().unwrap_or(0),
             max_w: (0..ns).map(|s| end[s] - begin[s]).max().unwrap_or(0),
+            offsets: packed_offsets(sn),
         }
     }
 }
@@ -207,8 +210,8 @@ const PANEL: usize = 64;
 
 /// A panel of a supernode: columns `f..f + w` of the factor (rows of the solution block); its
 /// values start at `ls[0]` (the panel's first column), columns `nr` apart, with the panel's
-/// diagonal at row `d0` of each column. Below it: `below` rows of the supernode's diagonal block
-/// (`f + w..f + w + below`), then the pattern.
+/// diagonal at row `d0` of each column (0 in the packed layout the solves read, [`pack`]). Below
+/// it: `below` rows of the supernode's diagonal block (`f + w..f + w + below`), then the pattern.
 struct Node<'a> {
     f: usize,
     w: usize,
@@ -235,27 +238,97 @@ impl Node<'_> {
     }
 }
 
-/// The panels of supernode `s`, first to last.
-fn panels<'a>(sn: &'a SupernodalSymbolic, values: &'a [f64], s: usize) -> impl DoubleEndedIterator<Item = Node<'a>> {
-    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
-    let cp = sn.col_ptr_for_val();
-    let (f, w) = (begin[s], end[s] - begin[s]);
+/// The panels of supernode `s`, first to last, in the packed layout ([`pack`]).
+fn panels<'a>(
+    sn: &'a SupernodalSymbolic,
+    plan: &SolvePlan,
+    values: &'a [f64],
+    s: usize,
+) -> impl DoubleEndedIterator<Item = Node<'a>> {
+    let (f, w) = (sn.supernode_begin()[s], sn.supernode_end()[s] - sn.supernode_begin()[s]);
     let pat = sn.supernode(s).pattern();
     let nr = w + pat.len();
-    let ls = &values[cp[s]..cp[s + 1]];
+    let ls = &values[plan.offsets[s]..plan.offsets[s + 1]];
     (0..w.div_ceil(PANEL)).map(move |k| {
         let c0 = k * PANEL;
         let pw = PANEL.min(w - c0);
+        let at = packed_start(nr, k);
         Node {
             f: f + c0,
             w: pw,
-            d0: c0,
-            nr,
+            d0: 0,
+            nr: nr - c0,
             below: w - c0 - pw,
             pat,
-            ls: &ls[c0 * nr..],
+            ls: &ls[at..],
         }
     })
+}
+
+/// Values per supernode in the packed layout, cumulated (`offsets[s]..offsets[s + 1]` holds
+/// supernode `s`): each panel of at most [`PANEL`] columns keeps, of every column, the rows from
+/// the panel's own diagonal down (faer's layout keeps the whole square diagonal block, whose
+/// upper triangle the solves never read).
+fn packed_offsets(sn: &SupernodalSymbolic) -> Vec<usize> {
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    let mut offsets = Vec::with_capacity(sn.n_supernodes() + 1);
+    offsets.push(0);
+    let mut total = 0;
+    for s in 0..sn.n_supernodes() {
+        let w = end[s] - begin[s];
+        let nr = w + sn.supernode(s).pattern().len();
+        total += (0..w).map(|j| nr - j / PANEL * PANEL).sum::<usize>();
+        offsets.push(total);
+    }
+    offsets
+}
+
+/// Column `j` of supernode `s` (width `w`, `nr` rows): where its kept rows start in faer's
+/// layout (from the supernode's first value) and in the packed one, and how many there are.
+fn packed_column(nr: usize, j: usize) -> (usize, usize, usize) {
+    let c0 = j / PANEL * PANEL;
+    (j * nr + c0, packed_start(nr, j / PANEL) + (j - c0) * (nr - c0), nr - c0)
+}
+
+/// Where panel `k` of a supernode of `nr` rows starts in the packed layout: after `k` full
+/// panels, the i-th of `PANEL` columns of `nr − i·PANEL` values.
+fn packed_start(nr: usize, k: usize) -> usize {
+    PANEL * (k * nr - PANEL * k * k.saturating_sub(1) / 2)
+}
+
+/// Rewrite a supernodal factor from faer's layout into the packed one, in place, and give the
+/// freed tail back: every value moves towards the front (a column's packed position is never
+/// after its position in faer's layout), so one forward pass of overlapping copies suffices.
+pub(crate) fn pack(sn: &SupernodalSymbolic, plan: &SolvePlan, values: &mut Vec<f64>) {
+    let cp = sn.col_ptr_for_val();
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    for s in 0..sn.n_supernodes() {
+        let w = end[s] - begin[s];
+        let nr = w + sn.supernode(s).pattern().len();
+        for j in 0..w {
+            let (src, dst, len) = packed_column(nr, j);
+            values.copy_within(cp[s] + src..cp[s] + src + len, plan.offsets[s] + dst);
+        }
+    }
+    values.truncate(plan.offsets[sn.n_supernodes()]);
+    values.shrink_to_fit();
+}
+
+/// faer's layout of a packed factor (the upper triangles of the diagonal blocks, which no solve
+/// reads, zero): for faer's own solve, a reference.
+pub(crate) fn unpack(sn: &SupernodalSymbolic, plan: &SolvePlan, packed: &[f64]) -> Vec<f64> {
+    let cp = sn.col_ptr_for_val();
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    let mut values = vec![0.0; cp[sn.n_supernodes()]];
+    for s in 0..sn.n_supernodes() {
+        let w = end[s] - begin[s];
+        let nr = w + sn.supernode(s).pattern().len();
+        for j in 0..w {
+            let (src, dst, len) = packed_column(nr, j);
+            values[cp[s] + src..cp[s] + src + len].copy_from_slice(&packed[plan.offsets[s] + dst..][..len]);
+        }
+    }
+    values
 }
 
 /// Entry (i, c) of a product buffer of `len` rows (one column per right-hand side).
@@ -284,7 +357,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
             let mut out = vec![[0.0f64; K]; root_pat.len()];
             let mut tmp = vec![0.0f64; buf_len];
             for &s in nodes {
-                for nd in panels(sn, values, s as usize) {
+                for nd in panels(sn, plan, values, s as usize) {
                     let q = nd.q();
                     // SAFETY: the subtree's own rows; no other task touches them.
                     let xs = unsafe { rows.slice(nd.f, nd.f + nd.w) };
@@ -328,7 +401,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
     // Forward, top: each panel's product split by rows between two tasks.
     let mut tmp = vec![0.0f64; buf_len];
     for &s in &plan.top {
-        for nd in panels(sn, values, s as usize) {
+        for nd in panels(sn, plan, values, s as usize) {
             let q = nd.q();
             let (xs, _) = x[nd.f..].split_at_mut(nd.w);
             kern.forward_diag(&nd, xs);
@@ -356,7 +429,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
     // Backward, top, last panel first: each product split by columns.
     let mut g = vec![0.0f64; buf_len];
     for &s in plan.top.iter().rev() {
-        for nd in panels(sn, values, s as usize).rev() {
+        for nd in panels(sn, plan, values, s as usize).rev() {
             let q = nd.q();
             scale_by_pivots(&nd, &mut x[nd.f..nd.f + nd.w]);
             let g = &mut g[..K * q];
@@ -379,7 +452,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
     plan.subtrees.par_iter().with_max_len(1).for_each(|nodes| {
         let mut g = vec![0.0f64; buf_len];
         for &s in nodes.iter().rev() {
-            for nd in panels(sn, values, s as usize).rev() {
+            for nd in panels(sn, plan, values, s as usize).rev() {
                 let q = nd.q();
                 // SAFETY: the subtree's own rows; the rows below read next are its ancestors'
                 // or later panels' (done), or the top's (final).
