@@ -1180,9 +1180,11 @@ struct Lanczos {
     want: usize,
     /// Maximum basis size before a restart.
     m_max: usize,
-    /// Basis and M times basis (columns `0..cur` in use, plus the next block).
+    /// Basis (columns `0..cur` in use, plus the next block at `cur..cur + b`).
     v: Mat<f64>,
-    mv: Mat<f64>,
+    /// M times the next block (the only M-image kept: the basis's own would double the
+    /// iteration's largest allocation, for M products that cost ~4 % of the run to redo).
+    m_next: Mat<f64>,
     /// Projected matrix (full storage, symmetrised at use).
     t: Mat<f64>,
     /// Columns whose operator image is in `t`.
@@ -1216,16 +1218,14 @@ impl Lanczos {
         let b = p.block.max(1).min(n);
         let m_max = (want * BASIS_PER_WANTED + 4 * b).max(want + 6 * b).min(n);
         let m_max = m_max.max(b.min(n));
-        // The basis and its M-image are the largest allocations of the iteration (160 MB at
-        // 119k DOFs): zero-filled on two threads.
-        let (v, mv) = rayon::join(|| Mat::zeros(n, m_max + b), || Mat::zeros(n, m_max + b));
+        // The basis is the largest allocation of the iteration (83 MB at 119k DOFs).
         Lanczos {
             n,
             b,
             want,
             m_max,
-            v,
-            mv,
+            v: Mat::zeros(n, m_max + b),
+            m_next: Mat::zeros(n, b),
             t: Mat::zeros(m_max + b, m_max + b),
             cur: 0,
             rng: Rng(p.seed | 1),
@@ -1241,10 +1241,11 @@ impl Lanczos {
         }
     }
 
-    /// Bytes of the basis, its M-image and the projected matrix held now.
+    /// Bytes of the basis, the next block's M-image and the projected matrix held now.
     fn bytes(&self) -> u64 {
-        8 * (self.v.nrows() * self.v.ncols() + self.mv.nrows() * self.mv.ncols() + self.t.nrows() * self.t.ncols())
-            as u64
+        8 * (self.v.nrows() * self.v.ncols()
+            + self.m_next.nrows() * self.m_next.ncols()
+            + self.t.nrows() * self.t.ncols()) as u64
     }
 
     /// The most [`Lanczos::bytes`] held so far (a converged run frees them as it hands back
@@ -1262,18 +1263,19 @@ impl Lanczos {
         w
     }
 
-    /// Orthogonalise `w` (and its M-image `mw`) against basis columns `0..upto`, twice;
-    /// returns the summed coefficients.
-    fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, upto: usize) -> Mat<f64> {
+    /// M-orthogonalise `w` against basis columns `0..upto`, twice (classical Gram–Schmidt with
+    /// the coefficients Vᵀ(M w)); `mw` is its M-image on entry and, recomputed after each pass,
+    /// on return. Returns the summed coefficients.
+    fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize) -> Mat<f64> {
         let bw = w.ncols();
         let mut coef = Mat::zeros(upto, bw);
         if upto == 0 {
             return coef;
         }
         for _ in 0..2 {
-            let c = tall::gram(self.mv.get(.., 0..upto), w.as_ref());
+            let c = tall::gram(self.v.get(.., 0..upto), mw.as_ref());
             tall::mul(w.as_mut(), Accum::Add, self.v.get(.., 0..upto), c.as_ref(), -1.0);
-            tall::mul(mw.as_mut(), Accum::Add, self.mv.get(.., 0..upto), c.as_ref(), -1.0);
+            m.mul_block(w.as_ref(), mw.as_mut());
             coef += &c;
         }
         coef
@@ -1332,14 +1334,14 @@ impl Lanczos {
                 // The block was orthogonal to the basis to rounding (two Gram–Schmidt passes);
                 // scaling a well-conditioned block amplifies that rounding by at most
                 // √(smax/smin) ≤ 100, so another pass against the basis buys nothing.
-                // Its M-image, updated along (M·W − MV·C, then scaled), carries the rounding of
-                // the unscaled terms amplified by at most √(scale2/smin): below 1e3, it is
-                // accurate to ~1e-13 and is kept rather than recomputed.
+                // Its M-image, scaled along, carries the rounding of the unscaled terms
+                // amplified by at most √(scale2/smin): below 1e3, it is accurate to ~1e-13 and
+                // is kept rather than recomputed.
                 fresh = !(pass == 0 && scale2 > 0.0 && smin >= IMAGE_KEPT * scale2);
                 break;
             }
             // Second pass: clean rounding (and orthogonalise random replacements).
-            let _ = self.orthogonalise(w, mw, upto);
+            let _ = self.orthogonalise(w, mw, m, upto);
         }
         // A fresh M-image: the algebraic updates above lose accuracy when a block is nearly
         // in the span of the basis (its scaling amplifies their rounding).
@@ -1414,7 +1416,7 @@ impl Lanczos {
         m.mul_block(w.as_ref(), mw.as_mut());
         let _ = self.normalise(&mut w, &mut mw, m, 0, 0.0);
         self.v.get_mut(.., 0..b).copy_from(&w);
-        self.mv.get_mut(.., 0..b).copy_from(&mw);
+        self.m_next = mw;
         // `cur` columns have images in T; the block at cur..cur+b is the next to apply.
         self.cur = 0;
         self.iterate(p, fa, m, sigma, apps)
@@ -1425,7 +1427,7 @@ impl Lanczos {
     fn release(&mut self) {
         self.peak_bytes.set(self.peak_bytes());
         self.v = Mat::zeros(0, 0);
-        self.mv = Mat::zeros(0, 0);
+        self.m_next = Mat::zeros(0, 0);
         self.t = Mat::zeros(0, 0);
         self.m_max = 0;
         self.cur = 0;
@@ -1443,7 +1445,6 @@ impl Lanczos {
             return;
         }
         self.v.get_mut(.., 0..c).copy_from(x);
-        m.mul_block(x, self.mv.get_mut(.., 0..c));
         self.t.fill(0.0);
         for (k, &l) in lambda.iter().enumerate().take(c) {
             self.t[(k, k)] = 1.0 / (l - sigma);
@@ -1452,10 +1453,10 @@ impl Lanczos {
         let mut mw = Mat::zeros(n, b);
         m.mul_block(w.as_ref(), mw.as_mut());
         let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
-        let _ = self.orthogonalise(&mut w, &mut mw, c);
+        let _ = self.orthogonalise(&mut w, &mut mw, m, c);
         let _ = self.normalise(&mut w, &mut mw, m, c, scale2);
         self.v.get_mut(.., c..c + b).copy_from(&w);
-        self.mv.get_mut(.., c..c + b).copy_from(&mw);
+        self.m_next = mw;
         self.cur = c;
         self.started = true;
     }
@@ -1476,16 +1477,17 @@ impl Lanczos {
             .max(b.min(self.n));
         if m_max > self.m_max {
             let cols = m_max + b;
-            let (mut v, mut mv) = rayon::join(|| Mat::zeros(self.n, cols), || Mat::zeros(self.n, cols));
+            let mut v = Mat::zeros(self.n, cols);
             let mut t = Mat::zeros(cols, cols);
             let old = self.v.ncols();
             if old > 0 {
                 v.get_mut(.., 0..old).copy_from(&self.v);
-                mv.get_mut(.., 0..old).copy_from(&self.mv);
                 t.get_mut(0..old, 0..old).copy_from(&self.t);
             }
+            if self.m_next.nrows() != self.n {
+                self.m_next = Mat::zeros(self.n, b);
+            }
             self.v = v;
-            self.mv = mv;
             self.t = t;
             self.m_max = m_max;
         }
@@ -1511,7 +1513,7 @@ impl Lanczos {
                 tick = now;
             };
             // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
-            let mut w = self.mv.get(.., blk..blk + b).to_owned();
+            let mut w = self.m_next.clone();
             fa.solve_in_place(w.as_mut());
             *apps += b;
             lap(&mut self.times, 0);
@@ -1519,7 +1521,7 @@ impl Lanczos {
             m.mul_block(w.as_ref(), mw.as_mut());
             lap(&mut self.times, 1);
             let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
-            let coef = self.orthogonalise(&mut w, &mut mw, blk + b);
+            let coef = self.orthogonalise(&mut w, &mut mw, m, blk + b);
             // Column block `blk` of T: rows 0..blk+b.
             self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
             lap(&mut self.times, 2);
@@ -1532,7 +1534,7 @@ impl Lanczos {
                 return Err(Error::EigenNotConverged("internal basis overflow".into()));
             }
             self.v.get_mut(.., nb..nb + b).copy_from(&w);
-            self.mv.get_mut(.., nb..nb + b).copy_from(&mw);
+            self.m_next = mw;
             self.t.get_mut(nb..nb + b, blk..blk + b).copy_from(&r);
             self.t.get_mut(blk..blk + b, nb..nb + b).copy_from(r.transpose());
 
@@ -1564,11 +1566,10 @@ impl Lanczos {
                 take.retain(|&k| self.side.wants(theta[k]));
                 let mut lam = Vec::with_capacity(take.len());
                 let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
-                // The Ritz vectors in place of the basis, copied out once its M-image is
-                // freed: the basis is spent (every caller releases it next).
+                // The Ritz vectors in place of the basis: it is spent (every caller releases
+                // it next).
                 tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
                 self.peak_bytes.set(self.peak_bytes());
-                self.mv = Mat::zeros(0, 0);
                 let x = self.v.get(.., 0..take.len()).to_owned();
                 // Op·X = X·Θ + W·R·Y_last, with the next block W still after the basis columns
                 // (the in-place combination wrote only the first ones).
@@ -1634,12 +1635,10 @@ impl Lanczos {
                 );
                 // In place (no copies of the basis at the memory peak): the Ritz vectors into
                 // the first columns, then the next block after them (keep + b ≤ c = nb).
+                // The next block's M-image moves along with it.
                 tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
-                tall::combine_columns_in_place(self.mv.as_mut(), yk.as_ref());
-                for mat in [&mut self.v, &mut self.mv] {
-                    let (head, tail) = mat.as_mut().split_at_col_mut(nb);
-                    head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
-                }
+                let (head, tail) = self.v.as_mut().split_at_col_mut(nb);
+                head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
                 self.t.fill(0.0);
                 for k in 0..keep {
                     self.t[(k, k)] = theta[k];
