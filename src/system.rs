@@ -174,6 +174,7 @@ impl System {
             symbolic.nnz_l
         );
         check_memory(source, &symbolic, &pattern, opts.max_memory)?;
+        release_free_memory();
         Ok(System {
             model: Arc::new(model),
             source: source.to_string(),
@@ -472,6 +473,23 @@ pub fn check_memory(source: &str, sym: &SymbolicFactor, pattern: &Pattern, limit
         )));
     }
     Ok(())
+}
+
+/// Give the heap's free memory back to the system. The allocator keeps what a phase freed (the
+/// graph, the assembly's scratch, a coarse model) for later requests, spread over the heaps of
+/// the worker threads; the large buffers that follow (the factor, the Lanczos basis) are
+/// mapped separately and cannot reuse it, so it would only raise the peak. A no-op off glibc.
+pub fn release_free_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        unsafe extern "C" {
+            fn malloc_trim(pad: usize) -> i32;
+        }
+        // SAFETY: malloc_trim only returns unused heap pages to the system; any thread may call it.
+        unsafe {
+            malloc_trim(0);
+        }
+    }
 }
 
 /// Peak resident set size of this process (bytes), from /proc/self/status.

@@ -809,6 +809,9 @@ fn solve_below_bound(
         // Ascending, as every solve returns them, with the vectors in the same order.
         (coarse.lambda, coarse.vectors)
     };
+    // The coarse model's matrices and factor are freed: give the memory back before the
+    // model's factor is allocated.
+    crate::system::release_free_memory();
     if lc.len() <= nm || !(lc[nm] > 0.0) {
         return Ok(None);
     }
