@@ -107,15 +107,17 @@ pub struct MemoryByPhase {
     pub mesh: u64,
     /// The shared sparsity pattern and the values of K and M.
     pub k_and_m: u64,
-    /// Values of one LDLᵀ factor.
+    /// Values of one LDLᵀ factor while it is factorised (faer's layout).
     pub factor: u64,
+    /// The factor packed for the solves (what the iteration holds).
+    pub factor_packed: u64,
     /// K − σM while it is factorised.
     pub shifted_matrix: u64,
     /// Scratch of the numeric factorisation.
     pub factor_workspace: u64,
     /// Solve workspaces kept with the factor.
     pub solve_workspace: u64,
-    /// Lanczos basis, its M-image and the projected matrix.
+    /// Lanczos basis, the next block's M-image and the projected matrix.
     pub lanczos_basis: u64,
 }
 
@@ -446,6 +448,7 @@ pub fn finish(
                 (8 * pat.col_ptr.len() + 4 * pat.row_idx.len() + k_mat.value_bytes() + m_mat.value_bytes()) as u64
             },
             factor: sol.memory.factor,
+            factor_packed: sol.memory.factor_packed,
             shifted_matrix: sol.memory.shifted_matrix,
             factor_workspace: sol.memory.factor_workspace,
             solve_workspace: sol.memory.solve_workspace,

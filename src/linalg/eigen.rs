@@ -136,15 +136,18 @@ pub struct EigenSolution {
 /// Bytes of the large allocations of an eigen solve (the largest of each kind held at once).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct EigenMemory {
-    /// Values of one LDLᵀ factor (never two at once).
+    /// Values of one LDLᵀ factor as the factorisation holds them (faer's layout; never two at
+    /// once).
     pub factor: u64,
+    /// The same factor packed for the solves, as the iteration holds it.
+    pub factor_packed: u64,
     /// K − σM, the matrix being factorised (dropped once factorised).
     pub shifted_matrix: u64,
     /// Scratch of the numeric factorisation (freed when it returns).
     pub factor_workspace: u64,
     /// Solve workspaces kept with the factor.
     pub solve_workspace: u64,
-    /// Lanczos basis V, its M-image and the projected matrix.
+    /// Lanczos basis V, the next block's M-image and the projected matrix.
     pub lanczos_basis: u64,
     /// Seconds of the numeric factorisations, summed (every factorisation passes through
     /// [`EigenMemory::add_factor`], so its time is gathered here too).
@@ -157,7 +160,8 @@ pub struct EigenMemory {
 
 impl EigenMemory {
     fn add_factor(&mut self, f: &Factor) {
-        self.factor = self.factor.max(f.bytes() as u64);
+        self.factor = self.factor.max(f.factorisation_bytes() as u64);
+        self.factor_packed = self.factor_packed.max(f.bytes() as u64);
         self.shifted_matrix = self.shifted_matrix.max(f.shifted_matrix_bytes as u64);
         self.factor_workspace = self.factor_workspace.max(f.factor_workspace_bytes as u64);
         self.solve_workspace = self.solve_workspace.max(f.workspace_bytes() as u64);

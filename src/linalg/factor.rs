@@ -282,7 +282,13 @@ impl Factor {
         matches!(self.sym.sym.raw(), SymbolicCholeskyRaw::Supernodal(_))
     }
 
-    /// Bytes of the factor's values.
+    /// Bytes of the factor's values as the numeric factorisation held them (faer's layout,
+    /// before a supernodal factor is packed).
+    pub fn factorisation_bytes(&self) -> usize {
+        self.sym.factor_bytes()
+    }
+
+    /// Bytes of the factor's values (packed when supernodal).
     pub fn bytes(&self) -> usize {
         self.values.len() * std::mem::size_of::<f64>()
     }

@@ -283,11 +283,23 @@ fn packed_offsets(sn: &SupernodalSymbolic) -> Vec<usize> {
     offsets
 }
 
-/// Column `j` of supernode `s` (width `w`, `nr` rows): where its kept rows start in faer's
-/// layout (from the supernode's first value) and in the packed one, and how many there are.
-fn packed_column(nr: usize, j: usize) -> (usize, usize, usize) {
-    let c0 = j / PANEL * PANEL;
-    (j * nr + c0, packed_start(nr, j / PANEL) + (j - c0) * (nr - c0), nr - c0)
+/// Every column's kept rows, supernode by supernode in order: `f(faer, packed, len)` with where
+/// they start in faer's layout and in the packed one, and how many there are.
+fn packed_columns(sn: &SupernodalSymbolic, plan: &SolvePlan, mut f: impl FnMut(usize, usize, usize)) {
+    let cp = sn.col_ptr_for_val();
+    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
+    for s in 0..sn.n_supernodes() {
+        let w = end[s] - begin[s];
+        let nr = w + sn.supernode(s).pattern().len();
+        for j in 0..w {
+            let (k, c0) = (j / PANEL, j / PANEL * PANEL);
+            f(
+                cp[s] + j * nr + c0,
+                plan.offsets[s] + packed_start(nr, k) + (j - c0) * (nr - c0),
+                nr - c0,
+            );
+        }
+    }
 }
 
 /// Where panel `k` of a supernode of `nr` rows starts in the packed layout: after `k` full
@@ -300,16 +312,7 @@ fn packed_start(nr: usize, k: usize) -> usize {
 /// freed tail back: every value moves towards the front (a column's packed position is never
 /// after its position in faer's layout), so one forward pass of overlapping copies suffices.
 pub(crate) fn pack(sn: &SupernodalSymbolic, plan: &SolvePlan, values: &mut Vec<f64>) {
-    let cp = sn.col_ptr_for_val();
-    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
-    for s in 0..sn.n_supernodes() {
-        let w = end[s] - begin[s];
-        let nr = w + sn.supernode(s).pattern().len();
-        for j in 0..w {
-            let (src, dst, len) = packed_column(nr, j);
-            values.copy_within(cp[s] + src..cp[s] + src + len, plan.offsets[s] + dst);
-        }
-    }
+    packed_columns(sn, plan, |src, dst, len| values.copy_within(src..src + len, dst));
     values.truncate(plan.offsets[sn.n_supernodes()]);
     values.shrink_to_fit();
 }
@@ -317,17 +320,10 @@ pub(crate) fn pack(sn: &SupernodalSymbolic, plan: &SolvePlan, values: &mut Vec<f
 /// faer's layout of a packed factor (the upper triangles of the diagonal blocks, which no solve
 /// reads, zero): for faer's own solve, a reference.
 pub(crate) fn unpack(sn: &SupernodalSymbolic, plan: &SolvePlan, packed: &[f64]) -> Vec<f64> {
-    let cp = sn.col_ptr_for_val();
-    let (begin, end) = (sn.supernode_begin(), sn.supernode_end());
-    let mut values = vec![0.0; cp[sn.n_supernodes()]];
-    for s in 0..sn.n_supernodes() {
-        let w = end[s] - begin[s];
-        let nr = w + sn.supernode(s).pattern().len();
-        for j in 0..w {
-            let (src, dst, len) = packed_column(nr, j);
-            values[cp[s] + src..cp[s] + src + len].copy_from_slice(&packed[plan.offsets[s] + dst..][..len]);
-        }
-    }
+    let mut values = vec![0.0; sn.col_ptr_for_val()[sn.n_supernodes()]];
+    packed_columns(sn, plan, |dst, src, len| {
+        values[dst..dst + len].copy_from_slice(&packed[src..src + len])
+    });
     values
 }
 

@@ -219,8 +219,9 @@ fn parallel_block_solve_is_bit_identical_across_threads() {
 
 /// The supernodal block solve against its definition: for an indefinite K − σM of a hex20
 /// solid (σ inside the spectrum), ‖A X − B‖ / ‖B‖ stays at rounding level for a block of 13
-/// right-hand sides (split into column groups), and every column of the block is bit for bit
-/// the solve of that column alone (the grouping, hence the thread count, changes nothing).
+/// right-hand sides (split into column groups), every column of the block is bit for bit the
+/// solve of that column alone (the grouping, hence the thread count, changes nothing), and faer's
+/// solve on the factor unpacked from the solves' packed layout agrees.
 #[test]
 fn block_solve_matches_single_columns_and_has_small_residual() {
     let sys = hex20_box([0.3, 0.2, 0.1], [6, 4, 3]);
@@ -232,6 +233,12 @@ fn block_solve_matches_single_columns_and_has_small_residual() {
     let f = Factor::new(sys.symbolic().unwrap().clone(), &a).unwrap();
     assert!(f.is_supernodal(), "the test must exercise the supernodal solve");
     assert_eq!(f.negative_pivots, 20);
+    // The solves read the packed layout: a supernode wider than one 64-column panel loses the
+    // upper triangle of its diagonal block beyond the first panel (faer's own solve below reads
+    // the layout unpacked again).
+    let layout = f.solve_layout().unwrap();
+    assert!(layout.widest_top > 64, "the test must exercise a multi-panel supernode");
+    assert!(f.bytes() < f.factorisation_bytes(), "the factor was not packed");
     let n = k.n();
     let b = random_block(n, 13, 0x2545_f491_4f6c_dd1d);
     let mut x = b.clone();
