@@ -304,11 +304,18 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
                         if want_mass {
                             scatter_general(&pattern, dofs, nodes, ndpn, &me, cols.clone(), mv);
                         }
+                    } else if want_mass {
+                        scatter(
+                            &pattern,
+                            dofs,
+                            nodes,
+                            ndpn,
+                            [&ke, &me],
+                            cols.clone(),
+                            [&mut *kv, &mut *mv],
+                        );
                     } else {
-                        scatter(&pattern, dofs, nodes, ndpn, &ke, cols.clone(), kv);
-                        if want_mass {
-                            scatter(&pattern, dofs, nodes, ndpn, &me, cols.clone(), mv);
-                        }
+                        scatter(&pattern, dofs, nodes, ndpn, [&ke], cols.clone(), [&mut *kv]);
                     }
                 }
             }
@@ -371,24 +378,28 @@ fn scatter_general(
 /// [`scatter_general`]).
 const SCATTER_MAX_NODES: usize = 32;
 
-/// Add one element matrix into global values.
+/// Add `T` element matrices of one element (K, or K and M) into their global values.
 ///
 /// Every column of a node b lists the same rows (the free DOFs of b's neighbours, in
 /// equation order; [`dof_pattern`]), and a node's equations are consecutive in component
 /// order. So one binary search per node pair (a, b) places node a's rows in all of b's
-/// columns, and the free components of each node are looked up once per element.
-/// Only the columns in `cols` are written; `vals` holds their values (from the first of them).
-fn scatter(
+/// columns, for every matrix at once, and the free components of each node are looked up once
+/// per element. Only the columns in `cols` are written; `vals[t]` holds matrix t's values in
+/// them (from the first of them).
+fn scatter<const T: usize>(
     pattern: &Pattern,
     dofs: &DofMap,
     nodes: &[u32],
     ndpn: usize,
-    me: &[f64],
+    mats: [&[f64]; T],
     cols: std::ops::Range<usize>,
-    vals: &mut [f64],
+    vals: [&mut [f64]; T],
 ) {
     if nodes.len() > SCATTER_MAX_NODES {
-        return scatter_general(pattern, dofs, nodes, ndpn, me, cols, vals);
+        for (me, v) in mats.into_iter().zip(vals) {
+            scatter_general(pattern, dofs, nodes, ndpn, me, cols.clone(), v);
+        }
+        return;
     }
     let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
@@ -437,7 +448,10 @@ fn scatter(
                 for &(ra, ca) in &free[la][..nfree[la] as usize] {
                     let pos = base + ra as usize;
                     debug_assert_eq!(pattern.row_idx[pos] as usize, f0 + ra as usize);
-                    vals[pos - off] += me[(la * ndpn + ca as usize) * nd + mcol];
+                    let idx = (la * ndpn + ca as usize) * nd + mcol;
+                    for t in 0..T {
+                        vals[t][pos - off] += mats[t][idx];
+                    }
                 }
             }
         }
