@@ -124,6 +124,9 @@ pub struct Factor {
     pub numeric_seconds: f64,
     /// Solve workspaces kept between calls (one per concurrent column group).
     scratch: Mutex<Vec<Vec<f64>>>,
+    /// A supernodal factor's values back in faer's layout, made at the first call of faer's
+    /// own solve (a reference for tests and benchmarks) and kept for the next.
+    unpacked: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl Factor {
@@ -273,6 +276,7 @@ impl Factor {
             shifted_matrix_bytes,
             numeric_seconds,
             scratch: Mutex::new(Vec::new()),
+            unpacked: std::sync::OnceLock::new(),
         })
     }
 
@@ -334,7 +338,8 @@ impl Factor {
     }
 
     /// faer's own sequential supernodal solve (a reference for tests and benchmarks: it rounds
-    /// differently from [`Factor::solve_in_place`]).
+    /// differently from [`Factor::solve_in_place`]). A supernodal factor keeps a copy of its
+    /// values in faer's layout from the first call on.
     pub fn solve_in_place_faer(&self, rhs: MatMut<'_, f64>) {
         if rhs.ncols() > 0 {
             self.solve_faer(rhs);
@@ -349,9 +354,10 @@ impl Factor {
         let stack = MemStack::new(&mut mem);
         match self.sym.sym.raw() {
             SymbolicCholeskyRaw::Supernodal(sn) => {
-                let plan = self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn));
-                let values = trisolve::unpack(sn, plan, &self.values);
-                LdltRef::new(&self.sym.sym, &values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
+                let values = self.unpacked.get_or_init(|| {
+                    trisolve::unpack(sn, self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn)), &self.values)
+                });
+                LdltRef::new(&self.sym.sym, values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
             }
             SymbolicCholeskyRaw::Simplicial(_) => {
                 LdltRef::new(&self.sym.sym, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, stack)
