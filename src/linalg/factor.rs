@@ -263,7 +263,15 @@ impl Factor {
         // The solves read each diagonal block from the panel's diagonal down: drop the rest
         // (~15 % of faer's layout on a 3D solid) before the iteration allocates its basis.
         if let SymbolicCholeskyRaw::Supernodal(sn) = sym.sym.raw() {
+            let t_pack = std::time::Instant::now();
+            let before = values.len();
             trisolve::pack(sn, sym.solve_plan.get_or_init(|| SolvePlan::new(sn)), &mut values);
+            log::debug!(
+                "factor packed for the solves: {} → {} MB in {:.3} s",
+                8 * before / 1_000_000,
+                8 * values.len() / 1_000_000,
+                t_pack.elapsed().as_secs_f64()
+            );
         }
         Ok(Factor {
             sym,
