@@ -65,6 +65,12 @@ impl SymbolicFactor {
         self.plan.is_some()
     }
 
+    /// The cut of the elimination tree for block solves and the packed layout, made at first
+    /// use (`sn` is this structure's supernodal part).
+    fn solve_plan(&self, sn: &trisolve::SupernodalSymbolic) -> &SolvePlan {
+        self.solve_plan.get_or_init(|| SolvePlan::new(sn))
+    }
+
     /// Bytes the numeric factor's values will take.
     pub fn factor_bytes(&self) -> usize {
         self.sym.len_val() * std::mem::size_of::<f64>()
@@ -265,7 +271,7 @@ impl Factor {
         if let SymbolicCholeskyRaw::Supernodal(sn) = sym.sym.raw() {
             let t_pack = std::time::Instant::now();
             let before = values.len();
-            trisolve::pack(sn, sym.solve_plan.get_or_init(|| SolvePlan::new(sn)), &mut values);
+            trisolve::pack(sn, sym.solve_plan(sn), &mut values);
             log::debug!(
                 "factor packed for the solves: {} → {} MB in {:.3} s",
                 8 * before / 1_000_000,
@@ -311,7 +317,7 @@ impl Factor {
         let SymbolicCholeskyRaw::Supernodal(sn) = self.sym.sym.raw() else {
             return None;
         };
-        Some(self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn)).layout)
+        Some(self.sym.solve_plan(sn).layout)
     }
 
     /// Bytes of the solve workspaces kept between calls.
@@ -360,17 +366,13 @@ impl Factor {
         let req = self.sym.sym.solve_in_place_scratch::<f64>(rhs.ncols(), par);
         let mut mem = MemBuffer::new(req);
         let stack = MemStack::new(&mut mem);
-        match self.sym.sym.raw() {
-            SymbolicCholeskyRaw::Supernodal(sn) => {
-                let values = self.unpacked.get_or_init(|| {
-                    trisolve::unpack(sn, self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn)), &self.values)
-                });
-                LdltRef::new(&self.sym.sym, values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
-            }
-            SymbolicCholeskyRaw::Simplicial(_) => {
-                LdltRef::new(&self.sym.sym, &self.values).solve_in_place_with_conj(Conj::No, rhs, par, stack)
-            }
-        }
+        let values = match self.sym.sym.raw() {
+            SymbolicCholeskyRaw::Supernodal(sn) => self
+                .unpacked
+                .get_or_init(|| trisolve::unpack(sn, self.sym.solve_plan(sn), &self.values)),
+            SymbolicCholeskyRaw::Simplicial(_) => &self.values,
+        };
+        LdltRef::new(&self.sym.sym, values).solve_in_place_with_conj(Conj::No, rhs, par, stack);
     }
 
     /// One group of at most [`MAX_GROUP`] columns: permuted into a row-major workspace (kept
@@ -386,7 +388,7 @@ impl Factor {
             Some(pool.swap_remove(i))
         });
         let mut x = pooled.unwrap_or_else(|| vec![0.0; need]);
-        let plan = self.sym.solve_plan.get_or_init(|| SolvePlan::new(sn));
+        let plan = self.sym.solve_plan(sn);
         let perm = self.sym.sym.perm().map(|p| p.arrays());
         for c in 0..k {
             let col = rhs.as_ref().col(c);

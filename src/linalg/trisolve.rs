@@ -208,14 +208,13 @@ impl<const K: usize> Rows<K> {
 /// tasks can share.
 const PANEL: usize = 64;
 
-/// A panel of a supernode: columns `f..f + w` of the factor (rows of the solution block); its
-/// values start at `ls[0]` (the panel's first column), columns `nr` apart, with the panel's
-/// diagonal at row `d0` of each column (0 in the packed layout the solves read, [`pack`]). Below
-/// it: `below` rows of the supernode's diagonal block (`f + w..f + w + below`), then the pattern.
+/// A panel of a supernode in the packed layout ([`pack`]): columns `f..f + w` of the factor
+/// (rows of the solution block); its values start at `ls[0]` (the panel's first column, from its
+/// diagonal down), columns `nr` apart. Below the panel's triangle: `below` rows of the
+/// supernode's diagonal block (`f + w..f + w + below`), then the pattern.
 struct Node<'a> {
     f: usize,
     w: usize,
-    d0: usize,
     nr: usize,
     below: usize,
     pat: &'a [usize],
@@ -256,7 +255,6 @@ fn panels<'a>(
         Node {
             f: f + c0,
             w: pw,
-            d0: 0,
             nr: nr - c0,
             below: w - c0 - pw,
             pat,
@@ -472,7 +470,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
 /// D z = y on the rows of one panel.
 fn scale_by_pivots<const K: usize>(nd: &Node<'_>, xs: &mut [[f64; K]]) {
     for (j, xj) in xs.iter_mut().enumerate() {
-        let dinv = nd.ls[j * nd.nr + nd.d0 + j].recip();
+        let dinv = nd.ls[j * nd.nr + j].recip();
         for v in xj.iter_mut() {
             *v *= dinv;
         }
@@ -555,7 +553,7 @@ mod fma {
         xs: &[[f64; K]],
         tmp: &mut [f64],
     ) {
-        let start = nd.d0 + nd.w + lo;
+        let start = nd.w + lo;
         tmp[..K * len].fill(0.0);
         let mut c0 = 0;
         while c0 + 6 <= K {
@@ -672,7 +670,7 @@ mod fma {
         g: &[f64],
         c0: usize,
     ) {
-        let (q, nr, start) = (nd.q(), nd.nr, nd.d0 + nd.w);
+        let (q, nr, start) = (nd.q(), nd.nr, nd.w);
         let n = xs.len();
         let mut j = 0;
         while j + J <= n {
@@ -758,9 +756,9 @@ fn madd<const F: bool>(a: f64, b: f64, c: f64) -> f64 {
 /// Forward substitution with the unit lower triangle of the panel, column by column.
 #[inline(always)]
 fn forward_diag<const K: usize, const F: bool>(nd: &Node<'_>, xs: &mut [[f64; K]]) {
-    let (w, nr, d0) = (nd.w, nd.nr, nd.d0);
+    let (w, nr) = (nd.w, nd.nr);
     for j in 0..w {
-        let col = &nd.ls[j * nr + d0..j * nr + d0 + w];
+        let col = &nd.ls[j * nr..j * nr + w];
         let xj = xs[j];
         for (xi, &a) in xs[j + 1..w].iter_mut().zip(&col[j + 1..w]) {
             for c in 0..K {
@@ -773,9 +771,9 @@ fn forward_diag<const K: usize, const F: bool>(nd: &Node<'_>, xs: &mut [[f64; K]
 /// Backward substitution with the transposed unit triangle of the panel, last column first.
 #[inline(always)]
 fn backward_diag<const K: usize, const F: bool>(nd: &Node<'_>, xs: &mut [[f64; K]]) {
-    let (w, nr, d0) = (nd.w, nd.nr, nd.d0);
+    let (w, nr) = (nd.w, nd.nr);
     for j in (0..w).rev() {
-        let col = &nd.ls[j * nr + d0..j * nr + d0 + w];
+        let col = &nd.ls[j * nr..j * nr + w];
         let mut acc = [0.0f64; K];
         for (xi, &a) in xs[j + 1..w].iter().zip(&col[j + 1..w]) {
             for c in 0..K {
@@ -799,7 +797,7 @@ fn cols<const J: usize>(ls: &[f64], nr: usize, start: usize, len: usize, j0: usi
 /// vector. Each entry is a sum over the columns in order from zero, multiply–adds.
 #[inline(always)]
 fn forward_off<const K: usize, const F: bool>(nd: &Node<'_>, lo: usize, len: usize, xs: &[[f64; K]], tmp: &mut [f64]) {
-    let start = nd.d0 + nd.w + lo;
+    let start = nd.w + lo;
     tmp[..K * len].fill(0.0);
     let mut c0 = 0;
     while c0 + 6 <= K {
@@ -909,7 +907,7 @@ fn backward_chunk<const K: usize, const KC: usize, const J: usize, const F: bool
     g: &[f64],
     c0: usize,
 ) {
-    let (q, nr, start) = (nd.q(), nd.nr, nd.d0 + nd.w);
+    let (q, nr, start) = (nd.q(), nd.nr, nd.w);
     let n = xs.len();
     let mut j = 0;
     while j + J <= n {
@@ -985,13 +983,11 @@ mod tests {
         };
         fn check<const K: usize>(next: &mut dyn FnMut() -> f64) {
             for (w, below) in [(1usize, 3usize), (5, 17), (7, 30), (64, 9)] {
-                let d0 = 2;
-                let nr = d0 + w + below;
+                let nr = w + below;
                 let ls: Vec<f64> = (0..w * nr).map(|_| next()).collect();
                 let nd = Node {
                     f: 0,
                     w,
-                    d0,
                     nr,
                     below,
                     pat: &[],
