@@ -492,6 +492,14 @@ pub fn release_free_memory() {
     }
 }
 
+/// Resident set size of this process now (bytes), from /proc/self/status.
+pub fn resident_memory() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmRSS:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
 /// Peak resident set size of this process (bytes), from /proc/self/status.
 pub fn peak_memory() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
