@@ -321,6 +321,9 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
             }
             Ok(())
         })?;
+    // M keeps only its nonzeros, on a pattern of its own within K's (a third of the values of a
+    // solid's; see [`SymMatrix::without_zeros`]).
+    let m = if want_mass { m.without_zeros() } else { m };
     Ok(Assembled { k, m })
 }
 

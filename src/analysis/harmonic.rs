@@ -255,6 +255,8 @@ pub fn direct(sys: &System, load: &[c64], omega: f64, damping: &Damping) -> Resu
         Damping::Rayleigh { alpha, beta } => (c64::new(1.0, omega * beta), c64::new(w2, -omega * alpha)),
         Damping::Ratio(z) => (c64::new(1.0, 2.0 * z), c64::new(w2, 0.0)),
     };
+    // M on K's pattern (it may store only its nonzeros).
+    let m = m.on_pattern(k.pattern.clone());
     let values: Vec<c64> = k
         .values
         .iter()

@@ -105,7 +105,7 @@ pub struct Timings {
 pub struct MemoryByPhase {
     /// Node coordinates and element connectivity of the model.
     pub mesh: u64,
-    /// The shared sparsity pattern and the values of K and M.
+    /// K's sparsity pattern and values, and M's values with its own pattern (its nonzeros).
     pub k_and_m: u64,
     /// Values of one LDLᵀ factor while it is factorised (faer's layout).
     pub factor: u64,
@@ -445,7 +445,7 @@ pub fn finish(
             },
             k_and_m: {
                 let pat = sys.pattern();
-                (8 * pat.col_ptr.len() + 4 * pat.row_idx.len() + k_mat.value_bytes() + m_mat.value_bytes()) as u64
+                (8 * pat.col_ptr.len() + 4 * pat.row_idx.len() + k_mat.value_bytes() + m_mat.bytes_beside(pat)) as u64
             },
             factor: sol.memory.factor,
             factor_packed: sol.memory.factor_packed,

@@ -69,7 +69,9 @@ pub fn export(sys: &System, dir: &Path, formats: Formats) -> Result<(ExportSumma
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let model = sys.model();
     let k = sys.k();
-    let m = sys.m()?;
+    // M on K's pattern, explicit zeros included: one structure for both files, as other solvers
+    // expect (PETSc's K − σM with SAME_NONZERO_PATTERN, the SLEPc script's).
+    let m = &sys.m()?.on_pattern(k.pattern.clone());
     let mut files = Vec::new();
     let mut written = Vec::new();
     let comment = format!(

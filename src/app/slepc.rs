@@ -189,7 +189,8 @@ pub fn write_job(sys: &System, params: &ModalParams, dir: &Path, matrices: bool)
     let m = sys.m()?;
     if matrices {
         matrix::write_petsc(&dir.join("K.petsc"), k)?;
-        matrix::write_petsc(&dir.join("M.petsc"), m)?;
+        // On K's pattern: the script forms K − sM with PETSc's SAME_NONZERO_PATTERN.
+        matrix::write_petsc(&dir.join("M.petsc"), &m.on_pattern(k.pattern.clone()))?;
     }
     let sigma = match (params.shift_hz, params.target) {
         (Some(f), _) => lambda_of_hz(f),

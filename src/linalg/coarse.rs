@@ -70,7 +70,7 @@ impl Prolongation {
             .collect()
     }
 
-    /// PᵀKP and PᵀMP on one pattern (K and M share theirs). Coarse columns are computed in
+    /// PᵀKP and PᵀMP on one pattern (M's pattern is K's or a subset of it). Coarse columns are computed in
     /// parallel, each with its own accumulator; the result does not depend on the threads.
     pub fn galerkin(&self, k: &SymMatrix, m: &SymMatrix) -> (SymMatrix, SymMatrix) {
         assert_eq!(
@@ -100,7 +100,7 @@ impl Prolongation {
                 next[c] += 1;
             }
         }
-        let pat = &*k.pattern;
+        let (pat, mpat) = (&*k.pattern, &*m.pattern);
         let chunk = nc.div_ceil(4 * rayon::current_num_threads().max(1)).max(64);
         let cols: Vec<(Vec<usize>, Vec<u32>, Vec<f64>, Vec<f64>)> = (0..nc)
             .collect::<Vec<_>>()
@@ -117,13 +117,19 @@ impl Prolongation {
                         let (e, we) = (trow[t] as usize, tw[t]);
                         for q in pat.col_ptr[e]..pat.col_ptr[e + 1] {
                             let r = pat.row_idx[q] as usize;
-                            let (a, b) = (we * k.values[q], we * m.values[q]);
+                            let a = we * k.values[q];
                             for (i, wr) in self.row(r) {
                                 if !mark[i] {
                                     mark[i] = true;
                                     rows.push(i);
                                 }
                                 acc_k[i] += wr * a;
+                            }
+                        }
+                        // M's rows are among K's (marked above).
+                        for q in mpat.col_ptr[e]..mpat.col_ptr[e + 1] {
+                            let b = we * m.values[q];
+                            for (i, wr) in self.row(mpat.row_idx[q] as usize) {
                                 acc_m[i] += wr * b;
                             }
                         }

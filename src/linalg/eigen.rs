@@ -348,6 +348,13 @@ fn solve_inner(
     if n == 0 {
         return Err(Error::InvalidInput("the model has no free degree of freedom".into()));
     }
+    // K − σM is factorised on K's pattern: M's entries must be among K's.
+    if m.n() != n || !k.pattern.contains(&m.pattern) {
+        return Err(Error::InvalidInput(format!(
+            "M ({} equations) must have K's sparsity pattern ({n} equations) or a subset of it",
+            m.n()
+        )));
+    }
     let t0 = Instant::now();
     let mut notes = Vec::new();
     let mut pl = p.clone();
@@ -880,7 +887,15 @@ fn solve_below_bound(
             .ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
         est.memory.lanczos_basis = est.memory.lanczos_basis.max(lz.peak_bytes());
         est.memory.solve_workspace = est.memory.solve_workspace.max(fa.workspace_bytes() as u64);
+        log::debug!(
+            "Lanczos done: resident {} MiB, peak so far {} MiB",
+            crate::system::resident_memory().unwrap_or(0) >> 20,
+            crate::system::peak_memory().unwrap_or(0) >> 20
+        );
         lz.release();
+        // The iteration's freed blocks stay in the allocator's heaps (~40 MiB at 119k DOFs):
+        // give them back before the refinement allocates its own.
+        crate::system::release_free_memory();
         log::info!(
             "Lanczos: {} pairs below U converged after {applications} operator applications",
             l.len()
@@ -894,17 +909,20 @@ fn solve_below_bound(
         // elastic modes and takes the other images from the Lanczos relation (see
         // [`image_with_solves`]: 6 solved columns instead of 19 for 18 modes of the plates);
         // the further steps, when needed, solve for every column.
-        let (mut lambda, mut x) = match lz.image.take() {
+        let y = match lz.image.take() {
             Some(y) if y.ncols() == x.ncols() && y.ncols() == l.len() => {
                 let solved = lowest_elastic(&l, zero, p.block.max(1));
                 applications += solved.len();
-                rayleigh_ritz(k, m, image_with_solves(m, &fa, &x, y, &solved))?
+                image_with_solves(m, &fa, &x, y, &solved)
             }
             _ => {
                 applications += x.ncols();
-                refine(k, m, &fa, &x)?
+                inverse_images(m, &fa, x.as_ref())
             }
         };
+        // The Lanczos vectors are spent: free them before the Rayleigh–Ritz step allocates.
+        drop(x);
+        let (mut lambda, mut x) = rayleigh_ritz(k, m, y)?;
         let mut steps = 1;
         loop {
             let mut below: Vec<usize> = (0..lambda.len()).filter(|&i| lambda[i] < u).collect();
@@ -1074,12 +1092,14 @@ fn image_with_solves(m: &SymMatrix, fa: &Factor, x: &Mat<f64>, mut image: Mat<f6
 /// M-orthonormal vectors of the pencil (K, M) in span(Y), ascending.
 fn rayleigh_ritz(k: &SymMatrix, m: &SymMatrix, y: Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     let (n, c) = (y.nrows(), y.ncols());
-    let mut ky = Mat::zeros(n, c);
-    let mut my = Mat::zeros(n, c);
-    k.mul_block(y.as_ref(), ky.as_mut());
-    m.mul_block(y.as_ref(), my.as_mut());
-    let kh = tall::gram(y.as_ref(), ky.as_ref());
-    let mh = tall::gram(y.as_ref(), my.as_ref());
+    // One product at a time (each Gram matrix is all that is kept of it).
+    let gram_of = |a: &SymMatrix| {
+        let mut ay = Mat::zeros(n, c);
+        a.mul_block(y.as_ref(), ay.as_mut());
+        tall::gram(y.as_ref(), ay.as_ref())
+    };
+    let kh = gram_of(k);
+    let mh = gram_of(m);
     // Columns scaled to unit M-norm first (they differ by the ratios of θ).
     let sc: Vec<f64> = (0..c)
         .map(|i| 1.0 / mh[(i, i)].abs().sqrt().max(f64::MIN_POSITIVE))
@@ -1192,6 +1212,9 @@ struct Lanczos {
     /// M times the next block (the only M-image kept: the basis's own would double the
     /// iteration's largest allocation, for M products that cost ~4 % of the run to redo).
     m_next: Mat<f64>,
+    /// A block of the same size kept for the next step's M-image (no allocation per step: the
+    /// freed blocks would stay in the allocator's heap, fragmented, and add to the peak).
+    spare: Mat<f64>,
     /// Projected matrix (full storage, symmetrised at use).
     t: Mat<f64>,
     /// Columns whose operator image is in `t`.
@@ -1233,6 +1256,7 @@ impl Lanczos {
             m_max,
             v: Mat::zeros(n, m_max + b),
             m_next: Mat::zeros(n, b),
+            spare: Mat::zeros(0, 0),
             t: Mat::zeros(m_max + b, m_max + b),
             cur: 0,
             rng: Rng(p.seed | 1),
@@ -1252,6 +1276,7 @@ impl Lanczos {
     fn bytes(&self) -> u64 {
         8 * (self.v.nrows() * self.v.ncols()
             + self.m_next.nrows() * self.m_next.ncols()
+            + self.spare.nrows() * self.spare.ncols()
             + self.t.nrows() * self.t.ncols()) as u64
     }
 
@@ -1323,12 +1348,9 @@ impl Lanczos {
                     deficient.push(k);
                 }
             }
-            let mut wn = Mat::zeros(self.n, bw);
-            tall::mul(wn.as_mut(), Accum::Replace, w.as_ref(), u.as_ref(), 1.0);
-            let mut mwn = Mat::zeros(self.n, bw);
-            tall::mul(mwn.as_mut(), Accum::Replace, mw.as_ref(), u.as_ref(), 1.0);
-            *w = wn;
-            *mw = mwn;
+            // W·U and (MW)·U in place (U is square).
+            tall::combine_columns_in_place(w.as_mut(), u.as_ref());
+            tall::combine_columns_in_place(mw.as_mut(), u.as_ref());
             r_total = &r * &r_total;
             if !deficient.is_empty() {
                 for &k in &deficient {
@@ -1435,6 +1457,7 @@ impl Lanczos {
         self.peak_bytes.set(self.peak_bytes());
         self.v = Mat::zeros(0, 0);
         self.m_next = Mat::zeros(0, 0);
+        self.spare = Mat::zeros(0, 0);
         self.t = Mat::zeros(0, 0);
         self.m_max = 0;
         self.cur = 0;
@@ -1520,11 +1543,14 @@ impl Lanczos {
                 tick = now;
             };
             // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
-            let mut w = self.m_next.clone();
+            let mut w = std::mem::replace(&mut self.m_next, Mat::zeros(0, 0));
             fa.solve_in_place(w.as_mut());
             *apps += b;
             lap(&mut self.times, 0);
-            let mut mw = Mat::zeros(n, b);
+            let mut mw = std::mem::replace(&mut self.spare, Mat::zeros(0, 0));
+            if mw.nrows() != n || mw.ncols() != b {
+                mw = Mat::zeros(n, b);
+            }
             m.mul_block(w.as_ref(), mw.as_mut());
             lap(&mut self.times, 1);
             let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
@@ -1542,6 +1568,7 @@ impl Lanczos {
             }
             self.v.get_mut(.., nb..nb + b).copy_from(&w);
             self.m_next = mw;
+            self.spare = w;
             self.t.get_mut(nb..nb + b, blk..blk + b).copy_from(&r);
             self.t.get_mut(blk..blk + b, nb..nb + b).copy_from(r.transpose());
 
@@ -1579,8 +1606,11 @@ impl Lanczos {
                 self.peak_bytes.set(self.peak_bytes());
                 let x = self.v.get(.., 0..take.len()).to_owned();
                 // Op·X = X·Θ + W·R·Y_last, with the next block W still after the basis columns
-                // (the in-place combination wrote only the first ones).
-                let image = self.keep_image.then(|| {
+                // (the in-place combination wrote only the first ones). W is copied out and the
+                // basis freed before the image is formed: it is not at the memory peak.
+                let next = self.keep_image.then(|| self.v.get(.., nb..nb + b).to_owned());
+                self.release();
+                let image = next.map(|next| {
                     let mut rs = Mat::zeros(b, take.len());
                     matmul(
                         rs.as_mut(),
@@ -1591,18 +1621,11 @@ impl Lanczos {
                         Par::Seq,
                     );
                     let mut image = Mat::zeros(n, take.len());
-                    tall::mul(
-                        image.as_mut(),
-                        Accum::Replace,
-                        self.v.get(.., nb..nb + b),
-                        rs.as_ref(),
-                        1.0,
-                    );
+                    tall::mul(image.as_mut(), Accum::Replace, next.as_ref(), rs.as_ref(), 1.0);
                     let th: Vec<f64> = take.iter().map(|&k| theta[k]).collect();
                     tall::add_scaled_columns(image.as_mut(), x.as_ref(), &th);
                     image
                 });
-                self.release();
                 self.image = image;
                 for &k in &take {
                     lam.push(sigma + 1.0 / theta[k]);

@@ -32,6 +32,23 @@ impl Pattern {
         let rows: Vec<usize> = self.row_idx.iter().map(|&i| i as usize).collect();
         SymbolicSparseColMat::new_checked(self.n, self.n, self.col_ptr.clone(), None, rows)
     }
+    /// Whether every entry of `sub` is an entry of this pattern (same dimension). M may be
+    /// stored on a pattern of its own, which must lie in K's (the factorisations of K − σM are
+    /// laid out on K's).
+    pub fn contains(&self, sub: &Pattern) -> bool {
+        if std::ptr::eq(self, sub) {
+            return true;
+        }
+        if self.n != sub.n || sub.col_ptr.len() != sub.n + 1 {
+            return false;
+        }
+        (0..self.n).into_par_iter().with_min_len(1024).all(|j| {
+            let mut mine = self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]].iter();
+            sub.row_idx[sub.col_ptr[j]..sub.col_ptr[j + 1]]
+                .iter()
+                .all(|r| mine.by_ref().any(|q| q == r))
+        })
+    }
     /// Position of entry `(row, col)` in the value array, if stored.
     pub fn position(&self, row: usize, col: usize) -> Option<usize> {
         let s = self.col_ptr[col];
@@ -41,13 +58,14 @@ impl Pattern {
     }
 }
 
-/// Row-major block product kernel with the block width known at compile time, so the
-/// accumulators stay in registers: `out[j, :] = Σ_i A[i, j] · x[i, :]`.
-fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: &mut [f64]) {
-    out.par_chunks_mut(B)
-        .enumerate()
-        .with_min_len(256)
-        .for_each(|(j, out)| {
+/// Block product kernel with the block width known at compile time, so the accumulators stay
+/// in registers: `out[j, c] = Σ_i A[i, j] · x[i, c]` for `x` row-major (`xr`, width B); the
+/// results go straight into the columns of `out`, in parallel chunks of rows.
+fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMut<'_, f64>) {
+    const ROWS: usize = 256;
+    out.par_row_chunks_mut(ROWS).enumerate().for_each(|(ch, mut o)| {
+        for jj in 0..o.nrows() {
+            let j = ch * ROWS + jj;
             let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
             let mut acc = [0.0f64; B];
             for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
@@ -57,8 +75,11 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: &mut 
                     acc[c] += a * xi[c];
                 }
             }
-            out.copy_from_slice(&acc);
-        });
+            for (c, v) in acc.iter().enumerate() {
+                o[(jj, c)] = *v;
+            }
+        }
+    });
 }
 
 /// A symmetric matrix on a shared pattern (both triangles stored).
@@ -94,9 +115,13 @@ impl SymMatrix {
     pub fn n(&self) -> usize {
         self.pattern.n
     }
-    /// `self − s·other` (same pattern).
+    /// `self − s·other` on this matrix's pattern; `other`'s pattern must be the same or a
+    /// subset of it ([`Pattern::contains`]).
     pub fn sub_scaled(&self, s: f64, other: &SymMatrix) -> SymMatrix {
-        debug_assert!(Arc::ptr_eq(&self.pattern, &other.pattern));
+        if !Arc::ptr_eq(&self.pattern, &other.pattern) {
+            let other = other.on_pattern(self.pattern.clone());
+            return self.sub_scaled(s, &other);
+        }
         let values = self
             .values
             .par_iter()
@@ -107,6 +132,69 @@ impl SymMatrix {
             pattern: self.pattern.clone(),
             values,
         }
+    }
+    /// The same matrix without its stored zeros, on a pattern of its own. A solid's consistent
+    /// mass matrix couples only equal components of two nodes (M = Mₛ ⊗ I₃ node by node), so
+    /// on the stiffness pattern two of every three of its stored values are exact zeros:
+    /// dropping them keeps a third of the values and of the work of each product `M x`.
+    pub fn without_zeros(&self) -> SymMatrix {
+        let p = &*self.pattern;
+        // Columns in ranges of about equal size, counted and then copied in parallel (the
+        // result does not depend on the ranges).
+        const COLS: usize = 2048;
+        let ranges: Vec<(usize, usize)> = (0..p.n).step_by(COLS).map(|c| (c, (c + COLS).min(p.n))).collect();
+        let kept_in = |j: usize| {
+            self.values[p.col_ptr[j]..p.col_ptr[j + 1]]
+                .iter()
+                .filter(|&&v| v != 0.0)
+                .count()
+        };
+        let counts: Vec<usize> = (0..p.n).into_par_iter().with_min_len(COLS).map(kept_in).collect();
+        let mut col_ptr = Vec::with_capacity(p.n + 1);
+        col_ptr.push(0);
+        for c in &counts {
+            col_ptr.push(col_ptr.last().copied().unwrap_or(0) + c);
+        }
+        let kept = col_ptr[p.n];
+        let mut row_idx = vec![0u32; kept];
+        let mut values = vec![0.0f64; kept];
+        let mut pieces = Vec::with_capacity(ranges.len());
+        let (mut ri, mut va) = (&mut row_idx[..], &mut values[..]);
+        for &(c0, c1) in &ranges {
+            let len = col_ptr[c1] - col_ptr[c0];
+            let (r_here, r_rest) = std::mem::take(&mut ri).split_at_mut(len);
+            let (v_here, v_rest) = std::mem::take(&mut va).split_at_mut(len);
+            pieces.push((c0, c1, r_here, v_here));
+            (ri, va) = (r_rest, v_rest);
+        }
+        pieces.into_par_iter().for_each(|(c0, c1, r, v)| {
+            let mut t = 0;
+            for q in p.col_ptr[c0]..p.col_ptr[c1] {
+                if self.values[q] != 0.0 {
+                    r[t] = p.row_idx[q];
+                    v[t] = self.values[q];
+                    t += 1;
+                }
+            }
+        });
+        SymMatrix {
+            pattern: Arc::new(Pattern {
+                n: p.n,
+                col_ptr,
+                row_idx,
+            }),
+            values,
+        }
+    }
+    /// Bytes of the values, and of the pattern when it is not `shared` (the pattern of K, which
+    /// the caller counts once).
+    pub fn bytes_beside(&self, shared: &Arc<Pattern>) -> usize {
+        let own = if Arc::ptr_eq(&self.pattern, shared) {
+            0
+        } else {
+            8 * self.pattern.col_ptr.len() + 4 * self.pattern.row_idx.len()
+        };
+        self.value_bytes() + own
     }
     /// Diagonal entries.
     pub fn diagonal(&self) -> Vec<f64> {
@@ -124,12 +212,11 @@ impl SymMatrix {
         let p = &*self.pattern;
         let vals = &self.values;
         let mut xr = Vec::new();
-        let mut tmp = Vec::new();
         let mut c0 = 0;
         while c0 < b {
             let w = (b - c0).min(8);
-            // Row-major copies: each row of the chunk is then contiguous, and each parallel
-            // task writes one contiguous piece of the output.
+            // A row-major copy of the chunk's columns: each row the gather reads is then one
+            // contiguous piece.
             xr.clear();
             xr.resize(n * w, 0.0);
             for c in 0..w {
@@ -137,22 +224,16 @@ impl SymMatrix {
                     xr[i * w + c] = *v;
                 }
             }
-            tmp.clear();
-            tmp.resize(n * w, 0.0);
+            let out = y.as_mut().subcols_mut(c0, w);
             match w {
-                1 => gather_rows::<1>(p, vals, &xr, &mut tmp),
-                2 => gather_rows::<2>(p, vals, &xr, &mut tmp),
-                3 => gather_rows::<3>(p, vals, &xr, &mut tmp),
-                4 => gather_rows::<4>(p, vals, &xr, &mut tmp),
-                5 => gather_rows::<5>(p, vals, &xr, &mut tmp),
-                6 => gather_rows::<6>(p, vals, &xr, &mut tmp),
-                7 => gather_rows::<7>(p, vals, &xr, &mut tmp),
-                _ => gather_rows::<8>(p, vals, &xr, &mut tmp),
-            }
-            for c in 0..w {
-                for (j, v) in y.as_mut().col_mut(c0 + c).iter_mut().enumerate() {
-                    *v = tmp[j * w + c];
-                }
+                1 => gather_rows::<1>(p, vals, &xr, out),
+                2 => gather_rows::<2>(p, vals, &xr, out),
+                3 => gather_rows::<3>(p, vals, &xr, out),
+                4 => gather_rows::<4>(p, vals, &xr, out),
+                5 => gather_rows::<5>(p, vals, &xr, out),
+                6 => gather_rows::<6>(p, vals, &xr, out),
+                7 => gather_rows::<7>(p, vals, &xr, out),
+                _ => gather_rows::<8>(p, vals, &xr, out),
             }
             c0 += w;
         }
@@ -258,6 +339,9 @@ impl SymMatrix {
 
     /// Same values on another pattern that contains this one's (entries not stored here are 0).
     pub fn on_pattern(&self, pattern: Arc<Pattern>) -> SymMatrix {
+        if Arc::ptr_eq(&self.pattern, &pattern) {
+            return self.clone();
+        }
         let mut out = SymMatrix::zeros(pattern.clone());
         let p = &*self.pattern;
         for j in 0..p.n {

@@ -169,7 +169,7 @@ fn instr_set() -> Option<()> {
 pub struct Input<'a> {
     /// K (or the matrix itself), both triangles stored.
     pub k: &'a SymMatrix,
-    /// M and σ, on K's pattern.
+    /// M and σ; M on K's pattern or a subset of it.
     pub shift: Option<(&'a SymMatrix, f64)>,
     /// The elimination order.
     pub perm: Option<(&'a [usize], &'a [usize])>,
@@ -336,12 +336,22 @@ fn node(
                 if i < j {
                     continue;
                 }
-                let mut v = input.k.values[pos];
-                if let Some((m, sigma)) = input.shift {
-                    v -= sigma * m.values[pos];
-                }
                 let il = if i < s_end { i - s_start } else { w.g2l[i] };
-                ls_vals[il + jl * s_nrows] += v;
+                ls_vals[il + jl * s_nrows] += input.k.values[pos];
+            }
+            // −σM, on its own pattern (a subset of K's: each of its rows is one of K's).
+            if let Some((m, sigma)) = input.shift {
+                let mp = &m.pattern;
+                for pos in mp.col_ptr[c_old]..mp.col_ptr[c_old + 1] {
+                    let i = input
+                        .perm
+                        .map_or(mp.row_idx[pos] as usize, |(_, inv)| inv[mp.row_idx[pos] as usize]);
+                    if i < j {
+                        continue;
+                    }
+                    let il = if i < s_end { i - s_start } else { w.g2l[i] };
+                    ls_vals[il + jl * s_nrows] -= sigma * m.values[pos];
+                }
             }
         }
     }

@@ -489,3 +489,52 @@ fn one_factorisation_solve_equals_the_two_factorisation_solve() {
         }
     }
 }
+
+/// A solid's consistent mass matrix is held without its zeros (M = Mₛ ⊗ I₃ node by node: a
+/// third of K's entries), on a pattern inside K's. The factorisations read it from there and the
+/// solves multiply by it; the modes must be those of the same M stored on K's pattern, bit for
+/// bit (the dropped entries are exact zeros, and every sum skips only `+ 0·x`). An M with an
+/// entry outside K's pattern cannot be factorised with K and is refused.
+#[test]
+fn mass_without_zeros_gives_the_modes_of_the_full_pattern() {
+    use vibrofem::linalg::eigen::solve_with;
+    use vibrofem::mesh::CellKind;
+    let sys = box_system(CellKind::Tet10, [0.4, 0.2, 0.1], [6, 3, 2]);
+    let (k, m) = (sys.k(), sys.m().unwrap());
+    assert!(!Arc::ptr_eq(&k.pattern, &m.pattern));
+    assert!(k.pattern.contains(&m.pattern) && !m.pattern.contains(&k.pattern));
+    // Free–free solid: every node has its three components, so exactly one in three.
+    assert_eq!(3 * m.pattern.nnz(), k.pattern.nnz());
+    assert!(m.values.iter().all(|&v| v != 0.0));
+    let full = m.on_pattern(k.pattern.clone());
+    assert_eq!(full.values.iter().filter(|&&v| v != 0.0).count(), m.pattern.nnz());
+    let sym = sys.symbolic().unwrap();
+    let p = EigenParams {
+        target: Target::Nearest(14),
+        dense_below: 0,
+        ..Default::default()
+    };
+    let a = solve_with(k, m, sym, &p, sys.coarse_space()).unwrap();
+    let b = solve_with(k, &full, sym, &p, sys.coarse_space()).unwrap();
+    assert!(a.sturm.complete && b.sturm.complete);
+    assert_eq!(a.lambda.len(), 14);
+    for (i, (x, y)) in a.lambda.iter().zip(&b.lambda).enumerate() {
+        assert_eq!(x.to_bits(), y.to_bits(), "mode {i}: {x} vs {y}");
+    }
+    // Two-factorisation path (Sturm counts at both ends) on the compact M as well.
+    let two = solve(k, m, sym, &p).unwrap();
+    let scale = two.lambda[6];
+    for (x, y) in two.lambda.iter().zip(&b.lambda) {
+        assert!((x - y).abs() <= 1e-9 * y.abs().max(scale), "{x} vs {y}");
+    }
+    // An M coupling two equations that K does not: refused, not factorised wrongly.
+    let n = k.n();
+    let far = (0..n)
+        .find(|&j| k.pattern.position(0, j).is_none())
+        .expect("a sparse K");
+    let bad = SymMatrix::from_triplets(n, &[(0, 0, 1.0), (0, far, 0.5)]);
+    match solve(k, &bad, sym, &p) {
+        Err(vibrofem::Error::InvalidInput(msg)) => assert!(msg.contains("pattern"), "{msg}"),
+        other => panic!("an M outside K's pattern was accepted: {:?}", other.map(|s| s.lambda)),
+    }
+}
