@@ -323,12 +323,15 @@ fn node(
     for (i, &row) in s_pattern.iter().enumerate() {
         w.g2l[row] = i + s_ncols;
     }
-    // The matrix's columns, lower part in elimination order.
-    {
-        let pat = &input.k.pattern;
-        for j in s_start..s_end {
-            let jl = j - s_start;
-            let c_old = input.perm.map_or(j, |(fwd, _)| fwd[j]);
+    // The matrix's columns, lower part in elimination order: K, then −σM from M's own pattern
+    // (a subset of K's: each of its rows is one of K's). `c·a` with c = 1 is `a` exactly, and
+    // adding (−σ)·m is subtracting σ·m: the same bits as one pass over K − σM.
+    for j in s_start..s_end {
+        let jl = j - s_start;
+        let c_old = input.perm.map_or(j, |(fwd, _)| fwd[j]);
+        let terms = std::iter::once((input.k, 1.0)).chain(input.shift.map(|(m, sigma)| (m, -sigma)));
+        for (a, c) in terms {
+            let pat = &a.pattern;
             for pos in pat.col_ptr[c_old]..pat.col_ptr[c_old + 1] {
                 let i = input
                     .perm
@@ -337,21 +340,7 @@ fn node(
                     continue;
                 }
                 let il = if i < s_end { i - s_start } else { w.g2l[i] };
-                ls_vals[il + jl * s_nrows] += input.k.values[pos];
-            }
-            // −σM, on its own pattern (a subset of K's: each of its rows is one of K's).
-            if let Some((m, sigma)) = input.shift {
-                let mp = &m.pattern;
-                for pos in mp.col_ptr[c_old]..mp.col_ptr[c_old + 1] {
-                    let i = input
-                        .perm
-                        .map_or(mp.row_idx[pos] as usize, |(_, inv)| inv[mp.row_idx[pos] as usize]);
-                    if i < j {
-                        continue;
-                    }
-                    let il = if i < s_end { i - s_start } else { w.g2l[i] };
-                    ls_vals[il + jl * s_nrows] -= sigma * m.values[pos];
-                }
+                ls_vals[il + jl * s_nrows] += c * a.values[pos];
             }
         }
     }
