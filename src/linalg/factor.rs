@@ -137,9 +137,10 @@ pub struct Factor {
 
 /// Run `f` on worker threads of its own (as many as the current pool has), which end when it
 /// returns. The dense kernels of the factorisation keep a packing buffer per thread, sized
-/// from the L3 cache (64 MiB reserved here, of which the large updates touch tens of MB) and
-/// never freed while the thread lives: on threads that end, it does not stay resident beside
-/// the factor and the Lanczos basis (91 MiB less at the peak of the 119k-DOF plate).
+/// from the L3 cache (64 MiB reserved here, of which the large updates touch a part) and never
+/// freed while the thread lives: on threads that end, it does not stay resident beside the
+/// factor and the Lanczos basis (16 MiB less resident after the factorisation of the 119k-DOF
+/// plate).
 fn on_own_threads<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     match rayon::ThreadPoolBuilder::new()
         .num_threads(rayon::current_num_threads())
