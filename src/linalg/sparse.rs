@@ -139,8 +139,8 @@ impl SymMatrix {
     /// dropping them keeps a third of the values and of the work of each product `M x`.
     pub fn without_zeros(&self) -> SymMatrix {
         let p = &*self.pattern;
-        // Columns in ranges of about equal size, counted and then copied in parallel (the
-        // result does not depend on the ranges).
+        // Counted per column, then copied in parallel by ranges of 2048 columns (the result
+        // does not depend on the ranges).
         const COLS: usize = 2048;
         let ranges: Vec<(usize, usize)> = (0..p.n).step_by(COLS).map(|c| (c, (c + COLS).min(p.n))).collect();
         let kept_in = |j: usize| {
