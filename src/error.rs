@@ -89,7 +89,18 @@ pub enum Error {
         /// What is wrong.
         msg: String,
     },
-    /// Any other invalid user input (option, value, combination).
+    /// Invalid user input at a place named as data ([`At`]): a command-line option, a
+    /// parameter of a library call, a group, an element, a node or a DOF. The message is shown
+    /// as written (it names the place in words too); `at` lets a program (the JSON error
+    /// record, the Python package) tell where without parsing the text.
+    #[error("{msg}")]
+    Invalid {
+        /// Where the bad value is.
+        at: At,
+        /// What is wrong.
+        msg: String,
+    },
+    /// Any other invalid user input (a combination of options with no single place).
     #[error("{0}")]
     InvalidInput(String),
     /// A result could not be written or serialised (not the user's input: a full disk, a
@@ -132,6 +143,67 @@ pub enum Error {
     },
 }
 
+/// Where an [`Error::Invalid`] input is: the place a user looks to fix it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum At {
+    /// A command-line option (`--freq`) or a keyword argument of the Python package.
+    Option {
+        /// The option as the user spelled it.
+        name: String,
+    },
+    /// A parameter of a library call or a field of an options struct (`ModalParams::n_modes`).
+    Param {
+        /// The parameter's name.
+        name: String,
+    },
+    /// A key of an input file (scene, design, machine case) or a column of a CSV file.
+    Key {
+        /// The file, as given.
+        file: String,
+        /// 1-based line, where known.
+        line: Option<usize>,
+        /// The key (dotted path) or column name.
+        key: String,
+    },
+    /// A mesh group (physical name).
+    Group {
+        /// The group's name.
+        name: String,
+    },
+    /// A mesh element by its gmsh tag.
+    Element {
+        /// gmsh element tag.
+        tag: u64,
+    },
+    /// A mesh node by its gmsh tag.
+    Node {
+        /// gmsh node tag.
+        tag: u64,
+    },
+    /// A degree of freedom: a node's component.
+    Dof {
+        /// gmsh node tag.
+        node: u64,
+        /// Component name (`ux`, `ry`, ...).
+        component: String,
+    },
+}
+
+impl std::fmt::Display for At {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            At::Option { name } => write!(f, "option {name}"),
+            At::Param { name } => write!(f, "parameter {name}"),
+            At::Key { file, line, key } => write!(f, "{}key '{key}'", input_prefix(file, *line, None)),
+            At::Group { name } => write!(f, "group '{name}'"),
+            At::Element { tag } => write!(f, "element {tag}"),
+            At::Node { tag } => write!(f, "node {tag}"),
+            At::Dof { node, component } => write!(f, "node {node} {component}"),
+        }
+    }
+}
+
 /// `file, line L, key 'k': ` with the parts that are known (nothing when none is).
 fn input_prefix(file: &str, line: Option<usize>, key: Option<&str>) -> String {
     let mut parts = Vec::new();
@@ -172,6 +244,7 @@ impl Error {
             | Error::InvalidMaterial { .. }
             | Error::EmptyModel { .. }
             | Error::Input { .. }
+            | Error::Invalid { .. }
             | Error::InvalidInput(_) => 1,
             Error::EigenNotConverged(_) | Error::Verification(_) | Error::Factorization(_) | Error::Singular { .. } => {
                 2
@@ -206,6 +279,83 @@ impl Error {
                 msg,
             },
             e => e,
+        }
+    }
+
+    /// A bad value of the command-line option (or Python keyword) `name`.
+    pub fn option(name: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: At::Option { name: name.into() },
+            msg: msg.into(),
+        }
+    }
+
+    /// A bad value of the library parameter (or options-struct field) `name`.
+    pub fn param(name: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: At::Param { name: name.into() },
+            msg: msg.into(),
+        }
+    }
+
+    /// A bad value at `key` of the input file `file` (line where known). Shown with the
+    /// `file, line L, key 'k': ` prefix, like [`Error::Input`].
+    pub fn key(file: impl Into<String>, line: Option<usize>, key: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Input {
+            file: file.into(),
+            line,
+            key: Some(key.into()),
+            msg: msg.into(),
+        }
+    }
+
+    /// A problem with the mesh group `name`.
+    pub fn group(name: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: At::Group { name: name.into() },
+            msg: msg.into(),
+        }
+    }
+
+    /// A problem with the element of gmsh tag `tag`.
+    pub fn element(tag: u64, msg: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: At::Element { tag },
+            msg: msg.into(),
+        }
+    }
+
+    /// A problem with the node of gmsh tag `tag`.
+    pub fn node(tag: u64, msg: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: At::Node { tag },
+            msg: msg.into(),
+        }
+    }
+
+    /// A problem with one DOF (node `node`, component `component`).
+    pub fn dof(node: u64, component: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Invalid {
+            at: At::Dof {
+                node,
+                component: component.into(),
+            },
+            msg: msg.into(),
+        }
+    }
+
+    /// Where the bad input is, when the error names a place as data.
+    pub fn at(&self) -> Option<At> {
+        match self {
+            Error::Invalid { at, .. } => Some(at.clone()),
+            Error::Input { file, line, key, .. } => Some(At::Key {
+                file: file.clone(),
+                line: *line,
+                key: key.clone().unwrap_or_default(),
+            }),
+            Error::UnknownGroup { name, .. } => Some(At::Group { name: name.clone() }),
+            Error::InvertedElement { element, .. } => Some(At::Element { tag: *element }),
+            _ => None,
         }
     }
 

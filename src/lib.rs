@@ -51,4 +51,4 @@ pub mod system;
 #[cfg(feature = "app")]
 pub mod app;
 
-pub use error::{Error, Result};
+pub use error::{At, Error, Result};
