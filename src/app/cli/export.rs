@@ -1,0 +1,80 @@
+//! `vibrofem export`: K, M and the DOF map for other solvers, and the SLEPc job.
+
+use super::emit;
+use crate::analysis::modal::ModalTarget;
+use crate::app::cli::args::{ModelArgs, length_scale};
+use crate::{Error, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    /// gmsh mesh file (MSH 2.2 or 4.1), or a generator (`box:`, `helix:`, `sandwich:`, `ibeam-*:`).
+    mesh: String,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Folder for K.petsc, M.petsc, K.mtx, M.mtx, dofs.csv and model.json.
+    #[arg(short, long)]
+    out: PathBuf,
+    /// Matrix formats: petsc, mtx or both.
+    #[arg(long, default_value = "both")]
+    format: String,
+    /// Print the summary (model.json) on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Modes of the SLEPc job written beside the PETSc matrices (params.json, slepc_modes.py).
+    #[arg(long, default_value_t = 12, conflicts_with = "band")]
+    modes: usize,
+    /// The SLEPc job's band in Hz instead (all modes in [F_LO, F_HI]).
+    #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"], allow_negative_numbers = true)]
+    band: Option<Vec<f64>>,
+    /// The SLEPc job's shift in Hz.
+    #[arg(long, allow_negative_numbers = true)]
+    shift: Option<f64>,
+}
+
+pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
+    use crate::app::export;
+    let formats = export::Formats::parse(&a.format)?;
+    let spec = a.model.spec()?;
+    let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let model = crate::model::Model::build(&mesh, &spec, &a.mesh)?;
+    let sys = crate::system::System::assemble_only(model, &a.mesh)?;
+    let (summary, mut files) = export::export(&sys, &a.out, formats)?;
+    if formats != export::Formats::MatrixMarket {
+        // The SLEPc job beside the PETSc matrices: `mpirun -n N python3 DIR/slepc_modes.py DIR`.
+        let target = match (&a.band, a.modes) {
+            (Some(b), _) => ModalTarget::Band(b[0], b[1]),
+            (None, 0) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
+            (None, n) => ModalTarget::Modes(n),
+        };
+        let params = crate::analysis::modal::ModalParams {
+            target,
+            shift_hz: a.shift,
+            ..Default::default()
+        };
+        crate::app::slepc::write_job(&sys, &params, &a.out, false)?;
+        files.push(a.out.join("params.json"));
+        files.push(a.out.join("slepc_modes.py"));
+    }
+    if a.json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&summary).map_err(|e| Error::output("JSON", e))?
+        );
+    } else {
+        outln!(
+            "{}: {} free DOFs, {} entries in K and M, mass {} kg",
+            a.mesh,
+            summary.dofs,
+            summary.nnz,
+            crate::io::fmt_sig(summary.mass_kg, 4)
+        );
+        for f in &files {
+            outln!("wrote {}", f.display());
+        }
+    }
+    for n in &summary.notes {
+        eprintln!("note: {n}");
+    }
+    Ok(0)
+}

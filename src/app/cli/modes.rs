@@ -1,0 +1,153 @@
+//! `vibrofem modes`: natural frequencies and mode shapes of a mesh.
+
+use super::{check_outputs, emit, ordering, parse_bytes};
+use crate::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use crate::app::cli::args::{ModelArgs, length_scale};
+use crate::io;
+use crate::{Error, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct ModesArgs {
+    /// gmsh mesh file (MSH 2.2 or 4.1), or a generated box `box:LX,LY,LZ:NX,NY,NZ:KIND`.
+    mesh: String,
+    /// Number of modes (the lowest ones, rigid-body modes included; nearest the shift if --shift).
+    #[arg(long, conflicts_with = "band")]
+    modes: Option<usize>,
+    /// All modes with frequency in [F_LO, F_HI] Hz.
+    #[arg(long, num_args = 2, value_names = ["F_LO", "F_HI"], allow_negative_numbers = true)]
+    band: Option<Vec<f64>>,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Shift in Hz: find the modes nearest this frequency (negative: a negative λ shift).
+    #[arg(long, allow_negative_numbers = true)]
+    shift: Option<f64>,
+    /// Lanczos block size (at least the largest multiplicity expected).
+    #[arg(long, default_value_t = 6)]
+    block: usize,
+    /// Safety limit on the eigen iteration: operator applications (vectors) before giving up.
+    #[arg(long = "max-applications", default_value_t = 20000)]
+    max_applications: usize,
+    /// Fill-reducing ordering: metis (default) or amd.
+    #[arg(long, default_value = "metis")]
+    ordering: String,
+    /// Refuse models whose factorisation needs more memory than this (e.g. 8G, 500M).
+    #[arg(long = "max-memory")]
+    max_memory: Option<String>,
+    /// Print the JSON report on stdout instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write mode shapes as a VTU file (ParaView).
+    #[arg(long)]
+    vtu: Option<PathBuf>,
+    /// Write the mesh with one $NodeData view per mode (gmsh).
+    #[arg(long = "msh-out")]
+    msh_out: Option<PathBuf>,
+    /// Eigen solver: native (verified block Lanczos, default) or slepc (SLEPc Krylov–Schur with
+    /// a MUMPS LDLᵀ under mpirun; Debian's python3-slepc4py and openmpi-bin).
+    #[arg(long, default_value = "native")]
+    engine: String,
+    /// MPI ranks of --engine slepc.
+    #[arg(long, default_value_t = 1)]
+    ranks: usize,
+    /// Keep the SLEPc work folder (matrices, script, eigenpairs) here instead of a temporary one.
+    #[arg(long = "slepc-dir")]
+    slepc_dir: Option<PathBuf>,
+    /// Read the eigenpairs of a SLEPc job run elsewhere (a cluster) from this folder (written by
+    /// `vibrofem export` with the same mesh and model options, then solved by its
+    /// slepc_modes.py), verify and post-process them.
+    #[arg(long = "slepc-import", conflicts_with = "slepc_dir")]
+    slepc_import: Option<PathBuf>,
+}
+
+pub fn run(a: &ModesArgs) -> Result<i32> {
+    let spec = a.model.spec()?;
+    let target = match (&a.band, a.modes) {
+        (Some(b), _) => ModalTarget::Band(b[0], b[1]),
+        (None, Some(n)) if n > 0 => ModalTarget::Modes(n),
+        (None, Some(_)) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
+        (None, None) => ModalTarget::Modes(12),
+    };
+    let ordering = ordering(&a.ordering)?;
+    if a.block == 0 {
+        return Err(Error::InvalidInput("--block must be at least 1".into()));
+    }
+    let opts = ModalOptions {
+        spec,
+        target,
+        shift_hz: a.shift,
+        block: a.block,
+        ordering,
+        max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
+        max_applications: a.max_applications,
+    };
+    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref()], None)?;
+    let t = std::time::Instant::now();
+    let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
+    let read_time = t.elapsed().as_secs_f64();
+    let source = a.mesh.clone();
+    let engine = if a.slepc_import.is_some() {
+        "slepc"
+    } else {
+        a.engine.as_str()
+    };
+    let run = match engine {
+        "native" => {
+            if a.ranks != 1 || a.slepc_dir.is_some() {
+                return Err(Error::InvalidInput(
+                    "--ranks and --slepc-dir apply to --engine slepc".into(),
+                ));
+            }
+            run_modal(&mesh, &source, &opts, read_time)?
+        }
+        "slepc" => {
+            let t = std::time::Instant::now();
+            let model = crate::model::Model::build(&mesh, &opts.spec, &source)?;
+            let sys = crate::system::System::assemble_only(model, &source)?;
+            let t_model = t.elapsed().as_secs_f64() - sys.timings.assemble;
+            let so = crate::app::slepc::SlepcOptions {
+                ranks: a.ranks,
+                workdir: a.slepc_dir.clone(),
+                import: a.slepc_import.clone(),
+                ..Default::default()
+            };
+            let mut run = crate::app::slepc::solve(&sys, &opts.params(), &so)?;
+            run.report.timings_s.read = read_time;
+            run.report.timings_s.assemble += t_model;
+            run.report.timings_s.total += read_time + t_model;
+            run
+        }
+        e => {
+            return Err(Error::InvalidInput(format!("--engine '{e}': use native or slepc")));
+        }
+    };
+    if a.json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&run.report).map_err(|e| Error::output("JSON", e))?
+        );
+    } else {
+        out!("{}", crate::app::report::modal_table(&run.report));
+    }
+    for p in io::write_mode_shapes(
+        &mesh,
+        &run.shapes,
+        &run.report.frequencies_hz,
+        a.vtu.as_deref(),
+        a.msh_out.as_deref(),
+    )? {
+        eprintln!("wrote {}", p.display());
+    }
+    for n in &run.report.notes {
+        eprintln!("note: {n}");
+    }
+    if !run.report.complete {
+        eprintln!("error: the Sturm-sequence check shows missed modes (see 'complete' above)");
+        return Ok(2);
+    }
+    if !run.report.accurate {
+        eprintln!("error: accuracy not guaranteed (residual or orthonormality above tolerance)");
+        return Ok(2);
+    }
+    Ok(0)
+}
