@@ -93,7 +93,7 @@ fn s1_s2() -> Res<()> {
     println!("## S1 and S2: plates as MITC4 shells against the converged solids\n");
     println!(
         "Free–free, mode 7. Shells on the `zmin` face of `box_mesh(Hex8, …, [n, m, 1])` with offset +t/2 (the \
-         mid-surface). References: converged hex20 solids (README): S1 720.43 Hz (ν = 0.3), 725.59 Hz (ν = 0.28); \
+         mid-surface). References: converged hex20 solids (docs/validation.md): S1 720.43 Hz (ν = 0.3), 725.59 Hz (ν = 0.28); \
          S2 722.67 Hz. Solid rows are run here for the cost comparison.\n"
     );
     println!("| scene | model | mesh | DOFs | f7 [Hz] ν = 0.3 | error | f7 [Hz] ν = 0.28 | error | time [s] |");

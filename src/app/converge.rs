@@ -9,7 +9,7 @@
 //! is a `box:`, `helix:` or `sandwich:paper` generator is refined by halving its element size
 //! ([`from_scene`]).
 //!
-//! The reference is a documented converged value where one exists (S1: the README's hex20
+//! The reference is a documented converged value where one exists (S1: docs/validation.md's hex20
 //! 45×45×9; S7: the finest graded hex20 of docs/formulations.md), else the Richardson
 //! extrapolation of the reference formulation's last three levels (each halving the element size)
 //! when they converge monotonically at an order ≥ 1.5, else its finest level.

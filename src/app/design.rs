@@ -388,7 +388,7 @@ impl Design {
 /// One line of the verdict table.
 #[derive(Clone, Debug, Serialize)]
 pub struct Quantity {
-    /// Stable key in `report.json` (`c12`, `k_leaf`, `x1`, …; README, *Design report*).
+    /// Stable key in `report.json` (`c12`, `k_leaf`, `x1`, …; docs/design-files.md, *The design report*).
     #[serde(skip)]
     pub id: String,
     /// What.

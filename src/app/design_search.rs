@@ -50,7 +50,7 @@ impl Default for SearchDesign {
     /// The family the built-in design's search covers: the bottom plate as wide as the top one
     /// with the longitudinal webs spread over 500 mm, three transverse webs, top plates of 12 to
     /// 20 mm, plate webs or channels. (A broader list, 288 variants with 400 mm bottom plates and
-    /// webs over 300 mm, found no passing variant in its six lightest whole chains: README.)
+    /// webs over 300 mm, found no passing variant in its six lightest whole chains: docs/design.md.)
     fn default() -> Self {
         SearchDesign {
             enabled: true,

@@ -286,7 +286,7 @@ fn dist2(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// integrates exactly; these degrees bring the stiffness error (Frobenius, relative) of a cell
 /// spanning 0.15–0.3 rad of an arc (mid-node offsets 2–4 % of the edge) to 3e-9 … 1e-6, from
 /// 5e-5 … 7.5e-3 with the straight rules, measured against degree-20 rules in
-/// `tests/unit/elements_15.rs`: tet10 the 24-point degree-6 rule (from
+/// `tests/unit/solid_elements.rs`: tet10 the 24-point degree-6 rule (from
 /// 4 points), hexahedra 4 × 4 × 4 Gauss (from 3 × 3 × 3), wedge15 the triangle degree-6 rule
 /// × 4 Gauss points (from degree 4 × 3). Other kinds keep [`stiffness_degree`].
 pub fn curved_stiffness_degree(kind: CellKind) -> usize {

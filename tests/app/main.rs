@@ -5,15 +5,21 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod batch_resume;
 mod cli;
-mod cli_15;
-mod cli_15b;
+mod converge_pairing;
 mod design;
 mod dynamics;
 mod export_engine;
 mod harmonic;
 mod machine3d;
 mod machines;
-mod numerics_15;
+mod mesh_files;
+mod model_options;
+mod options;
+mod outputs;
+mod resource_limits;
 mod scenes;
+mod solid_elements;
+mod support;
 mod sweep;

@@ -8,16 +8,22 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod couplings;
 mod determinism;
 mod elements;
-mod elements_15;
 mod errors_audit;
 mod extremes;
 mod fuzz_regressions;
-mod inputs_15;
+mod gmsh_bookkeeping;
+mod group_names;
+mod memory_estimate;
 mod mesh_io;
+mod modal_requests;
+mod model_notes;
 mod parametric;
-mod regressions_15;
+mod rigid_modes;
+mod shell_orientation;
+mod solid_elements;
 mod solver;
 mod statics;
 mod stress;

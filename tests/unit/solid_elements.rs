@@ -1,4 +1,7 @@
-//! Issue 15: curved quadratic cells integrated with higher rules; the incompatible-mode hex8.
+//! Solid element kernels beyond the property sweeps of `elements.rs`: curved quadratic cells
+//! (mid-side nodes off the straight edges) integrated with higher rules, the hex8 with
+//! incompatible modes (Wilson–Taylor), and one Jacobian test for modes and statics
+//! (quarter-point tet10 cells accepted, cells turned inside out refused).
 
 #![allow(clippy::needless_range_loop)]
 
@@ -9,6 +12,9 @@ use vibrofem::fe::{quadrature, shape};
 use vibrofem::material::Material;
 use vibrofem::mesh::CellKind;
 use vibrofem::mesh::generate::box_mesh;
+
+// ---------------------------------------------------------------------------------------------
+// Curved quadratic cells
 
 /// Reference coordinates of `kind` scaled to [0, 1] in every direction.
 fn unit_ref(kind: CellKind) -> Vec<[f64; 3]> {
@@ -508,403 +514,95 @@ fn incompatible_hex8_bends_like_a_beam_with_one_element_through_the_thickness() 
 }
 
 // ---------------------------------------------------------------------------------------------
-// Shell normals oriented before offsets apply
+// One Jacobian test: quarter-point tet10 cells and inverted ones
 
-use vibrofem::mesh::{CellBlock, CellRef, Group, Mesh};
-use vibrofem::model::ShellPart;
-use vibrofem::section::ShellSection;
+use super::modal_requests::{run, spec, verified};
+use vibrofem::input::source;
+use vibrofem::mesh::Mesh;
+use vibrofem::model::Model;
+use vibrofem::system::{System, SystemOptions};
 
-/// A quad4 surface mesh, one group "plate" of every cell.
-fn quad_mesh(nodes: Vec<[f64; 3]>, quads: Vec<[u32; 4]>) -> Mesh {
-    let mut b = CellBlock::new(CellKind::Quad4);
-    for (i, q) in quads.iter().enumerate() {
-        b.push(q, i as u64 + 1);
-    }
-    let n = quads.len();
-    Mesh {
-        node_tags: (1..=nodes.len() as u64).collect(),
-        nodes,
-        blocks: vec![b],
-        groups: vec![Group {
-            name: "plate".into(),
-            dim: 2,
-            tag: 1,
-            cells: (0..n as u32).map(|index| CellRef { block: 0, index }).collect(),
-        }],
-        ..Default::default()
-    }
-}
-
-/// A 0.3 × 0.2 m plate of 12 × 8 quad4; `flip(i, j)` reverses cell (i, j).
-fn plate(flip: impl Fn(usize, usize) -> bool) -> Mesh {
-    let (nx, ny) = (12, 8);
-    let nodes = (0..=ny)
-        .flat_map(|j| (0..=nx).map(move |i| [0.3 * i as f64 / nx as f64, 0.2 * j as f64 / ny as f64, 0.0]))
-        .collect();
-    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
-    let mut quads = Vec::new();
-    for j in 0..ny {
-        for i in 0..nx {
-            let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
-            quads.push(if flip(i, j) { [q[0], q[3], q[2], q[1]] } else { q });
-        }
-    }
-    quad_mesh(nodes, quads)
-}
-
-fn shell_frequencies(mesh: &Mesh, offset: f64) -> (Vec<f64>, Vec<String>) {
-    let t = 0.004;
-    let spec = ModelSpec {
-        shells: vec![ShellPart {
-            group: "plate".into(),
-            section: ShellSection {
-                offset,
-                ..ShellSection::new(t)
-            },
-            material: None,
-        }],
-        ..Default::default()
-    };
-    let run = run_modal(
-        mesh,
-        "plate",
-        &ModalOptions {
-            spec,
-            target: ModalTarget::Modes(12),
-            ..Default::default()
-        },
-        0.0,
-    )
-    .unwrap();
-    (run.report.frequencies_hz[6..].to_vec(), run.report.notes)
-}
-
-#[test]
-fn flipped_shell_cells_with_an_offset_give_the_consistent_answer() {
-    // A free plate: a uniform offset only moves the whole plate, so the elastic frequencies with
-    // offset t/2 equal those without (the independent reference). Cells flipped in a
-    // checkerboard, and the half plate x > 0.15 m flipped as one surface (a second, reversed
-    // gmsh surface), are reoriented and give the same frequencies; the note says how many.
-    let (f0, _) = shell_frequencies(&plate(|_, _| false), 0.0);
-    let (f1, n1) = shell_frequencies(&plate(|_, _| false), 0.002);
-    let (f2, n2) = shell_frequencies(&plate(|i, j| (i + j) % 2 == 1), 0.002);
-    let (f3, n3) = shell_frequencies(&plate(|i, _| i >= 6), 0.002);
-    for (f, what) in [(&f1, "offset"), (&f2, "checkerboard"), (&f3, "half reversed")] {
-        for (a, b) in f.iter().zip(&f0) {
-            // Different but equivalent element frames: agreement to solver accuracy.
-            assert!((a / b - 1.0).abs() < 1e-7, "{what}: {a} vs {b}");
-        }
-    }
-    assert!(!n1.iter().any(|n| n.contains("reversed")), "{n1:?}");
-    assert!(n2.iter().any(|n| n.contains("48 of 96 cells reversed")), "{n2:?}");
-    // The majority is kept: 48 of 96 in each half → the first-visited side wins a tie.
-    assert!(n3.iter().any(|n| n.contains("48 of 96 cells reversed")), "{n3:?}");
-    // With one cell flipped, that one cell is reversed (majority kept).
-    let (f4, n4) = shell_frequencies(&plate(|i, j| i == 3 && j == 2), 0.002);
-    assert!(n4.iter().any(|n| n.contains("1 of 96 cells reversed")), "{n4:?}");
-    assert!((f4[0] / f0[0] - 1.0).abs() < 1e-7);
-}
-
-#[test]
-fn a_one_sided_shell_with_an_offset_is_refused_and_without_one_runs() {
-    // Möbius strip: 24 quads around a circle of radius 0.1 m, width 0.02 m, half a twist.
-    let n = 24;
-    let mut nodes = Vec::new();
-    for k in 0..n {
-        let th = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-        let tw = 0.5 * th;
-        for s in [-0.01, 0.01] {
-            let r = 0.1 + s * tw.cos();
-            nodes.push([r * th.cos(), r * th.sin(), s * tw.sin()]);
-        }
-    }
-    let quads: Vec<[u32; 4]> = (0..n)
-        .map(|k| {
-            let (a, b) = (2 * k as u32, 2 * ((k + 1) % n) as u32);
-            // The last cell closes the strip with the sides swapped (the half twist).
-            if k + 1 == n {
-                [a, b + 1, b, a + 1]
-            } else {
-                [a, b, b + 1, a + 1]
-            }
-        })
-        .collect();
-    let mesh = quad_mesh(nodes, quads);
-    let spec = |offset| ModelSpec {
-        shells: vec![ShellPart {
-            group: "plate".into(),
-            section: ShellSection {
-                offset,
-                ..ShellSection::new(0.001)
-            },
-            material: None,
-        }],
-        ..Default::default()
-    };
-    let err = vibrofem::model::Model::build(&mesh, &spec(0.0005), "moebius")
-        .err()
-        .expect("refused");
-    let msg = err.to_string();
-    assert!(msg.contains("one-sided") && msg.contains("of 'plate'"), "{msg}");
-    let model = vibrofem::model::Model::build(&mesh, &spec(0.0), "moebius").unwrap();
-    assert!(model.notes.iter().all(|n| !n.contains("reversed")));
-}
-
-// ---------------------------------------------------------------------------------------------
-// Notes: flat linear cells
-
-fn model_notes(src: &str, hex8: Hex8Formulation) -> Vec<String> {
-    let mesh = vibrofem::input::source::load(src, 1.0).unwrap();
-    let spec = ModelSpec {
-        hex8,
-        ..Default::default()
-    };
-    vibrofem::model::Model::build(&mesh, &spec, src).unwrap().notes
-}
-
-#[test]
-fn thin_plates_of_linear_solids_get_a_note() {
-    let flat = |n: &Vec<String>| n.iter().any(|s| s.contains("flat or slender"));
-    // 1 m × 1 m × 1 mm, 20 × 20 × 1 cells: every cell is 50 mm wide and 1 mm thick.
-    for kind in ["tet4", "hex8", "wedge6"] {
-        let n = model_notes(&format!("box:1,1,0.001:20,20,1:{kind}"), Hex8Formulation::Standard);
-        assert!(flat(&n), "{kind}: {n:?}");
-        // Well-shaped cells (and quadratic ones) get none.
-        assert!(
-            !flat(&model_notes(
-                &format!("box:1,1,1:4,4,4:{kind}"),
-                Hex8Formulation::Standard
-            )),
-            "{kind}"
-        );
-    }
-    let n = model_notes("box:1,1,0.001:20,20,1:hex8", Hex8Formulation::Standard);
-    assert!(
-        n.iter()
-            .any(|s| s.contains("400 of 400 hex8") && s.contains("--hex8 incompatible")),
-        "{n:?}"
-    );
-    assert!(!flat(&model_notes(
-        "box:1,1,0.001:20,20,1:tet10",
-        Hex8Formulation::Standard
-    )));
-    assert!(!flat(&model_notes(
-        "box:1,1,0.001:20,20,1:hex8",
-        Hex8Formulation::Incompatible
-    )));
-}
-
-// ---------------------------------------------------------------------------------------------
-// Notes: singular supports
-
-/// Adds a line group `name` of line2 cells through the nodes selected by `on`, ordered by
-/// their coordinate `axis`.
-fn add_line_group(mesh: &mut Mesh, name: &str, on: impl Fn([f64; 3]) -> bool, axis: usize) {
-    let mut ids: Vec<u32> = (0..mesh.nodes.len() as u32)
-        .filter(|&a| on(mesh.nodes[a as usize]))
-        .collect();
-    ids.sort_by(|&a, &b| mesh.nodes[a as usize][axis].total_cmp(&mesh.nodes[b as usize][axis]));
-    let bi = mesh.block_index_mut(CellKind::Line2);
-    let start = mesh.blocks[bi].len() as u32;
-    for w in ids.windows(2) {
-        mesh.blocks[bi].push(w, 1000 + w[0] as u64);
-    }
-    let end = mesh.blocks[bi].len() as u32;
-    let tag = 100 + mesh.groups.len() as i32;
-    mesh.groups.push(Group {
-        name: name.into(),
-        dim: 1,
-        tag,
-        cells: (start..end)
-            .map(|index| CellRef {
-                block: bi as u32,
-                index,
-            })
-            .collect(),
-    });
-}
-
-#[test]
-fn a_line_support_on_a_solid_gets_a_note_and_a_shell_edge_does_not() {
-    let mut mesh = box_mesh(CellKind::Hex20, [1.0, 0.1, 0.1], [10, 1, 1]);
-    add_line_group(&mut mesh, "root_edge", |p| p[0] == 0.0 && p[2] == 0.0, 1);
-    let notes = |fix: &str, m: &Mesh, shells: Vec<ShellPart>| {
-        let spec = ModelSpec {
-            fixes: vec![(fix.into(), TRANSLATIONS)],
-            shells,
-            ..Default::default()
-        };
-        vibrofem::model::Model::build(m, &spec, "t").unwrap().notes
-    };
-    let n = notes("root_edge", &mesh, vec![]);
-    assert!(
-        n.iter().any(|s| s.contains("support 'root_edge' is a line of a solid")),
-        "{n:?}"
-    );
-    let n = notes("xmin", &mesh, vec![]);
-    assert!(!n.iter().any(|s| s.contains("support")), "{n:?}");
-    // A clamped shell edge is an ordinary support.
-    let mut p = plate(|_, _| false);
-    add_line_group(&mut p, "edge", |x| x[1] == 0.0, 0);
-    let sh = vec![ShellPart {
-        group: "plate".into(),
-        section: ShellSection::new(0.004),
-        material: None,
-    }];
-    let n = notes("edge", &p, sh);
-    assert!(!n.iter().any(|s| s.contains("support")), "{n:?}");
-}
-
-// ---------------------------------------------------------------------------------------------
-// Free parts and rigid-mode labels
-
-/// `a` and `b` (moved by `shift`) in one mesh, unconnected; `a`'s groups only.
-fn two_bodies(a: Mesh, b: &Mesh, shift: [f64; 3]) -> Mesh {
-    let mut m = a;
-    let off = m.nodes.len() as u32;
-    m.nodes.extend(
-        b.nodes
-            .iter()
-            .map(|p| [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]),
-    );
-    m.node_tags = (1..=m.nodes.len() as u64).collect();
-    for blk in &b.blocks {
-        if blk.kind.dim() != 3 {
-            continue;
-        }
-        let bi = m.block_index_mut(blk.kind);
-        for c in 0..blk.len() {
-            let conn: Vec<u32> = blk.cell(c).iter().map(|&x| x + off).collect();
-            m.blocks[bi].push(&conn, 100_000 + c as u64);
-        }
-    }
-    m
-}
-
-fn modes_of(mesh: &Mesh, fixes: &[&str], n: usize) -> vibrofem::analysis::modal::ModalReport {
-    let spec = ModelSpec {
-        fixes: fixes.iter().map(|g| (g.to_string(), TRANSLATIONS)).collect(),
-        ..Default::default()
-    };
-    run_modal(
-        mesh,
-        "t",
-        &ModalOptions {
-            spec,
-            target: ModalTarget::Modes(n),
-            ..Default::default()
-        },
-        0.0,
-    )
-    .unwrap()
-    .report
-}
-
-#[test]
-fn a_loose_part_of_a_supported_model_is_named_and_its_modes_are_rigid() {
-    let bar = box_mesh(CellKind::Hex8, [0.5, 0.05, 0.05], [10, 1, 1]);
-    let cube = box_mesh(CellKind::Tet4, [0.02, 0.02, 0.02], [1, 1, 1]);
-    let mesh = two_bodies(bar.clone(), &cube, [1.0, 0.0, 0.0]);
-    let rep = modes_of(&mesh, &["xmin"], 9);
-    assert_eq!(
-        rep.n_rigid,
-        6,
-        "{:?}",
-        rep.modes.iter().map(|m| m.kind).collect::<Vec<_>>()
-    );
-    assert!(rep.modes[6..].iter().all(|m| m.kind == "elastic"));
-    let note = rep
-        .notes
+/// The tet10 cells around the corner node at the origin of a `box:` mesh, with the mid-edge
+/// nodes of every edge from that corner moved to `frac` of the edge (¼: quarter-point cells, a
+/// crack-tip rosette; negative: past the corner, an inverted cell).
+fn tet10_with_corner_edges_at(frac: f64) -> Mesh {
+    let mut mesh = source::load("box:0.1,0.02,0.02:10,2,2:tet10", 1.0).unwrap();
+    let corner = mesh
+        .nodes
         .iter()
-        .find(|n| n.contains("not connected to the supports"))
-        .expect("note");
-    assert!(
-        note.contains("a part of 8 nodes (tet4") && note.contains("ux, uy, uz, rx, ry, rz"),
-        "{note}"
-    );
-    // The elastic modes are the bar's alone (the reference: the bar without the cube).
-    let alone = modes_of(&bar, &["xmin"], 3);
-    for (a, b) in rep.frequencies_hz[6..9].iter().zip(&alone.frequencies_hz) {
-        assert!((a / b - 1.0).abs() < 1e-8, "{a} vs {b}");
+        .position(|x| x.iter().all(|c| c.abs() < 1e-12))
+        .unwrap() as u32;
+    let b = mesh
+        .blocks
+        .iter()
+        .find(|b| b.kind == vibrofem::mesh::CellKind::Tet10)
+        .unwrap();
+    // gmsh tet10 edges: node 4 on (0,1), 5 (1,2), 6 (2,0), 7 (3,0), 8 (3,2), 9 (3,1).
+    const EDGES: [(usize, usize); 6] = [(0, 1), (1, 2), (2, 0), (3, 0), (3, 2), (3, 1)];
+    let mut moves = Vec::new();
+    for e in 0..b.len() {
+        let c = b.cell(e);
+        for (k, &(p, q)) in EDGES.iter().enumerate() {
+            let (a, o) = if c[p] == corner {
+                (c[p], c[q])
+            } else if c[q] == corner {
+                (c[q], c[p])
+            } else {
+                continue;
+            };
+            let (xa, xo) = (mesh.nodes[a as usize], mesh.nodes[o as usize]);
+            moves.push((c[4 + k] as usize, [0, 1, 2].map(|i| xa[i] + frac * (xo[i] - xa[i]))));
+        }
     }
-    // A single free body: six rigid modes, no note.
-    let rep = modes_of(&cube, &[], 8);
-    assert_eq!(rep.n_rigid, 6);
-    assert!(
-        !rep.notes.iter().any(|n| n.contains("not connected")),
-        "{:?}",
-        rep.notes
-    );
+    assert!(!moves.is_empty(), "the corner belongs to no tet10");
+    for (n, x) in moves {
+        mesh.nodes[n] = x;
+    }
+    mesh
 }
 
+/// Item 12: one Jacobian test for modes and statics. Quarter-point tet10 cells (Jacobian zero
+/// at the corner node, positive at the integration points) are legitimate: both analyses run,
+/// and the stresses at that node come from the integration points. Cells turned inside out by a
+/// mid-edge node past the corner are refused by both, naming the element.
 #[test]
-fn rigid_labels_do_not_depend_on_the_scale() {
-    // The same free tet10 box at 0.1 mm, 1 m and 10 km, and with a stiffness 1e6 times the
-    // steel one on a 1 mm body: always six rigid and then elastic modes.
-    for (size, young) in [(1e-4, 2.1e11), (1.0, 2.1e11), (1e4, 2.1e11), (1e-3, 2.1e17), (1.0, 1.0)] {
-        let mesh = box_mesh(CellKind::Tet10, [size, 0.5 * size, 0.3 * size], [2, 1, 1]);
-        let spec = ModelSpec {
-            material: Material {
-                young,
-                poisson: 0.3,
-                density: 7800.0,
-            },
-            ..Default::default()
-        };
-        let rep = run_modal(
-            &mesh,
-            "t",
-            &ModalOptions {
-                spec,
-                target: ModalTarget::Modes(8),
-                ..Default::default()
-            },
-            0.0,
-        )
-        .unwrap()
-        .report;
-        let kinds: Vec<&str> = rep.modes.iter().map(|m| m.kind).collect();
-        assert_eq!(rep.n_rigid, 6, "size {size}, E {young}: {kinds:?}");
-        assert!(kinds[6..].iter().all(|k| *k == "elastic"), "size {size}: {kinds:?}");
-    }
-}
-
-#[test]
-fn suspension_modes_on_soft_springs_are_elastic() {
-    // A 0.1 m steel cube of hex20 on a coupled base with springs to the ground: the six
-    // suspension modes are rigid-body shapes at 1.6–5 Hz, not zero-frequency modes, so they are
-    // "elastic" (before, shape alone labelled them rigid).
-    let src = "box:0.1,0.1,0.1:2,2,2:hex20";
-    let mesh = vibrofem::input::source::load(src, 1.0).unwrap();
-    let spec = ModelSpec {
-        couplings: vec![CouplingSpec {
-            group: "zmin".into(),
-            guided: None,
-            reference: None,
-        }],
-        springs: vec![vibrofem::model::SpringSpec {
-            a: "zmin".into(),
-            b: None,
-            k: [1e3, 1e3, 1e3, 10.0, 10.0, 10.0],
-        }],
-        ..Default::default()
+fn quarter_point_tet10_is_accepted_by_modes_and_statics_and_inverted_by_neither() {
+    use vibrofem::analysis::statics::{Load, StaticOptions, run_static};
+    let quarter = tet10_with_corner_edges_at(0.25);
+    let r = run(&quarter, &["xmax"], ModalTarget::Modes(3), None);
+    verified("quarter-point tet10", &r);
+    let cases = vec![vec![Load::Force {
+        group: "xmin".into(),
+        force: [0.0, 0.0, 100.0],
+    }]];
+    let opts = StaticOptions {
+        spec: spec(&["xmax"]),
+        cases,
     };
-    let rep = run_modal(
-        &mesh,
-        src,
-        &ModalOptions {
-            spec,
-            target: ModalTarget::Modes(7),
-            ..Default::default()
+    let st = run_static(&quarter, "quarter", &opts).unwrap();
+    let n = st.model.n_mesh_nodes;
+    let u: Vec<f64> = (0..n)
+        .flat_map(|a| (0..3).map(move |c| (a, c)))
+        .map(|(a, c)| st.u[0][7 * a + c])
+        .collect();
+    let ns = vibrofem::post::stress::nodal_stress(&st.model.solids, n, &u).unwrap();
+    assert!(ns.von_mises.iter().all(|v| v.is_finite()) && ns.von_mises.iter().any(|&v| v > 0.0));
+
+    let inverted = tet10_with_corner_edges_at(-0.3);
+    let e = Model::build(&inverted, &spec(&["xmax"]), "inverted")
+        .and_then(|m| System::build(m, &SystemOptions::default(), "inverted"))
+        .err()
+        .expect("modes must refuse an inverted tet10");
+    assert!(matches!(e, vibrofem::Error::InvertedElement { .. }), "{e}");
+    let e = run_static(
+        &inverted,
+        "inverted",
+        &StaticOptions {
+            spec: spec(&["xmax"]),
+            cases: vec![vec![]],
         },
-        0.0,
     )
-    .unwrap()
-    .report;
-    assert_eq!(rep.n_rigid, 0, "{:?}", rep.frequencies_hz);
-    assert!(
-        rep.frequencies_hz[0] > 1.0 && rep.frequencies_hz[5] < 10.0,
-        "{:?}",
-        rep.frequencies_hz
-    );
+    .err()
+    .expect("statics must refuse an inverted tet10");
+    assert!(matches!(e, vibrofem::Error::InvertedElement { .. }), "{e}");
 }

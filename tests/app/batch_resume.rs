@@ -1,0 +1,60 @@
+//! `vibrofem batch` resumes by the mesh's path and a hash of the mesh and the template, and two
+//! meshes of one stem get their own result files.
+
+use super::support::tmp;
+use crate::common::bin;
+
+/// Status column of each row of a batch's summary.csv, in file order.
+fn statuses(out: &std::path::Path) -> Vec<String> {
+    let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    csv.lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().to_string())
+        .collect()
+}
+
+/// Item 9: batch resume is keyed by the mesh's path and a hash of the mesh and template:
+/// an edited template or mesh is rerun, another mesh of the same name into the same folder is
+/// rerun, and two meshes of one stem in one batch get their own result files.
+#[test]
+fn batch_resume_is_keyed_by_content_and_path() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let d = tmp("resume");
+    std::fs::create_dir_all(d.join("a")).unwrap();
+    std::fs::create_dir_all(d.join("b")).unwrap();
+    let mesh = root.join("meshes/s1_plate_tet4_h30.msh");
+    std::fs::copy(&mesh, d.join("a/m.msh")).unwrap();
+    std::fs::copy(&mesh, d.join("a/m.msh2")).unwrap();
+    std::fs::copy(root.join("meshes/s1_plate_tet4_h20.msh"), d.join("b/m.msh")).unwrap();
+    let tpl = std::fs::read_to_string(root.join("scenes/s1_plate_solid.toml")).unwrap();
+    std::fs::write(d.join("t.toml"), &tpl).unwrap();
+    let batch = |pattern: &str| {
+        let o = bin()
+            .current_dir(&d)
+            .args(["batch", pattern, "--scene", "t.toml", "-o", "out"])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        statuses(&d.join("out"))
+    };
+    // One stem, two files: two results, neither resumed from the other.
+    assert_eq!(batch("a/m.msh*"), ["ok", "ok"]);
+    assert!(d.join("out/m.msh.json").is_file() && d.join("out/m.msh2.json").is_file());
+    assert_eq!(batch("a/m.msh*"), ["resumed", "resumed"]);
+    // The template changed: rerun.
+    std::fs::write(d.join("t.toml"), tpl.replace("modes = 7", "modes = 8")).unwrap();
+    assert_eq!(batch("a/m.msh*"), ["ok", "ok"]);
+    // One mesh changed: only it is rerun.
+    let mut text = std::fs::read_to_string(d.join("a/m.msh2")).unwrap();
+    text.push_str("$Comments\nedited\n$EndComments\n");
+    std::fs::write(d.join("a/m.msh2"), text).unwrap();
+    assert_eq!(batch("a/m.msh*"), ["resumed", "ok"]);
+    // Another mesh with the same name into the same folder is not the first one's result.
+    assert_eq!(batch("a/m.msh"), ["ok"]);
+    assert_eq!(batch("a/m.msh"), ["resumed"]);
+    let first = std::fs::read_to_string(d.join("out/summary.csv")).unwrap();
+    assert_eq!(batch("b/m.msh"), ["ok"]);
+    let second = std::fs::read_to_string(d.join("out/summary.csv")).unwrap();
+    let dofs = |csv: &str| csv.lines().nth(1).unwrap().split(',').nth(3).unwrap().to_string();
+    assert_ne!(dofs(&first), dofs(&second), "{first}\n{second}");
+}

@@ -1,0 +1,69 @@
+//! Where the results go: a closed pipe on stdout ends quietly, a full disk is an output error
+//! (exit 4), and output paths are checked (and missing folders created) before the run.
+
+use super::support::{BAR, expect_error, tmp};
+use crate::common::{bin, run};
+use std::process::Stdio;
+
+/// Item 10: stdout closed before anything is written: no panic (101); quiet exit 0 or 141.
+#[test]
+fn closed_stdout_is_quiet() {
+    for args in [
+        &["modes", BAR, "--fix", "xmin", "--modes", "2"][..],
+        &["modes", BAR, "--fix", "xmin", "--modes", "2", "--json"][..],
+        &["mesh-info", BAR][..],
+    ] {
+        let mut child = bin()
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // the reader is gone before the first write
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        let code = o.status.code();
+        assert!(matches!(code, Some(0) | Some(141)), "{args:?}: {code:?} {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// Item 10: a full disk on stdout is an output error (exit 4), not a panic.
+#[test]
+fn full_stdout_exits_4() {
+    if !std::path::Path::new("/dev/full").exists() {
+        return;
+    }
+    for args in [
+        &["modes", BAR, "--fix", "xmin", "--modes", "2"][..],
+        &["mesh-info", BAR][..],
+    ] {
+        let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+        let o = bin().args(args).stdout(full).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(4), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+/// Item 12: an output path that cannot be written is refused before the run, naming it; a
+/// missing folder is created.
+#[test]
+fn output_paths_are_checked_before_the_run() {
+    let cube = "box:0.1,0.1,0.1:2,2,2:hex8";
+    expect_error(&["modes", cube, "--vtu", "/proc/no/such/x.vtu"], &["/proc/no"]);
+    let d = tmp("outputs");
+    expect_error(&["modes", cube, "--vtu", d.to_str().unwrap()], &["is a folder"]);
+    expect_error(
+        &["static", cube, "--fix", "xmin", "--msh-out", "/proc/no/x.msh"],
+        &["/proc/no"],
+    );
+    expect_error(
+        &["run", "scenes/s3_leaf_stiffness.toml", "-o", "/proc/no/run"],
+        &["/proc/no/run"],
+    );
+    let f = d.join("new/folder/m.vtu");
+    let (code, out, err) = run(&["modes", cube, "--modes", "7", "--vtu", f.to_str().unwrap()]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(f.is_file());
+}

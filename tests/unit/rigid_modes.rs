@@ -1,0 +1,161 @@
+//! Free parts and rigid-mode labels: a part not connected to the supports is named and its
+//! modes are rigid; the labels do not depend on units or size; suspension modes on soft
+//! springs are elastic.
+
+use vibrofem::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use vibrofem::dof::TRANSLATIONS;
+use vibrofem::material::Material;
+use vibrofem::mesh::generate::box_mesh;
+use vibrofem::mesh::{CellKind, Mesh};
+use vibrofem::model::{CouplingSpec, ModelSpec};
+
+/// `a` and `b` (moved by `shift`) in one mesh, unconnected; `a`'s groups only.
+fn two_bodies(a: Mesh, b: &Mesh, shift: [f64; 3]) -> Mesh {
+    let mut m = a;
+    let off = m.nodes.len() as u32;
+    m.nodes.extend(
+        b.nodes
+            .iter()
+            .map(|p| [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]]),
+    );
+    m.node_tags = (1..=m.nodes.len() as u64).collect();
+    for blk in &b.blocks {
+        if blk.kind.dim() != 3 {
+            continue;
+        }
+        let bi = m.block_index_mut(blk.kind);
+        for c in 0..blk.len() {
+            let conn: Vec<u32> = blk.cell(c).iter().map(|&x| x + off).collect();
+            m.blocks[bi].push(&conn, 100_000 + c as u64);
+        }
+    }
+    m
+}
+
+fn modes_of(mesh: &Mesh, fixes: &[&str], n: usize) -> vibrofem::analysis::modal::ModalReport {
+    let spec = ModelSpec {
+        fixes: fixes.iter().map(|g| (g.to_string(), TRANSLATIONS)).collect(),
+        ..Default::default()
+    };
+    run_modal(
+        mesh,
+        "t",
+        &ModalOptions {
+            spec,
+            target: ModalTarget::Modes(n),
+            ..Default::default()
+        },
+        0.0,
+    )
+    .unwrap()
+    .report
+}
+
+#[test]
+fn a_loose_part_of_a_supported_model_is_named_and_its_modes_are_rigid() {
+    let bar = box_mesh(CellKind::Hex8, [0.5, 0.05, 0.05], [10, 1, 1]);
+    let cube = box_mesh(CellKind::Tet4, [0.02, 0.02, 0.02], [1, 1, 1]);
+    let mesh = two_bodies(bar.clone(), &cube, [1.0, 0.0, 0.0]);
+    let rep = modes_of(&mesh, &["xmin"], 9);
+    assert_eq!(
+        rep.n_rigid,
+        6,
+        "{:?}",
+        rep.modes.iter().map(|m| m.kind).collect::<Vec<_>>()
+    );
+    assert!(rep.modes[6..].iter().all(|m| m.kind == "elastic"));
+    let note = rep
+        .notes
+        .iter()
+        .find(|n| n.contains("not connected to the supports"))
+        .expect("note");
+    assert!(
+        note.contains("a part of 8 nodes (tet4") && note.contains("ux, uy, uz, rx, ry, rz"),
+        "{note}"
+    );
+    // The elastic modes are the bar's alone (the reference: the bar without the cube).
+    let alone = modes_of(&bar, &["xmin"], 3);
+    for (a, b) in rep.frequencies_hz[6..9].iter().zip(&alone.frequencies_hz) {
+        assert!((a / b - 1.0).abs() < 1e-8, "{a} vs {b}");
+    }
+    // A single free body: six rigid modes, no note.
+    let rep = modes_of(&cube, &[], 8);
+    assert_eq!(rep.n_rigid, 6);
+    assert!(
+        !rep.notes.iter().any(|n| n.contains("not connected")),
+        "{:?}",
+        rep.notes
+    );
+}
+
+#[test]
+fn rigid_labels_do_not_depend_on_the_scale() {
+    // The same free tet10 box at 0.1 mm, 1 m and 10 km, and with a stiffness 1e6 times the
+    // steel one on a 1 mm body: always six rigid and then elastic modes.
+    for (size, young) in [(1e-4, 2.1e11), (1.0, 2.1e11), (1e4, 2.1e11), (1e-3, 2.1e17), (1.0, 1.0)] {
+        let mesh = box_mesh(CellKind::Tet10, [size, 0.5 * size, 0.3 * size], [2, 1, 1]);
+        let spec = ModelSpec {
+            material: Material {
+                young,
+                poisson: 0.3,
+                density: 7800.0,
+            },
+            ..Default::default()
+        };
+        let rep = run_modal(
+            &mesh,
+            "t",
+            &ModalOptions {
+                spec,
+                target: ModalTarget::Modes(8),
+                ..Default::default()
+            },
+            0.0,
+        )
+        .unwrap()
+        .report;
+        let kinds: Vec<&str> = rep.modes.iter().map(|m| m.kind).collect();
+        assert_eq!(rep.n_rigid, 6, "size {size}, E {young}: {kinds:?}");
+        assert!(kinds[6..].iter().all(|k| *k == "elastic"), "size {size}: {kinds:?}");
+    }
+}
+
+#[test]
+fn suspension_modes_on_soft_springs_are_elastic() {
+    // A 0.1 m steel cube of hex20 on a coupled base with springs to the ground: the six
+    // suspension modes are rigid-body shapes at 1.6–5 Hz, not zero-frequency modes, so they are
+    // "elastic" (before, shape alone labelled them rigid).
+    let src = "box:0.1,0.1,0.1:2,2,2:hex20";
+    let mesh = vibrofem::input::source::load(src, 1.0).unwrap();
+    let spec = ModelSpec {
+        couplings: vec![CouplingSpec {
+            group: "zmin".into(),
+            guided: None,
+            reference: None,
+        }],
+        springs: vec![vibrofem::model::SpringSpec {
+            a: "zmin".into(),
+            b: None,
+            k: [1e3, 1e3, 1e3, 10.0, 10.0, 10.0],
+        }],
+        ..Default::default()
+    };
+    let rep = run_modal(
+        &mesh,
+        src,
+        &ModalOptions {
+            spec,
+            target: ModalTarget::Modes(7),
+            ..Default::default()
+        },
+        0.0,
+    )
+    .unwrap()
+    .report;
+    assert_eq!(rep.n_rigid, 0, "{:?}", rep.frequencies_hz);
+    assert!(
+        rep.frequencies_hz[0] > 1.0 && rep.frequencies_hz[5] < 10.0,
+        "{:?}",
+        rep.frequencies_hz
+    );
+}
