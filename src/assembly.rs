@@ -14,16 +14,10 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 pub use crate::element::ElementSet;
+pub use crate::linalg::graph::NodeGraph;
 
-/// Node adjacency graph in CSR form (each node is adjacent to itself).
-#[derive(Clone, Debug)]
-pub struct NodeGraph {
-    /// Offsets, length `n_nodes + 1`.
-    pub ptr: Vec<usize>,
-    /// Adjacent nodes, sorted per node.
-    pub adj: Vec<u32>,
-}
-
+/// How element sets make a [`NodeGraph`]: two nodes are adjacent when they share an element
+/// (the graph itself, and what the ordering reads of it, is [`crate::linalg::graph`]).
 impl NodeGraph {
     /// Build the graph of nodes sharing an element, over all element sets. Through
     /// constraints, an element also couples the nodes its nodes depend on (`dofs.deps`, e.g.
@@ -31,9 +25,9 @@ impl NodeGraph {
     pub fn build(n_nodes: usize, sets: &[&dyn ElementSet], dofs: Option<&DofMap>) -> NodeGraph {
         let mut keys = Vec::with_capacity(Self::key_count(n_nodes, sets, dofs));
         Self::fill_keys(&mut keys, n_nodes, sets, dofs);
-        let adj_len = Self::sort_keys(&mut keys);
+        let adj_len = NodeGraph::sort_keys(&mut keys);
         let mut adj = Vec::with_capacity(adj_len);
-        Self::from_keys(&keys, n_nodes, &mut adj)
+        NodeGraph::from_keys(&keys, n_nodes, &mut adj)
     }
 
     /// As [`NodeGraph::build`], but an allocation failure is an error naming the memory the
@@ -45,11 +39,11 @@ impl NodeGraph {
         keys.try_reserve_exact(count)
             .map_err(|_| crate::Error::out_of_memory("the node graph", 8 * count as u64))?;
         Self::fill_keys(&mut keys, n_nodes, sets, dofs);
-        let adj_len = Self::sort_keys(&mut keys);
+        let adj_len = NodeGraph::sort_keys(&mut keys);
         let mut adj = Vec::new();
         adj.try_reserve_exact(adj_len)
             .map_err(|_| crate::Error::out_of_memory("the node graph", 4 * adj_len as u64))?;
-        Ok(Self::from_keys(&keys, n_nodes, &mut adj))
+        Ok(NodeGraph::from_keys(&keys, n_nodes, &mut adj))
     }
 
     /// Node-pair keys [`NodeGraph::build`] sorts (with repeats): its working memory, 8 bytes each.
@@ -104,33 +98,6 @@ impl NodeGraph {
                 }
             }
         }
-    }
-
-    /// Sort and deduplicate in place; the number of distinct keys.
-    fn sort_keys(keys: &mut Vec<u64>) -> usize {
-        keys.par_sort_unstable();
-        keys.dedup();
-        keys.len()
-    }
-
-    fn from_keys(keys: &[u64], n_nodes: usize, adj: &mut Vec<u32>) -> NodeGraph {
-        let mut ptr = vec![0usize; n_nodes + 1];
-        for &k in keys {
-            ptr[(k >> 32) as usize + 1] += 1;
-        }
-        for a in 0..n_nodes {
-            ptr[a + 1] += ptr[a];
-        }
-        adj.extend(keys.iter().map(|&k| (k & 0xffff_ffff) as u32));
-        NodeGraph {
-            ptr,
-            adj: std::mem::take(adj),
-        }
-    }
-
-    /// Neighbours of node `a` (including `a`).
-    pub fn neighbours(&self, a: usize) -> &[u32] {
-        &self.adj[self.ptr[a]..self.ptr[a + 1]]
     }
 }
 

@@ -121,16 +121,22 @@ impl DofMap {
         for &s in c.mpc.keys() {
             let (a, comp) = (s / NCOMP, s % NCOMP);
             if a >= n || active[a] & (1 << comp) == 0 {
-                return Err(crate::Error::InvalidInput(format!(
-                    "constraint on node {a} component {} which no element uses",
-                    COMPONENT_NAMES[comp]
-                )));
+                return Err(crate::Error::param(
+                    "constraints",
+                    format!(
+                        "constraint on node {a} component {} which no element uses",
+                        COMPONENT_NAMES[comp]
+                    ),
+                ));
             }
             if c.fixed[a] & (1 << comp) != 0 {
-                return Err(crate::Error::InvalidInput(format!(
-                    "conflicting constraints: node {a} component {} is both fixed and coupled",
-                    COMPONENT_NAMES[comp]
-                )));
+                return Err(crate::Error::param(
+                    "constraints",
+                    format!(
+                        "conflicting constraints: node {a} component {} is both fixed and coupled",
+                        COMPONENT_NAMES[comp]
+                    ),
+                ));
             }
             slave[a] |= 1 << comp;
         }
@@ -138,12 +144,15 @@ impl DofMap {
             for &(m, _) in masters {
                 let (b, comp) = (m / NCOMP, m % NCOMP);
                 if b >= n || active[b] & (1 << comp) == 0 || slave[b] & (1 << comp) != 0 {
-                    return Err(crate::Error::InvalidInput(format!(
-                        "conflicting constraints: node {} is coupled to node {b} component {}, which is itself \
+                    return Err(crate::Error::param(
+                        "constraints",
+                        format!(
+                            "conflicting constraints: node {} is coupled to node {b} component {}, which is itself \
                          constrained or unused",
-                        s / NCOMP,
-                        COMPONENT_NAMES[comp]
-                    )));
+                            s / NCOMP,
+                            COMPONENT_NAMES[comp]
+                        ),
+                    ));
                 }
             }
         }

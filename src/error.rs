@@ -260,7 +260,7 @@ impl Error {
         Error::InvalidInput(format!(
             "cannot allocate {} for {what}: not enough memory for this model (a coarser mesh, or \
              more memory: --max-memory, ulimit -v and cgroup limits are honoured)",
-            crate::io::fmt_bytes(bytes)
+            crate::util::fmt::fmt_bytes(bytes)
         ))
     }
 

@@ -30,6 +30,12 @@
 //! vibratory table; it builds alone with `cargo build --lib --no-default-features`. The
 //! application (feature `app`, on by default) holds the table's lumped dynamics, the design
 //! chain, studies, scenes, reports and the CLI vocabulary.
+//!
+//! Inside the core a module uses only the layers below it, lowest first: [`util`] (number
+//! formatting, process memory) → [`error`] → [`mesh`], [`dof`], [`material`], [`section`] →
+//! [`fe`] → [`linalg`] → [`io`] → [`element`] → [`model`] (with the loads) → [`assembly`] →
+//! [`system`] → [`post`] → [`analysis`] → [`input`] (the text grammars) → [`app`].
+//! `tools/arch_metrics.py` prints the import graph and any import against this order.
 #![warn(missing_docs)]
 
 pub mod analysis;
@@ -47,6 +53,7 @@ pub mod model;
 pub mod post;
 pub mod section;
 pub mod system;
+pub mod util;
 
 #[cfg(feature = "app")]
 pub mod app;

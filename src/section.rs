@@ -290,7 +290,7 @@ impl BeamSection {
 
     /// Checks the values: `A`, `Iy`, `Iz`, `J`, `ky`, `kz` positive and finite, `Cw ≥ 0`,
     /// finite shear-centre offset. `name` (the section or group) goes into the
-    /// [`Error::InvalidInput`] message.
+    /// error message; the error ([`Error::param`]) names the field.
     ///
     /// ```
     /// use vibrofem::section::BeamSection;
@@ -299,31 +299,38 @@ impl BeamSection {
     /// ```
     pub fn validate(&self, name: &str) -> Result<()> {
         let positive = [
-            ("area A", self.area),
-            ("second moment Iy", self.iy),
-            ("second moment Iz", self.iz),
-            ("torsion constant J", self.j),
-            ("shear factor ky", self.ky),
-            ("shear factor kz", self.kz),
+            ("area", "area A", self.area),
+            ("iy", "second moment Iy", self.iy),
+            ("iz", "second moment Iz", self.iz),
+            ("j", "torsion constant J", self.j),
+            ("ky", "shear factor ky", self.ky),
+            ("kz", "shear factor kz", self.kz),
         ];
-        for (what, v) in positive {
+        for (field, what, v) in positive {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Error::InvalidInput(format!(
-                    "beam section '{name}': {what} = {v}: must be positive and finite"
-                )));
+                return Err(Error::param(
+                    format!("BeamSection::{field}"),
+                    format!("beam section '{name}': {what} = {v}: must be positive and finite"),
+                ));
             }
         }
         if !(self.cw.is_finite() && self.cw >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "beam section '{name}': warping constant Cw = {}: must be non-negative and finite",
-                self.cw
-            )));
+            return Err(Error::param(
+                "BeamSection::cw",
+                format!(
+                    "beam section '{name}': warping constant Cw = {}: must be non-negative and finite",
+                    self.cw
+                ),
+            ));
         }
         if !self.shear_centre.iter().all(|c| c.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "beam section '{name}': shear centre offset {:?} is not finite",
-                self.shear_centre
-            )));
+            return Err(Error::param(
+                "BeamSection::shear_centre",
+                format!(
+                    "beam section '{name}': shear centre offset {:?} is not finite",
+                    self.shear_centre
+                ),
+            ));
         }
         Ok(())
     }
@@ -387,22 +394,28 @@ impl ShellSection {
     /// finite); the error names `name` (the group).
     pub fn validate(&self, name: &str) -> Result<()> {
         if !(self.thickness.is_finite() && self.thickness > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "shell section '{name}': thickness {} m: must be positive and finite",
-                self.thickness
-            )));
+            return Err(Error::param(
+                "ShellSection::thickness",
+                format!(
+                    "shell section '{name}': thickness {} m: must be positive and finite",
+                    self.thickness
+                ),
+            ));
         }
         if !self.offset.is_finite() {
-            return Err(Error::InvalidInput(format!(
-                "shell section '{name}': offset {} m is not finite",
-                self.offset
-            )));
+            return Err(Error::param(
+                "ShellSection::offset",
+                format!("shell section '{name}': offset {} m is not finite", self.offset),
+            ));
         }
         if !(self.drilling.is_finite() && self.drilling > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "shell section '{name}': drilling factor {}: must be positive and finite",
-                self.drilling
-            )));
+            return Err(Error::param(
+                "ShellSection::drilling",
+                format!(
+                    "shell section '{name}': drilling factor {}: must be positive and finite",
+                    self.drilling
+                ),
+            ));
         }
         Ok(())
     }

@@ -24,9 +24,15 @@ use crate::linalg::factor::SymbolicFactor;
 use crate::linalg::ordering::{Ordering, expand_node_order, factor_entries, node_nested_dissection};
 use crate::linalg::sparse::{Pattern, SymMatrix};
 use crate::model::Model;
+use crate::util::fmt::fmt_bytes;
 use crate::{Error, Result};
 use std::sync::Arc;
 use std::time::Instant;
+
+/// The process's memory, at the path where the memory checks ([`check_memory`]) are.
+pub use crate::util::memory::{
+    MemoryBudget, available_memory, memory_budget, peak_memory, release_free_memory, resident_memory,
+};
 
 /// How to build a [`System`].
 #[derive(Clone, Debug)]
@@ -266,10 +272,13 @@ impl System {
     /// ([`SystemOptions::mass`] false).
     pub fn m(&self) -> Result<&SymMatrix> {
         self.m.as_ref().ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "{}: the system was assembled without its mass matrix (statics only)",
-                self.source
-            ))
+            Error::param(
+                "SystemOptions::mass",
+                format!(
+                    "{}: the system was assembled without its mass matrix (statics only)",
+                    self.source
+                ),
+            )
         })
     }
 
@@ -286,10 +295,13 @@ impl System {
     /// The symbolic factorisation (ordering and elimination structure) for K − σM.
     pub fn symbolic(&self) -> Result<&Arc<SymbolicFactor>> {
         self.symbolic.as_ref().ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "{}: the system was assembled for another solver, without a factorisation analysis",
-                self.source
-            ))
+            Error::param(
+                "System",
+                format!(
+                    "{}: the system was assembled for another solver, without a factorisation analysis",
+                    self.source
+                ),
+            )
         })
     }
 
@@ -331,122 +343,15 @@ pub fn describe_equation(model: &Model, eq: usize) -> String {
     }
 }
 
-/// The memory a model may use: `--max-memory` when given, otherwise what the system has
-/// available ([`memory_budget`] without a limit); with a description for messages.
-pub struct MemoryBudget {
-    /// Bytes.
-    pub bytes: u64,
-    /// Where the figure comes from, e.g. "--max-memory is" or "ulimit -v leaves".
-    pub what: String,
-}
-
-/// The memory budget: the smallest of `limit` (else MemAvailable), the cgroup's memory limit
-/// less its usage, and the address-space and data limits (`ulimit -v`, `ulimit -d`) less what
-/// the process already uses. `None` when nothing is known.
-pub fn memory_budget(limit: Option<u64>) -> Option<MemoryBudget> {
-    // An explicit limit replaces MemAvailable (which swap or reclaim may exceed), but the hard
-    // limits of ulimit and the cgroup still apply: beyond them an allocation fails for sure.
-    let mut sources = memory_sources();
-    if let Some(l) = limit {
-        sources.retain(|(_, what)| *what != MEMINFO);
-        sources.push((l, "--max-memory is"));
-    }
-    sources
-        .into_iter()
-        .min_by_key(|(b, _)| *b)
-        .map(|(bytes, what)| MemoryBudget {
-            bytes,
-            what: what.into(),
-        })
-}
-
-const MEMINFO: &str = "the system has available";
-
-/// Every memory limit that applies to this process: (bytes still usable, description).
-fn memory_sources() -> Vec<(u64, &'static str)> {
-    let mut out = Vec::new();
-    if let Some(a) = meminfo_available() {
-        out.push((a, MEMINFO));
-    }
-    if let Some(c) = cgroup_available() {
-        out.push((c, "the cgroup memory limit leaves"));
-    }
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
-    let status_kb = |key: &str| -> u64 {
-        status
-            .lines()
-            .find(|l| l.starts_with(key))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|v| v.parse::<u64>().ok())
-            .unwrap_or(0)
-            * 1024
-    };
-    if let Ok(limits) = std::fs::read_to_string("/proc/self/limits") {
-        // "Max address space   unlimited   unlimited   bytes": the soft limit is the first value.
-        let soft = |name: &str| -> Option<u64> {
-            let l = limits.lines().find(|l| l.starts_with(name))?;
-            l[name.len()..].split_whitespace().next()?.parse().ok()
-        };
-        if let Some(l) = soft("Max address space") {
-            out.push((l.saturating_sub(status_kb("VmSize:")), "ulimit -v leaves"));
-        }
-        if let Some(l) = soft("Max data size") {
-            out.push((l.saturating_sub(status_kb("VmData:")), "ulimit -d leaves"));
-        }
-    }
-    out
-}
-
-/// The cgroup (v2, else v1) memory limit of this process less its current usage, if limited.
-fn cgroup_available() -> Option<u64> {
-    let read = |p: &str| {
-        std::fs::read_to_string(p)
-            .ok()
-            .and_then(|s| s.trim().parse::<u64>().ok())
-    };
-    let cg = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
-    let mut dirs = Vec::new();
-    for line in cg.lines() {
-        let mut parts = line.splitn(3, ':');
-        let (id, ctrl, path) = (parts.next()?, parts.next()?, parts.next()?);
-        if id == "0" && ctrl.is_empty() {
-            dirs.push((format!("/sys/fs/cgroup{path}"), "memory.max", "memory.current"));
-        } else if ctrl.split(',').any(|c| c == "memory") {
-            dirs.push((
-                format!("/sys/fs/cgroup/memory{path}"),
-                "memory.limit_in_bytes",
-                "memory.usage_in_bytes",
-            ));
-        }
-    }
-    dirs.push(("/sys/fs/cgroup".into(), "memory.max", "memory.current"));
-    dirs.push((
-        "/sys/fs/cgroup/memory".into(),
-        "memory.limit_in_bytes",
-        "memory.usage_in_bytes",
-    ));
-    for (dir, max, cur) in dirs {
-        // v2 writes "max" when unlimited (not a number: skipped); v1 a huge number.
-        if let Some(limit) = read(&format!("{dir}/{max}")) {
-            if limit >= 1 << 60 {
-                continue;
-            }
-            let used = read(&format!("{dir}/{cur}")).unwrap_or(0);
-            return Some(limit.saturating_sub(used));
-        }
-    }
-    None
-}
-
 /// Refuse before allocating: `bytes` (an estimate, described by `detail`) against the budget.
 fn check_estimate(source: &str, budget: &Option<MemoryBudget>, bytes: u64, detail: impl Fn() -> String) -> Result<()> {
     match budget {
         Some(b) if bytes > b.bytes => Err(Error::InvalidInput(format!(
             "{source}: the model needs at least {} ({}) but {} {}",
-            crate::io::fmt_bytes(bytes),
+            fmt_bytes(bytes),
             detail(),
             b.what,
-            crate::io::fmt_bytes(b.bytes)
+            fmt_bytes(b.bytes)
         ))),
         _ => Ok(()),
     }
@@ -466,58 +371,11 @@ pub fn check_memory(source: &str, sym: &SymbolicFactor, pattern: &Pattern, limit
     if need > lim {
         return Err(Error::InvalidInput(format!(
             "{source}: the factorisation needs about {} (factor {}, {} entries) but {what} {}",
-            crate::io::fmt_bytes(need),
-            crate::io::fmt_bytes(sym.factor_bytes() as u64),
+            fmt_bytes(need),
+            fmt_bytes(sym.factor_bytes() as u64),
             sym.nnz_l,
-            crate::io::fmt_bytes(lim)
+            fmt_bytes(lim)
         )));
     }
     Ok(())
-}
-
-/// Give the heap's free memory back to the system. The allocator keeps what a phase freed (the
-/// graph, the assembly's scratch, a coarse model) for later requests, spread over the heaps of
-/// the worker threads; the large buffers that follow (the factor, the Lanczos basis) are
-/// mapped separately and cannot reuse it, so it would only raise the peak. A no-op off glibc.
-pub fn release_free_memory() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    {
-        unsafe extern "C" {
-            fn malloc_trim(pad: usize) -> i32;
-        }
-        // SAFETY: malloc_trim only returns unused heap pages to the system; any thread may call it.
-        unsafe {
-            malloc_trim(0);
-        }
-    }
-}
-
-/// Resident set size of this process now (bytes), from /proc/self/status.
-pub fn resident_memory() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmRSS:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Peak resident set size of this process (bytes), from /proc/self/status.
-pub fn peak_memory() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
-/// Memory this process can still use, bytes: the smallest of Linux MemAvailable, the cgroup
-/// limit less its usage, and `ulimit -v`/`-d` less the process's size ([`memory_budget`]).
-pub fn available_memory() -> Option<u64> {
-    memory_budget(None).map(|b| b.bytes)
-}
-
-/// Linux MemAvailable, bytes.
-fn meminfo_available() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
 }

@@ -40,15 +40,17 @@ impl Damping {
     /// Refuse values that make no physical sense (negative, non-finite).
     pub fn validate(&self) -> Result<()> {
         match *self {
-            Damping::Ratio(z) if !(z.is_finite() && z >= 0.0) => Err(Error::InvalidInput(format!(
-                "--damping: the damping ratio must be a finite number ≥ 0, got {z}"
-            ))),
+            Damping::Ratio(z) if !(z.is_finite() && z >= 0.0) => Err(Error::option(
+                "--damping",
+                format!("--damping: the damping ratio must be a finite number ≥ 0, got {z}"),
+            )),
             Damping::Rayleigh { alpha, beta }
                 if !(alpha.is_finite() && beta.is_finite() && alpha >= 0.0 && beta >= 0.0) =>
             {
-                Err(Error::InvalidInput(format!(
-                    "--rayleigh: α and β must be finite numbers ≥ 0, got {alpha}, {beta}"
-                )))
+                Err(Error::option(
+                    "--rayleigh",
+                    format!("--rayleigh: α and β must be finite numbers ≥ 0, got {alpha}, {beta}"),
+                ))
             }
             _ => Ok(()),
         }
@@ -75,33 +77,46 @@ impl Damping {
 pub fn load_vector(sys: &System, forces: &[(usize, [c64; 6])]) -> Result<Vec<c64>> {
     let dofs = sys.dofs();
     let mut f = vec![c64::new(0.0, 0.0); dofs.n_free];
+    // Where a bad load is: the node's component (by its mesh tag), else the argument.
+    let at = |a: usize, c: usize, msg: String| match sys.model().node_tags.get(a) {
+        Some(&tag) => Error::dof(tag, crate::dof::COMPONENT_NAMES[c], msg),
+        None => Error::param("forces", msg),
+    };
     for &(a, fa) in forces {
         if a >= dofs.n_nodes() {
-            return Err(Error::InvalidInput(format!(
-                "harmonic load on node {a}: the model has {} nodes",
-                dofs.n_nodes()
-            )));
+            return Err(Error::param(
+                "forces",
+                format!("harmonic load on node {a}: the model has {} nodes", dofs.n_nodes()),
+            ));
         }
         for (c, &v) in fa.iter().enumerate() {
             if v == c64::new(0.0, 0.0) {
                 continue;
             }
             if !(v.re.is_finite() && v.im.is_finite()) {
-                return Err(Error::InvalidInput(format!("harmonic load on node {a} is not finite")));
+                return Err(at(a, c, format!("harmonic load on node {a} is not finite")));
             }
             if dofs.active[a] & (1 << c) == 0 {
-                return Err(Error::InvalidInput(format!(
-                    "harmonic load on node {a} component {}: no element uses that degree of freedom",
-                    crate::dof::COMPONENT_NAMES[c]
-                )));
+                return Err(at(
+                    a,
+                    c,
+                    format!(
+                        "harmonic load on node {a} component {}: no element uses that degree of freedom",
+                        crate::dof::COMPONENT_NAMES[c]
+                    ),
+                ));
             }
             let ex = dofs.expansion(NCOMP * a + c);
             if ex.terms.is_empty() {
-                return Err(Error::InvalidInput(format!(
-                    "harmonic load on node {a} component {}: the degree of freedom is held, the load would go \
+                return Err(at(
+                    a,
+                    c,
+                    format!(
+                        "harmonic load on node {a} component {}: the degree of freedom is held, the load would go \
                      into the support",
-                    crate::dof::COMPONENT_NAMES[c]
-                )));
+                        crate::dof::COMPONENT_NAMES[c]
+                    ),
+                ));
             }
             for (e, k) in ex.terms {
                 f[e] += v * k;
@@ -136,10 +151,13 @@ fn residual_shift(modes: &ModalRun) -> Result<f64> {
     }
     match modes.lambda.get(n_rigid) {
         Some(&l) if l > 0.0 => Ok(-0.1 * l),
-        _ => Err(Error::InvalidInput(format!(
-            "the static correction of a model with {n_rigid} rigid-body modes needs at least one elastic mode \
+        _ => Err(Error::param(
+            "modes",
+            format!(
+                "the static correction of a model with {n_rigid} rigid-body modes needs at least one elastic mode \
              among the modes superposed (it places its shift below the first); ask for more modes"
-        ))),
+            ),
+        )),
     }
 }
 
@@ -149,15 +167,16 @@ fn check_request(sys: &System, load: &[c64], omegas: &[f64], damping: &Damping) 
     damping.validate()?;
     let n = sys.n_free();
     if load.len() != n {
-        return Err(Error::InvalidInput(format!(
-            "harmonic load has {} entries, the system {n} free DOFs",
-            load.len()
-        )));
+        return Err(Error::param(
+            "load",
+            format!("harmonic load has {} entries, the system {n} free DOFs", load.len()),
+        ));
     }
     if let Some(w) = omegas.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
-        return Err(Error::InvalidInput(format!(
-            "harmonic frequency must be finite and ≥ 0, got {w} rad/s"
-        )));
+        return Err(Error::param(
+            "omegas",
+            format!("harmonic frequency must be finite and ≥ 0, got {w} rad/s"),
+        ));
     }
     Ok(n)
 }
@@ -177,10 +196,13 @@ pub fn superpose(
     let phi = &modes.vectors;
     let k = phi.ncols();
     if phi.nrows() != n {
-        return Err(Error::InvalidInput(format!(
-            "the modes have {} rows, the system {n} free DOFs: they belong to another model",
-            phi.nrows()
-        )));
+        return Err(Error::param(
+            "modes",
+            format!(
+                "the modes have {} rows, the system {n} free DOFs: they belong to another model",
+                phi.nrows()
+            ),
+        ));
     }
     // Modal loads q_j = φ_jᵀ F.
     let q: Vec<c64> = (0..k)
@@ -212,12 +234,15 @@ pub fn superpose(
             let lam = modes.lambda[j];
             let den = c64::new(lam - w * w, w * damping.modal(lam));
             if den.norm() == 0.0 {
-                return Err(Error::InvalidInput(format!(
-                    "undamped response at {:.6} Hz, the frequency of mode {}: infinite; give --damping or \
+                return Err(Error::param(
+                    "damping",
+                    format!(
+                        "undamped response at {:.6} Hz, the frequency of mode {}: infinite; give --damping or \
                      --rayleigh",
-                    w / (2.0 * std::f64::consts::PI),
-                    j + 1
-                )));
+                        w / (2.0 * std::f64::consts::PI),
+                        j + 1
+                    ),
+                ));
             }
             let c = q[j] / den;
             for i in 0..n {
@@ -333,44 +358,7 @@ pub fn peak(u: &[c64; 3]) -> f64 {
     (0.5 * (aa + bb) + (h * h + ab * ab).sqrt()).max(0.0).sqrt()
 }
 
-/// A harmonic force on a group: F(t) = Re(F e^{i(ωt + φ)}), F total over the group (N), spread
-/// as a static force is (a coupled group at its reference node, a surface group as a uniform
-/// traction, other groups equally over their nodes).
-#[derive(Clone, Debug, PartialEq)]
-pub struct GroupForce {
-    /// Group (or coupled group).
-    pub group: String,
-    /// Fx, Fy, Fz amplitudes (N).
-    pub force: [f64; 3],
-    /// Phase φ (degrees).
-    pub phase_deg: f64,
-}
-
-impl GroupForce {
-    /// `GROUP=Fx,Fy,Fz` or `GROUP=Fx,Fy,Fz@PHASE_DEG`.
-    pub fn parse(opt: &str, text: &str) -> Result<GroupForce> {
-        let (body, phase) = match text.rsplit_once('@') {
-            Some((b, p)) => {
-                let v: f64 = p.trim().parse().map_err(|_| {
-                    Error::InvalidInput(format!(
-                        "{opt} '{text}': cannot read the phase '{p}' (degrees, e.g. GROUP=0,0,100@90)"
-                    ))
-                })?;
-                if !v.is_finite() {
-                    return Err(Error::InvalidInput(format!("{opt} '{text}': the phase must be finite")));
-                }
-                (b, v)
-            }
-            None => (text, 0.0),
-        };
-        let (group, v) = crate::input::options::group_values(opt, body, 3)?;
-        Ok(GroupForce {
-            group,
-            force: [v[0], v[1], v[2]],
-            phase_deg: phase,
-        })
-    }
-}
+pub use crate::model::GroupForce;
 
 /// Free-DOF load vector of group forces with their phases.
 pub fn group_load(sys: &System, mesh: &crate::mesh::Mesh, forces: &[GroupForce]) -> Result<Vec<c64>> {

@@ -210,7 +210,8 @@ pub struct ModalRun {
     pub vectors: faer::Mat<f64>,
 }
 
-pub use crate::system::{available_memory, check_memory, peak_memory};
+pub use crate::system::check_memory;
+pub use crate::util::memory::{available_memory, peak_memory};
 
 impl ModalOptions {
     /// How to build the system for this analysis.
@@ -283,25 +284,28 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
         ModalTarget::Modes(n) => Target::Nearest(n),
         ModalTarget::Band(lo, hi) => {
             if !(lo < hi) {
-                return Err(Error::InvalidInput(format!(
-                    "--band: lower frequency {lo} must be below the upper {hi}"
-                )));
+                return Err(Error::option(
+                    "--band",
+                    format!("--band: lower frequency {lo} must be below the upper {hi}"),
+                ));
             }
             Target::Band(lambda_of_hz(lo), lambda_of_hz(hi))
         }
     };
     if let Some(f) = opts.shift_hz {
         if !lambda_of_hz(f).is_finite() {
-            return Err(Error::InvalidInput(format!(
-                "--shift: {f} Hz is not a usable frequency (finite, with (2πf)² representable)"
-            )));
+            return Err(Error::option(
+                "--shift",
+                format!("--shift: {f} Hz is not a usable frequency (finite, with (2πf)² representable)"),
+            ));
         }
     }
     if let ModalTarget::Band(lo, hi) = opts.target {
         if !lambda_of_hz(lo).is_finite() || !lambda_of_hz(hi).is_finite() {
-            return Err(Error::InvalidInput(format!(
-                "--band: [{lo}, {hi}] Hz is not a usable band (finite, with (2πf)² representable)"
-            )));
+            return Err(Error::option(
+                "--band",
+                format!("--band: [{lo}, {hi}] Hz is not a usable band (finite, with (2πf)² representable)"),
+            ));
         }
     }
     let params = EigenParams {
@@ -330,7 +334,6 @@ pub fn finish(
     verify_tol: f64,
 ) -> Result<ModalRun> {
     let model = sys.model();
-    let source = sys.source();
     let m_mat = sys.m()?;
     let k_mat = sys.k();
     let t = Instant::now();
@@ -340,6 +343,74 @@ pub fn finish(
     // parts (they come first).
     let parts = crate::post::modal::rigid_analysis(k_mat, m_mat, &model.dofs, nodes, sol.vectors.as_ref());
     let n_rigid = parts.rigid.iter().take_while(|&&r| r).count();
+    let modes = mode_rows(&sol, &part, &parts);
+    let shapes = node_shapes(model, &sol);
+    tm.post = t.elapsed().as_secs_f64();
+    tm.total = t_all.elapsed().as_secs_f64() + sys.timings.wall;
+    let (volume, solid_mass) = model.volume_and_mass()?;
+    let mass = solid_mass + model.discrete_mass();
+
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
+    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
+    let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
+    let notes = solution_notes(model, &sol, &parts, &modes, verify_tol, accurate);
+    // The factorisation this process analysed (none when another engine solved).
+    let (factor_flops, factor_nnz) = sys.symbolic().map_or((0.0, 0), |s| (s.flops, s.nnz_l));
+    let memory_bytes = memory_by_phase(sys, &sol)?;
+    let report = ModalReport {
+        mesh: sys.source().to_string(),
+        nodes: model.n_mesh_nodes,
+        cells: model
+            .cell_counts()
+            .iter()
+            .map(|(k, n)| (k.name().to_string(), *n))
+            .collect(),
+        dofs: model.dofs.n_free,
+        volume_m3: volume,
+        mass_kg: mass,
+        mass_matrix: model.spec.lumping.name(),
+        shift: sol.shift,
+        frequencies_hz: sol.lambda.iter().map(|&l| hz(l)).collect(),
+        n_rigid,
+        modes,
+        complete: sol.sturm.complete,
+        sturm: sol.sturm,
+        accurate,
+        max_rel_residual: max_res,
+        max_backward_error: max_back,
+        m_orthonormality: sol.m_orthonormality,
+        factor_backward_error: sol.factor_backward_error,
+        participation_total: part.total,
+        centre_of_mass: part.centre_of_mass,
+        timings_s: tm.clone(),
+        peak_memory_bytes: peak_memory(),
+        memory_bytes,
+        factor_flops,
+        // The factorisation itself: flops over the mean time of the run's numeric factorisations.
+        factor_gflops: if sol.memory.numeric_seconds > 0.0 {
+            factor_flops * sol.memory.numeric_count as f64 / sol.memory.numeric_seconds / 1e9
+        } else {
+            0.0
+        },
+        factor_nnz,
+        factorizations: sol.factorizations,
+        operator_applications: sol.applications,
+        notes,
+    };
+    Ok(ModalRun {
+        report,
+        shapes,
+        lambda: sol.lambda,
+        vectors: sol.vectors,
+    })
+}
+
+/// One row per mode: frequency, rigid or elastic, verification, participation.
+fn mode_rows(
+    sol: &eigen::EigenSolution,
+    part: &ParticipationTable,
+    parts: &crate::post::modal::RigidAnalysis,
+) -> Vec<ModeRow> {
     let mut modes = Vec::with_capacity(sol.lambda.len());
     for (i, &l) in sol.lambda.iter().enumerate() {
         modes.push(ModeRow {
@@ -354,25 +425,36 @@ pub fn finish(
             cumulative_ratio: part.cumulative_ratio[i],
         });
     }
+    modes
+}
+
+/// The mode shapes at the mesh nodes: 3 translations per node, node-major, one per mode.
+fn node_shapes(model: &crate::model::Model, sol: &eigen::EigenSolution) -> Vec<Vec<f64>> {
     let n_mesh = model.n_mesh_nodes;
-    let shapes: Vec<Vec<f64>> = (0..sol.vectors.ncols())
+    (0..sol.vectors.ncols())
         .map(|c| {
             let mut s = model.dofs.expand(&eigen::column(&sol.vectors, c), 3);
             s.truncate(3 * n_mesh);
             s
         })
-        .collect();
-    tm.post = t.elapsed().as_secs_f64();
-    tm.total = t_all.elapsed().as_secs_f64() + sys.timings.wall;
-    let (volume, solid_mass) = model.volume_and_mass()?;
-    let mass = solid_mass + model.discrete_mass();
+        .collect()
+}
 
+/// The report's notes: the model's and the solver's, free parts, and what limits the accuracy
+/// (backward error, conditioning, an unstable factorisation, a failed Sturm check).
+fn solution_notes(
+    model: &crate::model::Model,
+    sol: &eigen::EigenSolution,
+    parts: &crate::post::modal::RigidAnalysis,
+    modes: &[ModeRow],
+    verify_tol: f64,
+    accurate: bool,
+) -> Vec<String> {
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
     let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
-    let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let mut notes = model.notes.clone();
     notes.extend(sol.notes.iter().cloned());
-    notes.extend(free_part_notes(model, &parts));
+    notes.extend(free_part_notes(model, parts));
     if !accurate {
         notes.push(format!(
             "accuracy not guaranteed: largest backward error {max_back:.2e} (tolerance {:.0e}; relative residual {max_res:.2e}), M-orthonormality error {:.2e}",
@@ -405,72 +487,33 @@ pub fn finish(
             sol.sturm.expected, sol.sturm.lower.0, sol.sturm.upper.0, sol.sturm.found
         ));
     }
-    // The factorisation this process analysed (none when another engine solved).
-    let (factor_flops, factor_nnz) = sys.symbolic().map_or((0.0, 0), |s| (s.flops, s.nnz_l));
-    let report = ModalReport {
-        mesh: source.to_string(),
-        nodes: model.n_mesh_nodes,
-        cells: model
-            .cell_counts()
-            .iter()
-            .map(|(k, n)| (k.name().to_string(), *n))
-            .collect(),
-        dofs: model.dofs.n_free,
-        volume_m3: volume,
-        mass_kg: mass,
-        mass_matrix: model.spec.lumping.name(),
-        shift: sol.shift,
-        frequencies_hz: sol.lambda.iter().map(|&l| hz(l)).collect(),
-        n_rigid,
-        modes,
-        complete: sol.sturm.complete,
-        sturm: sol.sturm,
-        accurate,
-        max_rel_residual: max_res,
-        max_backward_error: max_back,
-        m_orthonormality: sol.m_orthonormality,
-        factor_backward_error: sol.factor_backward_error,
-        participation_total: part.total,
-        centre_of_mass: part.centre_of_mass,
-        timings_s: tm.clone(),
-        peak_memory_bytes: peak_memory(),
-        memory_bytes: MemoryByPhase {
-            mesh: {
-                let sets = model.element_sets();
-                let conn: usize = sets
-                    .iter()
-                    .map(|s| (0..s.len()).map(|e| s.nodes(e).len()).sum::<usize>())
-                    .sum();
-                (24 * model.nodes.len() + 4 * conn) as u64
-            },
-            k_and_m: {
-                let pat = sys.pattern();
-                (8 * pat.col_ptr.len() + 4 * pat.row_idx.len() + k_mat.value_bytes() + m_mat.bytes_beside(pat)) as u64
-            },
-            factor: sol.memory.factor,
-            factor_packed: sol.memory.factor_packed,
-            shifted_matrix: sol.memory.shifted_matrix,
-            factor_workspace: sol.memory.factor_workspace,
-            solve_workspace: sol.memory.solve_workspace,
-            lanczos_basis: sol.memory.lanczos_basis,
+    notes
+}
+
+/// The memory of each phase: the mesh (coordinates and connectivity), K and M, and the
+/// solver's buffers.
+fn memory_by_phase(sys: &System, sol: &eigen::EigenSolution) -> Result<MemoryByPhase> {
+    let model = sys.model();
+    let (k_mat, m_mat) = (sys.k(), sys.m()?);
+    Ok(MemoryByPhase {
+        mesh: {
+            let sets = model.element_sets();
+            let conn: usize = sets
+                .iter()
+                .map(|s| (0..s.len()).map(|e| s.nodes(e).len()).sum::<usize>())
+                .sum();
+            (24 * model.nodes.len() + 4 * conn) as u64
         },
-        factor_flops,
-        // The factorisation itself: flops over the mean time of the run's numeric factorisations.
-        factor_gflops: if sol.memory.numeric_seconds > 0.0 {
-            factor_flops * sol.memory.numeric_count as f64 / sol.memory.numeric_seconds / 1e9
-        } else {
-            0.0
+        k_and_m: {
+            let pat = sys.pattern();
+            (8 * pat.col_ptr.len() + 4 * pat.row_idx.len() + k_mat.value_bytes() + m_mat.bytes_beside(pat)) as u64
         },
-        factor_nnz,
-        factorizations: sol.factorizations,
-        operator_applications: sol.applications,
-        notes,
-    };
-    Ok(ModalRun {
-        report,
-        shapes,
-        lambda: sol.lambda,
-        vectors: sol.vectors,
+        factor: sol.memory.factor,
+        factor_packed: sol.memory.factor_packed,
+        shifted_matrix: sol.memory.shifted_matrix,
+        factor_workspace: sol.memory.factor_workspace,
+        solve_workspace: sol.memory.solve_workspace,
+        lanczos_basis: sol.memory.lanczos_basis,
     })
 }
 

@@ -24,26 +24,7 @@ use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
 
-/// One load.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Load {
-    /// Total force (N) on a group.
-    Force {
-        /// Group.
-        group: String,
-        /// Fx, Fy, Fz.
-        force: [f64; 3],
-    },
-    /// Pressure (Pa) on a surface group, positive into the solid.
-    Pressure {
-        /// Surface group.
-        group: String,
-        /// Pressure.
-        p: f64,
-    },
-    /// Body acceleration (m/s²), e.g. gravity [0, 0, −9.81].
-    Acceleration([f64; 3]),
-}
+pub use crate::model::Load;
 
 /// A static analysis.
 #[derive(Clone, Debug, Default)]
@@ -176,9 +157,10 @@ fn surface_weights(mesh: &Mesh, group: &str) -> Result<(Vec<(u32, f64)>, f64, Ve
         }
     }
     if area <= 0.0 {
-        return Err(Error::InvalidInput(format!(
-            "group '{group}' has no surface cells: a distributed force or pressure needs a surface group"
-        )));
+        return Err(Error::group(
+            group,
+            format!("group '{group}' has no surface cells: a distributed force or pressure needs a surface group"),
+        ));
     }
     Ok((w.into_iter().collect(), area, wn.into_iter().collect()))
 }
@@ -191,9 +173,10 @@ pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<
         match load {
             Load::Force { group, force } => {
                 if force.iter().any(|v| !v.is_finite()) {
-                    return Err(Error::InvalidInput(format!(
-                        "force on '{group}' is not finite: {force:?}"
-                    )));
+                    return Err(Error::group(
+                        group.as_str(),
+                        format!("force on '{group}' is not finite: {force:?}"),
+                    ));
                 }
                 if let Some(r) = model.references.iter().find(|r| &r.group == group) {
                     force_on_constraints(model, group, force, &[r.node as u32])?;
@@ -214,9 +197,10 @@ pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<
                 } else {
                     let nodes = mesh.group_nodes(g);
                     if nodes.is_empty() {
-                        return Err(Error::InvalidInput(format!(
-                            "force on '{group}': the group has no nodes"
-                        )));
+                        return Err(Error::group(
+                            group.as_str(),
+                            format!("force on '{group}': the group has no nodes"),
+                        ));
                     }
                     for a in &nodes {
                         for d in 0..3 {
@@ -227,7 +211,10 @@ pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<
             }
             Load::Pressure { group, p } => {
                 if !p.is_finite() {
-                    return Err(Error::InvalidInput(format!("pressure on '{group}' is not finite: {p}")));
+                    return Err(Error::group(
+                        group.as_str(),
+                        format!("pressure on '{group}' is not finite: {p}"),
+                    ));
                 }
                 let (_, _, wn) = surface_weights(mesh, group)?;
                 // Orient the surface: its normals must point out of the solid. Compare with the
@@ -242,7 +229,10 @@ pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<
             }
             Load::Acceleration(acc) => {
                 if acc.iter().any(|v| !v.is_finite()) {
-                    return Err(Error::InvalidInput(format!("acceleration is not finite: {acc:?}")));
+                    return Err(Error::param(
+                        "acceleration",
+                        format!("acceleration is not finite: {acc:?}"),
+                    ));
                 }
                 // Consistent body force f = M·a over every element set (solids, shells,
                 // beams, point masses): the acceleration acts on the translations.
@@ -292,17 +282,20 @@ fn force_on_constraints(model: &Model, group: &str, force: &[f64; 3], nodes: &[u
         } else {
             format!("the reference node of '{group}'")
         };
-        return Err(Error::InvalidInput(format!(
-            "force on '{group}': its {} component acts only on held degrees of freedom ({first} {} {how}{}); \
+        return Err(Error::group(
+            group,
+            format!(
+                "force on '{group}': its {} component acts only on held degrees of freedom ({first} {} {how}{}); \
              it would go into the reaction unused: give a force or a displacement, not both",
-            ["x", "y", "z"][d],
-            crate::dof::COMPONENT_NAMES[d],
-            if nodes.len() > 1 {
-                ", as every node of the group"
-            } else {
-                ""
-            }
-        )));
+                ["x", "y", "z"][d],
+                crate::dof::COMPONENT_NAMES[d],
+                if nodes.len() > 1 {
+                    ", as every node of the group"
+                } else {
+                    ""
+                }
+            ),
+        ));
     }
     Ok(())
 }

@@ -1014,6 +1014,10 @@ impl Scene {
             MeshSource::File(p) => crate::io::gmsh::read(p, self.length_scale),
             MeshSource::Generator(g) => generate(g, self.length_scale).map_err(|e| match e {
                 Error::InvalidInput(m) => Error::InvalidInput(format!("{}: [mesh] {m}", self.path.display())),
+                Error::Invalid { at, msg } => Error::Invalid {
+                    at,
+                    msg: format!("{}: [mesh] {msg}", self.path.display()),
+                },
                 e => e,
             }),
             MeshSource::Missing => Err(Error::InvalidInput(format!(

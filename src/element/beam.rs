@@ -104,7 +104,7 @@ pub fn supports(kind: CellKind) -> bool {
 /// vector `orientation` (the local `y` hint): rows `[e_x, e_y, e_z]`, orthonormal and
 /// right-handed, `e_x ∥ tangent`, `e_y` in the plane of `tangent` and `orientation`.
 ///
-/// Errors ([`Error::InvalidInput`]): a zero or non-finite tangent (zero-length element), a
+/// Errors ([`Error::param`]): a zero or non-finite tangent (zero-length element), a
 /// zero or non-finite orientation vector, or one within `1e-6` rad of the axis.
 ///
 /// ```
@@ -117,26 +117,31 @@ pub fn local_axes(tangent: [f64; 3], orientation: [f64; 3]) -> Result<[[f64; 3];
     let lt = norm(tangent);
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(lt > 0.0 && lt.is_finite()) {
-        return Err(Error::InvalidInput(format!(
-            "beam element of zero or undefined length (axis {tangent:?})"
-        )));
+        return Err(Error::param(
+            "tangent",
+            format!("beam element of zero or undefined length (axis {tangent:?})"),
+        ));
     }
     let lo = norm(orientation);
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(lo > 0.0 && lo.is_finite()) {
-        return Err(Error::InvalidInput(format!(
-            "beam orientation vector {orientation:?} is zero or not finite"
-        )));
+        return Err(Error::param(
+            "orientation",
+            format!("beam orientation vector {orientation:?} is zero or not finite"),
+        ));
     }
     let ex = scale(tangent, 1.0 / lt);
     let ez = cross(ex, scale(orientation, 1.0 / lo));
     let s = norm(ez);
     if s < 1e-6 {
-        return Err(Error::InvalidInput(format!(
-            "beam orientation vector ({:.6}, {:.6}, {:.6}) is parallel to the element axis \
+        return Err(Error::param(
+            "orientation",
+            format!(
+                "beam orientation vector ({:.6}, {:.6}, {:.6}) is parallel to the element axis \
              ({:.6}, {:.6}, {:.6}): it must give the local y direction, across the beam",
-            orientation[0], orientation[1], orientation[2], ex[0], ex[1], ex[2]
-        )));
+                orientation[0], orientation[1], orientation[2], ex[0], ex[1], ex[2]
+            ),
+        ));
     }
     let ez = scale(ez, 1.0 / s);
     let ey = cross(ez, ex);
@@ -238,7 +243,7 @@ fn node_transform(r: &[[f64; 3]; 3], nd: usize, shear_centre: Option<[f64; 2]>) 
 
 /// Element stiffness matrix of a beam in global axes.
 ///
-/// - `kind`: `Line2` or `Line3` (an [`Error::InvalidInput`] otherwise).
+/// - `kind`: `Line2` or `Line3` (an [`Error::param`] otherwise).
 /// - `x`: node coordinates in gmsh order; `orientation`: local `y` hint (see the module
 ///   docs); `sec`: a validated section; `mat`: the material.
 /// - `ke`: output, `(n·d)²` row-major with `d` = [`dofs_per_node`]`(sec)`; fully written.
@@ -301,11 +306,12 @@ pub fn stiffness(
 }
 
 fn not_a_beam(kind: CellKind) -> Error {
-    Error::InvalidInput(format!("{kind} is not a beam cell kind (line2 or line3)"))
+    Error::param("kind", format!("{kind} is not a beam cell kind (line2 or line3)"))
 }
 
 fn warping_line3() -> Error {
-    Error::InvalidInput(
+    Error::param(
+        "BeamSection::warping",
         "the warping degree of freedom is available on 2-node beams (line2) only; \
          mesh this beam group with first-order lines or turn warping off"
             .to_string(),

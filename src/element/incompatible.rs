@@ -52,9 +52,10 @@ impl Hex8Formulation {
         match text.trim().to_ascii_lowercase().as_str() {
             "standard" | "plain" => Ok(Hex8Formulation::Standard),
             "incompatible" | "im" | "incompatible-modes" => Ok(Hex8Formulation::Incompatible),
-            other => Err(crate::Error::InvalidInput(format!(
-                "hex8 formulation '{other}': expected 'standard' or 'incompatible'"
-            ))),
+            other => Err(crate::Error::option(
+                "--hex8",
+                format!("hex8 formulation '{other}': expected 'standard' or 'incompatible'"),
+            )),
         }
     }
 

@@ -40,9 +40,10 @@ impl MassLumping {
         match s.trim().to_ascii_lowercase().as_str() {
             "consistent" => Ok(MassLumping::Consistent),
             "lumped" | "hrz" => Ok(MassLumping::Lumped),
-            _ => Err(Error::InvalidInput(format!(
-                "unknown mass matrix '{s}': expected 'consistent' or 'lumped'"
-            ))),
+            _ => Err(Error::option(
+                "--mass",
+                format!("unknown mass matrix '{s}': expected 'consistent' or 'lumped'"),
+            )),
         }
     }
 }

@@ -118,14 +118,18 @@ pub trait ElementSet: Sync {
     /// at reference point `xi` for element displacements `ue` (3 per node, node-major).
     /// The default, for formulations without a continuum stress field (shells and beams
     /// report stress resultants through their own kernels; discrete elements have none), is
-    /// an [`crate::Error::InvalidInput`] saying so.
+    /// an error at the element saying so.
     fn stress_at(&self, e: usize, ue: &[f64], xi: [f64; 3]) -> Result<[f64; 6]> {
         let _ = (ue, xi);
-        Err(crate::Error::InvalidInput(format!(
+        let msg = format!(
             "stress recovery is not available for '{}' (element {})",
             self.group(),
             self.tag(e).map_or_else(|| format!("#{e}"), |t| t.to_string())
-        )))
+        );
+        Err(match self.tag(e) {
+            Some(tag) => crate::Error::element(tag, msg),
+            None => crate::Error::group(self.group(), msg),
+        })
     }
 }
 

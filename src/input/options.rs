@@ -1,14 +1,16 @@
 //! The text grammar of model options and loads, shared by the command line, scene files and
 //! the bindings, so that `GROUP=t,offset` or `i:h,b,s,t@0,0,1` mean the same everywhere.
 //!
-//! Every parser returns an [`Error::InvalidInput`] that quotes the option (by its command-line
-//! name, which the scene and binding documentation also use) and the offending text.
+//! Every parser returns an error placed at the option ([`Error::option`]; a beam section or
+//! orientation read alone, at [`Error::param`]) whose message quotes the option (by its
+//! command-line name, which the scene and binding documentation also use) and the offending text.
 
-use crate::analysis::statics::Load;
 use crate::dof::parse_components;
 use crate::element::MassLumping;
 use crate::material::Material;
-use crate::model::{BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec};
+use crate::model::{
+    BeamPart, CouplingSpec, GroupForce, Load, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringSpec,
+};
 use crate::section::BeamSection;
 use crate::{Error, Result};
 
@@ -91,9 +93,9 @@ pub fn numbers(opt: &str, text: &str, s: &str) -> Result<Vec<f64>> {
             let x: f64 = v
                 .trim()
                 .parse()
-                .map_err(|_| Error::InvalidInput(format!("{opt} '{text}': '{}' is not a number", v.trim())))?;
+                .map_err(|_| Error::option(opt, format!("{opt} '{text}': '{}' is not a number", v.trim())))?;
             if !x.is_finite() {
-                return Err(Error::InvalidInput(format!("{opt} '{text}': {x} is not finite")));
+                return Err(Error::option(opt, format!("{opt} '{text}': {x} is not finite")));
             }
             Ok(x)
         })
@@ -104,13 +106,13 @@ pub fn numbers(opt: &str, text: &str, s: &str) -> Result<Vec<f64>> {
 pub fn group_values(opt: &str, text: &str, n: usize) -> Result<(String, Vec<f64>)> {
     let (g, v) = text
         .split_once('=')
-        .ok_or_else(|| Error::InvalidInput(format!("{opt} '{text}': expected GROUP=values")))?;
+        .ok_or_else(|| Error::option(opt, format!("{opt} '{text}': expected GROUP=values")))?;
     let v = numbers(opt, text, v)?;
     if v.len() != n {
-        return Err(Error::InvalidInput(format!(
-            "{opt} '{text}': expected {n} numbers, got {}",
-            v.len()
-        )));
+        return Err(Error::option(
+            opt,
+            format!("{opt} '{text}': expected {n} numbers, got {}", v.len()),
+        ));
     }
     Ok((g.trim().to_string(), v))
 }
@@ -121,9 +123,10 @@ pub fn length_scale(u: &str) -> Result<f64> {
         "m" => Ok(1.0),
         "mm" => Ok(1e-3),
         "cm" => Ok(1e-2),
-        _ => Err(Error::InvalidInput(format!(
-            "--length-unit: unknown unit '{u}' (use m or mm)"
-        ))),
+        _ => Err(Error::option(
+            "--length-unit",
+            format!("--length-unit: unknown unit '{u}' (use m or mm)"),
+        )),
     }
 }
 
@@ -132,7 +135,7 @@ fn axis(opt: &str, text: &str, a: &str) -> Result<usize> {
         "x" => Ok(0),
         "y" => Ok(1),
         "z" => Ok(2),
-        _ => Err(Error::InvalidInput(format!("{opt} '{text}': axis must be x, y or z"))),
+        _ => Err(Error::option(opt, format!("{opt} '{text}': axis must be x, y or z"))),
     }
 }
 
@@ -144,9 +147,12 @@ impl ModelOptions {
             ..Default::default()
         };
         for gm in &self.group_material {
-            let (g, m) = gm
-                .split_once('=')
-                .ok_or_else(|| Error::InvalidInput(format!("--group-material '{gm}': expected GROUP=MATERIAL")))?;
+            let (g, m) = gm.split_once('=').ok_or_else(|| {
+                Error::option(
+                    "--group-material",
+                    format!("--group-material '{gm}': expected GROUP=MATERIAL"),
+                )
+            })?;
             spec.group_materials.push((g.to_string(), Material::parse(m)?));
         }
         for f in &self.fix {
@@ -155,9 +161,10 @@ impl ModelOptions {
                 (g, None) => (g, "ux,uy,uz"),
             };
             let mask = parse_components(comps).ok_or_else(|| {
-                Error::InvalidInput(format!(
-                    "--fix '{f}': unknown components '{comps}' (use ux,uy,uz,rx,ry,rz)"
-                ))
+                Error::option(
+                    "--fix",
+                    format!("--fix '{f}': unknown components '{comps}' (use ux,uy,uz,rx,ry,rz)"),
+                )
             })?;
             spec.fixes.push((g.to_string(), mask));
         }
@@ -165,14 +172,18 @@ impl ModelOptions {
             spec.couplings.push(parse_coupling(c)?);
         }
         for p in &self.point_mass {
-            let (g, v) = p
-                .split_once('=')
-                .ok_or_else(|| Error::InvalidInput(format!("--point-mass '{p}': expected GROUP=m[,Ixx,...]")))?;
+            let (g, v) = p.split_once('=').ok_or_else(|| {
+                Error::option(
+                    "--point-mass",
+                    format!("--point-mass '{p}': expected GROUP=m[,Ixx,...]"),
+                )
+            })?;
             let v = numbers("--point-mass", p, v)?;
             if v.len() != 1 && v.len() != 7 {
-                return Err(Error::InvalidInput(format!(
-                    "--point-mass '{p}': give the mass, or the mass and 6 inertias (Ixx,Iyy,Izz,Ixy,Iyz,Ixz)"
-                )));
+                return Err(Error::option(
+                    "--point-mass",
+                    format!("--point-mass '{p}': give the mass, or the mass and 6 inertias (Ixx,Iyy,Izz,Ixy,Iyz,Ixz)"),
+                ));
             }
             let mut inertia = [0.0; 6];
             if v.len() == 7 {
@@ -185,12 +196,18 @@ impl ModelOptions {
             });
         }
         for s in &self.spring {
-            let (ends, v) = s
-                .split_once('=')
-                .ok_or_else(|| Error::InvalidInput(format!("--spring '{s}': expected A[:B]=kx,ky,kz,krx,kry,krz")))?;
+            let (ends, v) = s.split_once('=').ok_or_else(|| {
+                Error::option(
+                    "--spring",
+                    format!("--spring '{s}': expected A[:B]=kx,ky,kz,krx,kry,krz"),
+                )
+            })?;
             let v = numbers("--spring", s, v)?;
             if v.len() != 6 {
-                return Err(Error::InvalidInput(format!("--spring '{s}': expected 6 stiffnesses")));
+                return Err(Error::option(
+                    "--spring",
+                    format!("--spring '{s}': expected 6 stiffnesses"),
+                ));
             }
             let (a, b) = match ends.split_once(':') {
                 Some((a, b)) => (a.to_string(), Some(b.to_string())),
@@ -207,15 +224,17 @@ impl ModelOptions {
         }
         for sh in &self.shell {
             let (g, v) = sh.split_once('=').ok_or_else(|| {
-                Error::InvalidInput(format!(
-                    "--shell '{sh}': expected GROUP=thickness[,offset] (a shell needs a thickness)"
-                ))
+                Error::option(
+                    "--shell",
+                    format!("--shell '{sh}': expected GROUP=thickness[,offset] (a shell needs a thickness)"),
+                )
             })?;
             let v = numbers("--shell", sh, v)?;
             if v.is_empty() || v.len() > 2 {
-                return Err(Error::InvalidInput(format!(
-                    "--shell '{sh}': expected thickness[,offset]"
-                )));
+                return Err(Error::option(
+                    "--shell",
+                    format!("--shell '{sh}': expected thickness[,offset]"),
+                ));
             }
             let mut sec = crate::section::ShellSection::new(v[0]);
             if v.len() == 2 {
@@ -239,9 +258,10 @@ impl ModelOptions {
             .chain(spec.beams.iter().map(|b| &b.group))
         {
             if !seen.insert(g.as_str()) {
-                return Err(Error::InvalidInput(format!(
-                    "group '{g}' is given two sections (--shell/--beam twice): each group takes one"
-                )));
+                return Err(Error::group(
+                    g.as_str(),
+                    format!("group '{g}' is given two sections (--shell/--beam twice): each group takes one"),
+                ));
             }
         }
         Ok(spec)
@@ -251,7 +271,12 @@ impl ModelOptions {
 /// Parse a `--couple GROUP[@X,Y,Z][:guided=AXIS]` option: the group, where its reference
 /// node sits (default: the group's centroid) and the guided axis.
 pub fn parse_coupling(c: &str) -> Result<CouplingSpec> {
-    let bad = || Error::InvalidInput(format!("--couple '{c}': expected GROUP[@X,Y,Z][:guided=AXIS]"));
+    let bad = || {
+        Error::option(
+            "--couple",
+            format!("--couple '{c}': expected GROUP[@X,Y,Z][:guided=AXIS]"),
+        )
+    };
     let (head, guided) = match c.rsplit_once(":guided=") {
         Some((h, a)) => (h, Some(axis("--couple", c, a)?)),
         None => (c, None),
@@ -289,17 +314,19 @@ pub fn parse_coupling(c: &str) -> Result<CouplingSpec> {
 /// Parse a `--beam GROUP=SECTION@ORIENT` option.
 pub fn parse_beam(b: &str) -> Result<BeamPart> {
     let (g, rest) = b.split_once('=').ok_or_else(|| {
-        Error::InvalidInput(format!(
-            "--beam '{b}': expected GROUP=SECTION@ORIENT (a beam needs a section)"
-        ))
+        Error::option(
+            "--beam",
+            format!("--beam '{b}': expected GROUP=SECTION@ORIENT (a beam needs a section)"),
+        )
     })?;
     let (sec, orient) = rest.split_once('@').ok_or_else(|| {
-        Error::InvalidInput(format!(
-            "--beam '{b}': missing orientation, e.g. '@0,0,1' (the local y axis)"
-        ))
+        Error::option(
+            "--beam",
+            format!("--beam '{b}': missing orientation, e.g. '@0,0,1' (the local y axis)"),
+        )
     })?;
     let ctx = |e: Error| match e {
-        Error::InvalidInput(m) => Error::InvalidInput(format!("--beam '{b}': {m}")),
+        Error::Invalid { msg, .. } => Error::option("--beam", format!("--beam '{b}': {msg}")),
         e => e,
     };
     Ok(BeamPart {
@@ -328,10 +355,10 @@ pub fn parse_section(sec: &str) -> Result<BeamSection> {
         if v.len() == n {
             Ok(())
         } else {
-            Err(Error::InvalidInput(format!(
-                "section '{name}' needs {n} numbers, got {}",
-                v.len()
-            )))
+            Err(Error::param(
+                "section",
+                format!("section '{name}' needs {n} numbers, got {}", v.len()),
+            ))
         }
     };
     // Dimensions of the shape sections: positive and finite, and a shape that exists (a
@@ -345,29 +372,35 @@ pub fn parse_section(sec: &str) -> Result<BeamSection> {
         };
         for (l, x) in labels.iter().zip(&v) {
             if !(x.is_finite() && *x > 0.0) {
-                return Err(Error::InvalidInput(format!(
-                    "section '{sec}': {l} = {x} m must be positive and finite"
-                )));
+                return Err(Error::param(
+                    "section",
+                    format!("section '{sec}': {l} = {x} m must be positive and finite"),
+                ));
             }
         }
         if name == "tube" && v.len() == 2 && v[1] > v[0] / 2.0 {
-            return Err(Error::InvalidInput(format!(
-                "section '{sec}': wall {} m exceeds the radius {} m (at most d/2: a solid circle)",
-                v[1],
-                v[0] / 2.0
-            )));
+            return Err(Error::param(
+                "section",
+                format!(
+                    "section '{sec}': wall {} m exceeds the radius {} m (at most d/2: a solid circle)",
+                    v[1],
+                    v[0] / 2.0
+                ),
+            ));
         }
         if matches!(name, "i" | "channel") && v.len() == 4 {
             let (h, b, s, t) = (v[0], v[1], v[2], v[3]);
             if 2.0 * t >= h {
-                return Err(Error::InvalidInput(format!(
-                    "section '{sec}': two flanges of t = {t} m fill the height h = {h} m (2t must be below h)"
-                )));
+                return Err(Error::param(
+                    "section",
+                    format!("section '{sec}': two flanges of t = {t} m fill the height h = {h} m (2t must be below h)"),
+                ));
             }
             if s > b {
-                return Err(Error::InvalidInput(format!(
-                    "section '{sec}': web s = {s} m is wider than the flanges b = {b} m"
-                )));
+                return Err(Error::param(
+                    "section",
+                    format!("section '{sec}': web s = {s} m is wider than the flanges b = {b} m"),
+                ));
             }
         }
     }
@@ -405,9 +438,10 @@ pub fn parse_section(sec: &str) -> Result<BeamSection> {
             BeamSection::custom(v[0], v[1], v[2], v[3], v[4], v[5], v[6])
         }
         _ => {
-            return Err(Error::InvalidInput(format!(
-                "unknown section '{name}' (rect, circle, tube, i, channel, gost8239-10, gost8240-10, custom)"
-            )));
+            return Err(Error::param(
+                "section",
+                format!("unknown section '{name}' (rect, circle, tube, i, channel, gost8239-10, gost8240-10, custom)"),
+            ));
         }
     };
     Ok(section.with_warping(warping))
@@ -419,14 +453,16 @@ pub fn parse_orientation(orient: &str) -> Result<Orientation> {
     if let Some(r) = orient.strip_prefix("radial:") {
         let v = numbers("orientation", orient, r)?;
         if v.len() != 6 {
-            return Err(Error::InvalidInput(
+            return Err(Error::param(
+                "orientation",
                 "radial orientation needs cx,cy,cz,ax,ay,az".to_string(),
             ));
         }
         if v[3..].iter().all(|x| *x == 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "radial orientation '{orient}': the axis ax,ay,az must be a non-zero vector"
-            )));
+            return Err(Error::param(
+                "orientation",
+                format!("radial orientation '{orient}': the axis ax,ay,az must be a non-zero vector"),
+            ));
         }
         Ok(Orientation::Radial {
             centre: [v[0], v[1], v[2]],
@@ -435,7 +471,8 @@ pub fn parse_orientation(orient: &str) -> Result<Orientation> {
     } else {
         let v = numbers("orientation", orient, orient)?;
         if v.len() != 3 || v.iter().all(|x| *x == 0.0) {
-            return Err(Error::InvalidInput(
+            return Err(Error::param(
+                "orientation",
                 "orientation must be a non-zero vector x,y,z".to_string(),
             ));
         }
@@ -477,19 +514,23 @@ impl LoadOptions {
         if let Some(g) = &self.gravity {
             let v = numbers("--gravity", g, g)?;
             if v.len() != 3 {
-                return Err(Error::InvalidInput(format!("--gravity '{g}': expected gx,gy,gz")));
+                return Err(Error::option(
+                    "--gravity",
+                    format!("--gravity '{g}': expected gx,gy,gz"),
+                ));
             }
             loads.push(Load::Acceleration([v[0], v[1], v[2]]));
         }
         for d in &self.displace {
             let (g, v) = d
                 .split_once('=')
-                .ok_or_else(|| Error::InvalidInput(format!("--displace '{d}': expected GROUP=ux,uy,uz")))?;
+                .ok_or_else(|| Error::option("--displace", format!("--displace '{d}': expected GROUP=ux,uy,uz")))?;
             let parts: Vec<&str> = v.split(',').collect();
             if parts.len() != 3 && parts.len() != 6 {
-                return Err(Error::InvalidInput(format!(
-                    "--displace '{d}': expected 3 (or 6) values"
-                )));
+                return Err(Error::option(
+                    "--displace",
+                    format!("--displace '{d}': expected 3 (or 6) values"),
+                ));
             }
             let mut vals = [None; 6];
             for (i, p) in parts.iter().enumerate() {
@@ -499,14 +540,46 @@ impl LoadOptions {
                 }
                 let x: f64 = p
                     .parse()
-                    .map_err(|_| Error::InvalidInput(format!("--displace '{d}': '{p}' is not a number")))?;
+                    .map_err(|_| Error::option("--displace", format!("--displace '{d}': '{p}' is not a number")))?;
                 if !x.is_finite() {
-                    return Err(Error::InvalidInput(format!("--displace '{d}': {x} is not finite")));
+                    return Err(Error::option(
+                        "--displace",
+                        format!("--displace '{d}': {x} is not finite"),
+                    ));
                 }
                 vals[i] = Some(x);
             }
             spec.prescribed.push((g.to_string(), vals));
         }
         Ok(loads)
+    }
+}
+
+/// A harmonic group force in the same grammar as a static `--force`, with a phase.
+impl GroupForce {
+    /// `GROUP=Fx,Fy,Fz` or `GROUP=Fx,Fy,Fz@PHASE_DEG` (`opt` names the option in messages:
+    /// `--force`).
+    pub fn parse(opt: &str, text: &str) -> Result<GroupForce> {
+        let (body, phase) = match text.rsplit_once('@') {
+            Some((b, p)) => {
+                let v: f64 = p.trim().parse().map_err(|_| {
+                    Error::option(
+                        opt,
+                        format!("{opt} '{text}': cannot read the phase '{p}' (degrees, e.g. GROUP=0,0,100@90)"),
+                    )
+                })?;
+                if !v.is_finite() {
+                    return Err(Error::option(opt, format!("{opt} '{text}': the phase must be finite")));
+                }
+                (b, v)
+            }
+            None => (text, 0.0),
+        };
+        let (group, v) = group_values(opt, body, 3)?;
+        Ok(GroupForce {
+            group,
+            force: [v[0], v[1], v[2]],
+            phase_deg: phase,
+        })
     }
 }

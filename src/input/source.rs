@@ -49,9 +49,10 @@ pub fn load(spec: &str, length_scale: f64) -> Result<Mesh> {
     if !path.exists() {
         if let Some((prefix, _)) = spec.split_once(':') {
             if !prefix.is_empty() && !prefix.contains(['/', '\\', '.']) {
-                return Err(Error::InvalidInput(format!(
-                    "unknown generator '{spec}' (known generators: {GENERATORS}); no file of that name either"
-                )));
+                return Err(Error::param(
+                    "spec",
+                    format!("unknown generator '{spec}' (known generators: {GENERATORS}); no file of that name either"),
+                ));
             }
         }
     }
@@ -65,16 +66,17 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
         let v: std::result::Result<Vec<f64>, _> = rest.split(',').map(|s| s.trim().parse::<f64>()).collect();
         match v {
             Ok(v) if v.len() == n && v.iter().all(|x| x.is_finite()) => Ok(v),
-            _ => Err(Error::InvalidInput(format!("generator '{spec}': expected {usage}"))),
+            _ => Err(Error::param("spec", format!("generator '{spec}': expected {usage}"))),
         }
     };
     let mut m = if let Some(rest) = spec.strip_prefix("sandwich:") {
         let mut it = rest.splitn(2, ',');
         let preset = it.next().unwrap_or("").trim();
         if preset != "paper" {
-            return Err(Error::InvalidInput(format!(
-                "generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"
-            )));
+            return Err(Error::param(
+                "spec",
+                format!("generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"),
+            ));
         }
         let mut p = pm::SandwichParams::paper();
         if let Some(h) = it.next() {
@@ -84,9 +86,10 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
     } else if let Some(rest) = spec.strip_prefix("ibeam-line:") {
         let v = nums(rest, 2, "ibeam-line:LENGTH,N_ELEMENTS")?;
         if v[1] < 1.0 || v[1].fract() != 0.0 {
-            return Err(Error::InvalidInput(format!(
-                "generator '{spec}': the element count must be a whole number ≥ 1"
-            )));
+            return Err(Error::param(
+                "spec",
+                format!("generator '{spec}': the element count must be a whole number ≥ 1"),
+            ));
         }
         pm::i_beam_line(v[0], v[1] as usize)?
     } else if let Some(rest) = spec.strip_prefix("ibeam-shell:") {
@@ -99,7 +102,7 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
             .iter()
             .copied()
             .find(|k| k.name() == kind.trim())
-            .ok_or_else(|| Error::InvalidInput(format!("generator '{spec}': unknown cell kind '{kind}'")))?;
+            .ok_or_else(|| Error::param("spec", format!("generator '{spec}': unknown cell kind '{kind}'")))?;
         pm::i_beam_solid(v[0], v[1], v[2], v[3], v[4], v[5], kind)?
     } else {
         return Ok(None);
@@ -112,9 +115,12 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
 fn structured(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
     if let Some(rest) = spec.strip_prefix("box:") {
         let bad = |why: &str| {
-            Error::InvalidInput(format!(
-                "mesh '{spec}': {why}; expected box:LX,LY,LZ:NX,NY,NZ:KIND, e.g. box:0.3,0.3,0.02:20,20,4:hex20"
-            ))
+            Error::param(
+                "spec",
+                format!(
+                    "mesh '{spec}': {why}; expected box:LX,LY,LZ:NX,NY,NZ:KIND, e.g. box:0.3,0.3,0.02:20,20,4:hex20"
+                ),
+            )
         };
         let parts: Vec<&str> = rest.split(':').collect();
         if parts.len() != 3 {
@@ -145,9 +151,12 @@ fn structured(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
         // helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3]
         let parts: Vec<&str> = rest.split(',').map(str::trim).collect();
         let bad = |why: &str| {
-            Error::InvalidInput(format!(
-                "mesh '{spec}': {why}; expected helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3], e.g. helix:0.032,0.01,6,24"
-            ))
+            Error::param(
+                "spec",
+                format!(
+                    "mesh '{spec}': {why}; expected helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3], e.g. helix:0.032,0.01,6,24"
+                ),
+            )
         };
         if parts.len() != 4 && parts.len() != 5 {
             return Err(bad("four or five fields needed"));

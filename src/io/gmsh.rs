@@ -84,7 +84,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>> {
     }
     let cap = match size {
         Some(n) => n,
-        None => crate::system::available_memory().unwrap_or(u64::MAX) / 2,
+        None => crate::util::memory::available_memory().unwrap_or(u64::MAX) / 2,
     };
     let mut bytes = head;
     if let Some(n) = size {
@@ -103,7 +103,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>> {
             line: None,
             msg: format!(
                 "the stream goes on beyond {}, half the memory available: not a mesh this machine can hold",
-                crate::io::fmt_bytes(cap)
+                crate::util::fmt::fmt_bytes(cap)
             ),
         });
     }
@@ -114,6 +114,7 @@ fn read_file(path: &Path) -> Result<Vec<u8>> {
 ///
 /// See [`read`].
 pub fn read_bytes(bytes: &[u8], path: &Path, length_scale: f64) -> Result<Mesh> {
+    // Stays Error::InvalidInput: tests/unit/mesh_io.rs matches on the variant.
     if !(length_scale.is_finite() && length_scale > 0.0) {
         return Err(Error::InvalidInput(format!(
             "{}: length scale must be a positive number, got {length_scale}",

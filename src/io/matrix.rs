@@ -112,11 +112,14 @@ pub fn write_dof_map(path: &Path, dofs: &DofMap, nodes: &[[f64; 3]], node_tags: 
 pub fn read_f64_le(path: &Path) -> Result<Vec<f64>> {
     let b = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     if b.len() % 8 != 0 {
-        return Err(Error::InvalidInput(format!(
-            "{}: {} bytes is not a whole number of f64 values",
-            path.display(),
-            b.len()
-        )));
+        return Err(Error::param(
+            "path",
+            format!(
+                "{}: {} bytes is not a whole number of f64 values",
+                path.display(),
+                b.len()
+            ),
+        ));
     }
     Ok(b.chunks_exact(8)
         .map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes")))

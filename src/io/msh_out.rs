@@ -43,8 +43,8 @@ pub struct NodeView<'a> {
 /// Write `mesh` and `views` to a MSH 4.1 ASCII file.
 ///
 /// # Errors
-/// [`Error::InvalidInput`] if a view has not 1, 3 or 9 components, not `n_comp` finite values
-/// per node, or the mesh has no cells; [`Error::Io`] if the file cannot be written.
+/// [`Error::InvalidInput`] if a view has not 1, 3 or 9 components, [`Error::param`] if it has
+/// not `n_comp` finite values per node or the mesh has no cells; [`Error::Io`] if the file cannot be written.
 pub fn write_msh_views(path: &Path, mesh: &Mesh, views: &[NodeView]) -> Result<()> {
     let text = msh_string(mesh, views)?;
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
@@ -53,8 +53,27 @@ pub fn write_msh_views(path: &Path, mesh: &Mesh, views: &[NodeView]) -> Result<(
 
 /// The MSH 4.1 document as a string (see [`write_msh_views`]).
 pub fn msh_string(mesh: &Mesh, views: &[NodeView]) -> Result<String> {
+    let n_cells = check_views(mesh, views)?;
+    let (node_tags, elem_tags) = file_tags(mesh, n_cells);
+    let ent = Entities::of(mesh);
+    let mut s = String::new();
+    s.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
+    write_physical_names(&mut s, mesh, &ent.phys);
+    write_entities(&mut s, &ent);
+    write_nodes(&mut s, mesh, &node_tags, &ent.count);
+    write_elements(&mut s, mesh, &node_tags, &elem_tags, &ent.element_blocks, n_cells);
+    for v in views {
+        write_node_data(&mut s, v, &node_tags);
+    }
+    Ok(s)
+}
+
+/// Check the views (1, 3 or 9 components, `n_comp` finite values per node) and that the mesh
+/// has cells; the number of cells.
+fn check_views(mesh: &Mesh, views: &[NodeView]) -> Result<usize> {
     let n_nodes = mesh.n_nodes();
     for v in views {
+        // Stays Error::InvalidInput: tests/unit/mesh_io.rs matches on the variant.
         if !matches!(v.n_comp, 1 | 3 | 9) {
             return Err(Error::InvalidInput(format!(
                 "view '{}': gmsh views have 1, 3 or 9 components, not {}",
@@ -62,26 +81,35 @@ pub fn msh_string(mesh: &Mesh, views: &[NodeView]) -> Result<String> {
             )));
         }
         if v.data.len() != v.n_comp * n_nodes {
-            return Err(Error::InvalidInput(format!(
-                "view '{}': {} values for {} nodes with {} components",
-                v.name,
-                v.data.len(),
-                n_nodes,
-                v.n_comp
-            )));
+            return Err(Error::param(
+                "views",
+                format!(
+                    "view '{}': {} values for {} nodes with {} components",
+                    v.name,
+                    v.data.len(),
+                    n_nodes,
+                    v.n_comp
+                ),
+            ));
         }
         if !v.time.is_finite() || v.data.iter().any(|x| !x.is_finite()) {
-            return Err(Error::InvalidInput(format!("view '{}' has non-finite values", v.name)));
+            return Err(Error::param(
+                "views",
+                format!("view '{}' has non-finite values", v.name),
+            ));
         }
     }
     let n_cells: usize = mesh.blocks.iter().map(|b| b.len()).sum();
     if n_cells == 0 {
-        return Err(Error::InvalidInput(
-            "cannot write a MSH file of a mesh without cells".into(),
-        ));
+        return Err(Error::param("mesh", "cannot write a MSH file of a mesh without cells"));
     }
+    Ok(n_cells)
+}
 
-    // Node and element tags: the mesh's own if they are usable (non-zero, unique), else 1..=N.
+/// Node and element tags (per block) in the file: the mesh's own if they are usable
+/// (non-zero, unique), else `1..=N`.
+fn file_tags(mesh: &Mesh, n_cells: usize) -> (Vec<u64>, Vec<Vec<u64>>) {
+    let n_nodes = mesh.n_nodes();
     let node_tags: Vec<u64> = if usable_tags(mesh.node_tags.iter().copied(), n_nodes) {
         mesh.node_tags.clone()
     } else {
@@ -103,54 +131,88 @@ pub fn msh_string(mesh: &Mesh, views: &[NodeView]) -> Result<String> {
             })
             .collect()
     };
+    (node_tags, elem_tags)
+}
 
-    // Physical tag of each group: its own, unless another group of its dimension has it.
-    let mut used: HashSet<(u8, i32)> = HashSet::new();
-    let mut phys: Vec<i32> = Vec::with_capacity(mesh.groups.len());
-    for g in &mesh.groups {
-        let mut t = if g.tag > 0 { g.tag } else { 1 };
-        while !used.insert((g.dim, t)) {
-            t += 1;
+/// The discrete entities of the file (see the [module docs](self)) and the element blocks on
+/// them.
+struct Entities {
+    /// Physical tag of each mesh group.
+    phys: Vec<i32>,
+    /// Number of entities per dimension.
+    count: [i32; 4],
+    /// The groups of each entity, by (dim, entity tag).
+    groups: BTreeMap<(usize, i32), Vec<usize>>,
+    /// Cells (indices in their mesh block) by (mesh block, dim, entity tag).
+    element_blocks: BTreeMap<(usize, usize, i32), Vec<usize>>,
+    /// Bounding box of each entity (its lower corner is the position of a point entity).
+    bbox: HashMap<(usize, i32), ([f64; 3], [f64; 3])>,
+}
+
+impl Entities {
+    fn of(mesh: &Mesh) -> Entities {
+        // Physical tag of each group: its own, unless another group of its dimension has it.
+        let mut used: HashSet<(u8, i32)> = HashSet::new();
+        let mut phys: Vec<i32> = Vec::with_capacity(mesh.groups.len());
+        for g in &mesh.groups {
+            let mut t = if g.tag > 0 { g.tag } else { 1 };
+            while !used.insert((g.dim, t)) {
+                t += 1;
+            }
+            phys.push(t);
         }
-        phys.push(t);
-    }
-    // The groups of each cell.
-    let mut cell_groups: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
-    for (gi, g) in mesh.groups.iter().enumerate() {
-        for c in &g.cells {
-            cell_groups.entry((c.block, c.index)).or_default().push(gi);
+        // The groups of each cell.
+        let mut cell_groups: HashMap<(u32, u32), Vec<usize>> = HashMap::new();
+        for (gi, g) in mesh.groups.iter().enumerate() {
+            for c in &g.cells {
+                cell_groups.entry((c.block, c.index)).or_default().push(gi);
+            }
+        }
+        // Entities: (dim, sorted group list) → entity tag, numbered per dimension by first use.
+        // Element blocks are keyed (mesh block, dim, entity tag), so that the file lists the
+        // mesh's blocks in order and a reader gets them back in the same order.
+        let mut entity_of: HashMap<(usize, Vec<usize>), i32> = HashMap::new();
+        let mut count = [0i32; 4];
+        let mut groups_of: BTreeMap<(usize, i32), Vec<usize>> = BTreeMap::new();
+        let mut element_blocks: BTreeMap<(usize, usize, i32), Vec<usize>> = BTreeMap::new();
+        for (bi, b) in mesh.blocks.iter().enumerate() {
+            let dim = b.kind.dim();
+            for i in 0..b.len() {
+                let mut groups = cell_groups.get(&(bi as u32, i as u32)).cloned().unwrap_or_default();
+                groups.sort_unstable();
+                groups.dedup();
+                let key = (dim, groups);
+                let tag = match entity_of.get(&key) {
+                    Some(&t) => t,
+                    None => {
+                        count[dim] += 1;
+                        let t = count[dim];
+                        groups_of.insert((dim, t), key.1.clone());
+                        entity_of.insert(key, t);
+                        t
+                    }
+                };
+                element_blocks.entry((bi, dim, tag)).or_default().push(i);
+            }
+        }
+        let bbox = entity_boxes(mesh, &element_blocks);
+        Entities {
+            phys,
+            count,
+            groups: groups_of,
+            element_blocks,
+            bbox,
         }
     }
-    // Entities: (dim, sorted group list) → entity tag, numbered per dimension by first use.
-    // Element blocks are keyed (mesh block, dim, entity tag), so that the file lists the
-    // mesh's blocks in order and a reader gets them back in the same order.
-    let mut entity_of: HashMap<(usize, Vec<usize>), i32> = HashMap::new();
-    let mut n_entities = [0i32; 4];
-    let mut entity_groups: BTreeMap<(usize, i32), Vec<usize>> = BTreeMap::new();
-    let mut element_blocks: BTreeMap<(usize, usize, i32), Vec<usize>> = BTreeMap::new();
-    for (bi, b) in mesh.blocks.iter().enumerate() {
-        let dim = b.kind.dim();
-        for i in 0..b.len() {
-            let mut groups = cell_groups.get(&(bi as u32, i as u32)).cloned().unwrap_or_default();
-            groups.sort_unstable();
-            groups.dedup();
-            let key = (dim, groups);
-            let tag = match entity_of.get(&key) {
-                Some(&t) => t,
-                None => {
-                    n_entities[dim] += 1;
-                    let t = n_entities[dim];
-                    entity_groups.insert((dim, t), key.1.clone());
-                    entity_of.insert(key, t);
-                    t
-                }
-            };
-            element_blocks.entry((bi, dim, tag)).or_default().push(i);
-        }
-    }
-    // Bounding box of each entity (its lower corner is the position of a point entity).
+}
+
+/// Bounding box of each entity over the nodes of its cells.
+fn entity_boxes(
+    mesh: &Mesh,
+    element_blocks: &BTreeMap<(usize, usize, i32), Vec<usize>>,
+) -> HashMap<(usize, i32), ([f64; 3], [f64; 3])> {
     let mut bbox: HashMap<(usize, i32), ([f64; 3], [f64; 3])> = HashMap::new();
-    for (&(bi, dim, tag), cells) in &element_blocks {
+    for (&(bi, dim, tag), cells) in element_blocks {
         let b = &mesh.blocks[bi];
         let e = bbox
             .entry((dim, tag))
@@ -164,27 +226,26 @@ pub fn msh_string(mesh: &Mesh, views: &[NodeView]) -> Result<String> {
             }
         }
     }
+    bbox
+}
 
-    let mut s = String::new();
-    s.push_str("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n");
-
-    // $PhysicalNames: one line per group.
+/// `$PhysicalNames`: one line per group (none without groups).
+fn write_physical_names(s: &mut String, mesh: &Mesh, phys: &[i32]) {
     if !mesh.groups.is_empty() {
         let _ = writeln!(s, "$PhysicalNames\n{}", mesh.groups.len());
-        for (g, &t) in mesh.groups.iter().zip(&phys) {
+        for (g, &t) in mesh.groups.iter().zip(phys) {
             let _ = writeln!(s, "{} {} \"{}\"", g.dim, t, g.name.replace('"', "'"));
         }
         s.push_str("$EndPhysicalNames\n");
     }
+}
 
-    // $Entities.
-    let _ = writeln!(
-        s,
-        "$Entities\n{} {} {} {}",
-        n_entities[0], n_entities[1], n_entities[2], n_entities[3]
-    );
-    for (&(dim, tag), groups) in &entity_groups {
-        let (lo, hi) = bbox.get(&(dim, tag)).copied().unwrap_or(([0.0; 3], [0.0; 3]));
+/// `$Entities`: each discrete entity with its bounding box and physical tags.
+fn write_entities(s: &mut String, ent: &Entities) {
+    let n = ent.count;
+    let _ = writeln!(s, "$Entities\n{} {} {} {}", n[0], n[1], n[2], n[3]);
+    for (&(dim, tag), groups) in &ent.groups {
+        let (lo, hi) = ent.bbox.get(&(dim, tag)).copied().unwrap_or(([0.0; 3], [0.0; 3]));
         let _ = write!(s, "{tag}");
         let coords: &[f64] = if dim == 0 {
             &lo
@@ -196,33 +257,45 @@ pub fn msh_string(mesh: &Mesh, views: &[NodeView]) -> Result<String> {
         }
         let _ = write!(s, " {}", groups.len());
         for &g in groups {
-            let _ = write!(s, " {}", phys[g]);
+            let _ = write!(s, " {}", ent.phys[g]);
         }
         // Curves, surfaces and volumes list their bounding entities: none for discrete ones.
         s.push_str(if dim == 0 { "\n" } else { " 0\n" });
     }
     s.push_str("$EndEntities\n");
+}
 
-    // $Nodes: one block on the first entity of the highest dimension.
+/// `$Nodes`: one block on the first entity of the highest dimension.
+fn write_nodes(s: &mut String, mesh: &Mesh, node_tags: &[u64], n_entities: &[i32; 4]) {
+    let n_nodes = mesh.n_nodes();
     let top = (0..4).rev().find(|&d| n_entities[d] > 0).unwrap_or(0);
     let (lo, hi) = (
         node_tags.iter().min().copied().unwrap_or(0),
         node_tags.iter().max().copied().unwrap_or(0),
     );
     let _ = writeln!(s, "$Nodes\n1 {n_nodes} {lo} {hi}\n{top} 1 0 {n_nodes}");
-    for t in &node_tags {
+    for t in node_tags {
         let _ = writeln!(s, "{t}");
     }
     for p in &mesh.nodes {
         let _ = writeln!(s, "{} {} {}", fmt_f64(p[0]), fmt_f64(p[1]), fmt_f64(p[2]));
     }
     s.push_str("$EndNodes\n");
+}
 
-    // $Elements: one block per (entity, kind).
+/// `$Elements`: one block per (entity, kind).
+fn write_elements(
+    s: &mut String,
+    mesh: &Mesh,
+    node_tags: &[u64],
+    elem_tags: &[Vec<u64>],
+    element_blocks: &BTreeMap<(usize, usize, i32), Vec<usize>>,
+    n_cells: usize,
+) {
     let all = elem_tags.iter().flatten();
     let (lo, hi) = (all.clone().min().copied().unwrap_or(0), all.max().copied().unwrap_or(0));
     let _ = writeln!(s, "$Elements\n{} {n_cells} {lo} {hi}", element_blocks.len());
-    for (&(bi, dim, tag), cells) in &element_blocks {
+    for (&(bi, dim, tag), cells) in element_blocks {
         let b = &mesh.blocks[bi];
         let _ = writeln!(s, "{dim} {tag} {} {}", b.kind.gmsh_type(), cells.len());
         for &i in cells {
@@ -234,28 +307,27 @@ pub fn msh_string(mesh: &Mesh, views: &[NodeView]) -> Result<String> {
         }
     }
     s.push_str("$EndElements\n");
+}
 
-    // One $NodeData per view.
-    for v in views {
-        let _ = writeln!(
-            s,
-            "$NodeData\n1\n\"{}\"\n1\n{}\n3\n{}\n{}\n{}",
-            v.name.replace('"', "'"),
-            fmt_f64(v.time),
-            v.step,
-            v.n_comp,
-            n_nodes
-        );
-        for (t, row) in node_tags.iter().zip(v.data.chunks(v.n_comp)) {
-            let _ = write!(s, "{t}");
-            for &x in row {
-                let _ = write!(s, " {}", fmt_f64(x));
-            }
-            s.push('\n');
+/// One `$NodeData` section: the view `v` at its step and time.
+fn write_node_data(s: &mut String, v: &NodeView, node_tags: &[u64]) {
+    let _ = writeln!(
+        s,
+        "$NodeData\n1\n\"{}\"\n1\n{}\n3\n{}\n{}\n{}",
+        v.name.replace('"', "'"),
+        fmt_f64(v.time),
+        v.step,
+        v.n_comp,
+        node_tags.len()
+    );
+    for (t, row) in node_tags.iter().zip(v.data.chunks(v.n_comp)) {
+        let _ = write!(s, "{t}");
+        for &x in row {
+            let _ = write!(s, " {}", fmt_f64(x));
         }
-        s.push_str("$EndNodeData\n");
+        s.push('\n');
     }
-    Ok(s)
+    s.push_str("$EndNodeData\n");
 }
 
 /// True if `tags` are `n` non-zero, distinct values.

@@ -126,8 +126,8 @@ pub fn gmsh_to_vtk(kind: CellKind) -> (u8, Option<&'static [usize]>) {
 /// ```
 ///
 /// # Errors
-/// [`Error::InvalidInput`] if a field does not have `n_comp` finite values per node or the
-/// mesh has no cells, [`Error::Io`] if the file cannot be written.
+/// [`Error::InvalidInput`] if a field does not have `n_comp` finite values per node,
+/// [`Error::param`] if the mesh has no cells, [`Error::Io`] if the file cannot be written.
 pub fn write_vtu(path: &Path, mesh: &Mesh, point_data: &[PointField]) -> Result<()> {
     let text = vtu_string(mesh, point_data)?;
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
@@ -138,6 +138,7 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, point_data: &[PointField]) -> Result<
 pub fn vtu_string(mesh: &Mesh, point_data: &[PointField]) -> Result<String> {
     let n_nodes = mesh.n_nodes();
     for f in point_data {
+        // Stays Error::InvalidInput: tests/unit/mesh_io.rs matches on the variant.
         if f.n_comp == 0 || f.data.len() != f.n_comp * n_nodes {
             return Err(Error::InvalidInput(format!(
                 "field '{}': {} values for {} nodes with {} components",
@@ -161,9 +162,7 @@ pub fn vtu_string(mesh: &Mesh, point_data: &[PointField]) -> Result<String> {
     // The cells of the highest dimension present.
     let top = mesh.blocks.iter().filter(|b| !b.is_empty()).map(|b| b.kind.dim()).max();
     let Some(top) = top else {
-        return Err(Error::InvalidInput(
-            "cannot write a VTU file of a mesh without cells".into(),
-        ));
+        return Err(Error::param("mesh", "cannot write a VTU file of a mesh without cells"));
     };
     let blocks: Vec<_> = mesh
         .blocks

@@ -298,7 +298,7 @@ impl Factor {
                 8 * before / 1_000_000,
                 8 * values.len() / 1_000_000,
                 t_pack.elapsed().as_secs_f64(),
-                crate::system::resident_memory().unwrap_or(0) >> 20
+                crate::util::memory::resident_memory().unwrap_or(0) >> 20
             );
         }
         Ok(Factor {

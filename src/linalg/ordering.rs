@@ -5,8 +5,8 @@
 //! stay together. On 3D solids nested dissection needs 3–4× fewer factorisation flops than
 //! faer's built-in AMD.
 
-use crate::assembly::NodeGraph;
 use crate::dof::DofMap;
+use crate::linalg::graph::NodeGraph;
 use crate::{Error, Result};
 
 /// The fill-reducing ordering to use.

@@ -149,6 +149,11 @@ fn face_kind(kind: CellKind, n_corners: usize) -> Option<CellKind> {
     }
 }
 
+/// Largest number of cells (of the highest dimension) a generator builds, here and in
+/// [`super::parametric`]: a smaller element size is reported as an error instead of exhausting
+/// memory.
+pub const MAX_CELLS: usize = 5_000_000;
+
 /// Names of the boundary groups, in the order of their physical tags 1..=6.
 pub const FACE_GROUPS: [&str; 6] = ["xmin", "xmax", "ymin", "ymax", "zmin", "zmax"];
 
@@ -166,6 +171,22 @@ pub fn box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Mesh {
 /// A box mesh of `kind` cells, or [`Error::InvalidInput`] if `kind` is not a solid, a size is
 /// not positive and finite, a division count is zero, or the mesh would exceed 2³² nodes.
 pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mesh> {
+    let lat = check_box(kind, size, n)?;
+    let lid = |p: [usize; 3]| p[0] + lat[0] * (p[1] + lat[1] * p[2]);
+    // 1. Cells as lattice points, in gmsh order: corners, then higher-order nodes.
+    let (cells, boundary) = lattice_cells(kind, n, lat, &lid)?;
+    // 2. Number the lattice points in use, in lattice order.
+    let (mut mesh, number) = number_lattice(&cells, size, lat);
+    // 3. Blocks and groups.
+    add_blocks_and_groups(&mut mesh, kind, &cells, boundary, &number);
+    Ok(mesh)
+}
+
+/// Points of the half-step lattice per direction (`2n + 1`), once the arguments of
+/// [`try_box_mesh`] are checked: a solid kind, positive sizes, at least one division, at most
+/// [`MAX_CELLS`] bricks and fewer than 2³² lattice points.
+fn check_box(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<[usize; 3]> {
+    // Stays Error::InvalidInput: tests/unit/mesh_io.rs matches on the variant.
     if kind.dim() != 3 {
         return Err(Error::InvalidInput(format!(
             "box mesh: {kind} is not a solid cell kind"
@@ -185,24 +206,34 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
     // (the same cap as the parametric generators).
     let bricks = n[0].checked_mul(n[1]).and_then(|v| v.checked_mul(n[2]));
     match bricks {
-        Some(b) if b <= crate::mesh::parametric::MAX_CELLS => {}
+        Some(b) if b <= MAX_CELLS => {}
         _ => {
             return Err(Error::InvalidInput(format!(
-                "box mesh: {n:?} divisions give more than {} bricks; use a coarser mesh",
-                crate::mesh::parametric::MAX_CELLS
+                "box mesh: {n:?} divisions give more than {MAX_CELLS} bricks; use a coarser mesh"
             )));
         }
     }
     // Lattice of half-steps: 2n+1 points per direction.
     let lat = [2 * n[0] + 1, 2 * n[1] + 1, 2 * n[2] + 1];
-    let n_lat = lat[0]
+    lat[0]
         .checked_mul(lat[1])
         .and_then(|v| v.checked_mul(lat[2]))
         .filter(|&v| v < u32::MAX as usize)
-        .ok_or_else(|| Error::InvalidInput(format!("box mesh: {n:?} divisions are too many")))?;
-    let lid = |p: [usize; 3]| p[0] + lat[0] * (p[1] + lat[1] * p[2]);
+        .ok_or_else(|| Error::param("n", format!("box mesh: {n:?} divisions are too many")))?;
+    Ok(lat)
+}
 
-    // 1. Cells as lattice points, in gmsh order: corners, then higher-order nodes.
+/// The boundary faces of a box mesh per face group ([`FACE_GROUPS`]): (face kind, lattice ids).
+type BoundaryFaces = [Vec<(CellKind, Vec<usize>)>; 6];
+
+/// Step 1 of [`try_box_mesh`]: every cell of every brick as lattice ids (corners, then
+/// higher-order nodes, `kind.n_nodes()` per cell), and the cell faces on the box's boundary.
+fn lattice_cells(
+    kind: CellKind,
+    n: [usize; 3],
+    lat: [usize; 3],
+    lid: &impl Fn([usize; 3]) -> usize,
+) -> Result<(Vec<usize>, BoundaryFaces)> {
     let extra = higher_order_nodes(kind);
     let subcells: Vec<&[usize]> = match kind {
         CellKind::Tet4 | CellKind::Tet10 => BRICK_TETS.iter().map(|c| c.as_slice()).collect(),
@@ -216,13 +247,14 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
         | CellKind::Quad4
         | CellKind::Quad8
         | CellKind::Quad9 => {
-            return Err(Error::InvalidInput(format!(
-                "box mesh: {kind} is not a solid cell kind"
-            )));
+            return Err(Error::param(
+                "kind",
+                format!("box mesh: {kind} is not a solid cell kind"),
+            ));
         }
     };
     let mut cells: Vec<usize> = Vec::new(); // lattice ids, kind.n_nodes() per cell
-    let mut boundary: [Vec<(CellKind, Vec<usize>)>; 6] = Default::default();
+    let mut boundary: BoundaryFaces = Default::default();
     let mut corners: Vec<[usize; 3]> = Vec::with_capacity(8);
     for k in 0..n[2] {
         for j in 0..n[1] {
@@ -233,7 +265,7 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
                         let o = BRICK[c];
                         [2 * (i + o[0]), 2 * (j + o[1]), 2 * (k + o[2])]
                     }));
-                    push_cell(&mut cells, &corners, extra, &lid);
+                    push_cell(&mut cells, &corners, extra, lid);
                     // Faces of this cell on the box boundary.
                     for face in faces(kind) {
                         let fc: Vec<[usize; 3]> = face.iter().map(|&c| corners[c]).collect();
@@ -244,7 +276,7 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
                                 && let Some(fkind) = face_kind(kind, fc.len())
                             {
                                 let mut ids = Vec::with_capacity(fkind.n_nodes());
-                                push_cell(&mut ids, &fc, higher_order_nodes(fkind), &lid);
+                                push_cell(&mut ids, &fc, higher_order_nodes(fkind), lid);
                                 group.push((fkind, ids));
                             }
                         }
@@ -253,10 +285,14 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
             }
         }
     }
+    Ok((cells, boundary))
+}
 
-    // 2. Number the lattice points in use, in lattice order.
-    let mut number = vec![u32::MAX; n_lat];
-    for &c in &cells {
+/// Step 2 of [`try_box_mesh`]: a mesh with the nodes of the lattice points `cells` use, in
+/// lattice order, and the node index of each lattice point (`u32::MAX` for those unused).
+fn number_lattice(cells: &[usize], size: [f64; 3], lat: [usize; 3]) -> (Mesh, Vec<u32>) {
+    let mut number = vec![u32::MAX; lat[0] * lat[1] * lat[2]];
+    for &c in cells {
         number[c] = 0;
     }
     let mut mesh = Mesh::default();
@@ -281,8 +317,12 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
             mesh.node_tags.push(mesh.nodes.len() as u64);
         }
     }
+    (mesh, number)
+}
 
-    // 3. Blocks and groups.
+/// Step 3 of [`try_box_mesh`]: the volume block and group `"volume"`, then the boundary faces
+/// in their blocks and the six face groups.
+fn add_blocks_and_groups(mesh: &mut Mesh, kind: CellKind, cells: &[usize], boundary: BoundaryFaces, number: &[u32]) {
     let mut vol = CellBlock::new(kind);
     vol.conn = cells.iter().map(|&c| number[c]).collect();
     vol.tags = (1..=(cells.len() / kind.n_nodes()) as u64).collect();
@@ -315,7 +355,6 @@ pub fn try_box_mesh(kind: CellKind, size: [f64; 3], n: [usize; 3]) -> Result<Mes
             cells: refs,
         });
     }
-    Ok(mesh)
 }
 
 /// Append the lattice ids of a cell: its corners, then the centroids listed in `extra`.

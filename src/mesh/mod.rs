@@ -136,12 +136,15 @@ impl Mesh {
                     return Ok(g);
                 }
                 let ids: Vec<String> = several.iter().map(|g| format!("{}:{}", g.dim, g.tag)).collect();
-                return Err(crate::Error::InvalidInput(format!(
-                    "group name '{name}' is used by {} groups ({}, as dimension:tag); rename them in \
+                return Err(crate::Error::group(
+                    name,
+                    format!(
+                        "group name '{name}' is used by {} groups ({}, as dimension:tag); rename them in \
                      the mesh, or name one by its dimension:tag",
-                    several.len(),
-                    ids.join(", ")
-                )));
+                        several.len(),
+                        ids.join(", ")
+                    ),
+                ));
             }
         }
         // "D:T": a group by dimension and physical tag (unnamed groups are listed so).

@@ -1,7 +1,7 @@
 //! Built-in parametric geometry: structured meshes of the users' part families, in pure Rust.
 //!
 //! Design iteration (issue 6: sweeps over the work table's parameters) needs no mesher: each
-//! generator validates its parameters up front ([`Error::InvalidInput`] naming the parameter)
+//! generator validates its parameters up front ([`Error::param`] naming the parameter)
 //! and returns a [`Mesh`] with **named** physical groups.
 //!
 //! | generator | cells | groups |
@@ -44,9 +44,7 @@ use crate::mesh::generate::higher_order_nodes;
 use crate::mesh::{CellKind, CellRef, Group, Mesh};
 use crate::{Error, Result};
 
-/// Largest number of cells (of the highest dimension) a generator builds: a smaller element
-/// size is reported as an error instead of exhausting memory.
-pub const MAX_CELLS: usize = 5_000_000;
+pub use crate::mesh::generate::MAX_CELLS;
 
 /// Relative tolerance under which two required grid coordinates are the same line.
 const MERGE_TOL: f64 = 1e-9;
@@ -54,8 +52,9 @@ const MERGE_TOL: f64 = 1e-9;
 // ---------------------------------------------------------------------------------------------
 // Validation helpers
 
-fn invalid(msg: String) -> Error {
-    Error::InvalidInput(msg)
+/// A bad value of the generator parameter `name`.
+fn invalid(name: &str, msg: String) -> Error {
+    Error::param(name, msg)
 }
 
 /// `v` must be positive and finite.
@@ -63,7 +62,10 @@ fn positive(what: &str, name: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(invalid(format!("{what}: {name} must be positive and finite, got {v}")))
+        Err(invalid(
+            name,
+            format!("{what}: {name} must be positive and finite, got {v}"),
+        ))
     }
 }
 
@@ -91,9 +93,10 @@ fn grid_lines(what: &str, size_name: &str, required: &[f64], h: f64, min_div: us
         total += ((w[1] - w[0]) / h - 1e-9).ceil().max(min_div as f64);
     }
     if total > MAX_CELLS as f64 {
-        return Err(invalid(format!(
-            "{what}: {size_name} = {h} is too small: {total:.0} grid lines along one axis (limit {MAX_CELLS})"
-        )));
+        return Err(invalid(
+            size_name,
+            format!("{what}: {size_name} = {h} is too small: {total:.0} grid lines along one axis (limit {MAX_CELLS})"),
+        ));
     }
     let mut lines = Vec::with_capacity(total as usize);
     for w in pts.windows(2) {
@@ -128,9 +131,10 @@ fn check_cell_count(what: &str, cause: &str, n: f64) -> Result<()> {
     if n <= MAX_CELLS as f64 {
         Ok(())
     } else {
-        Err(invalid(format!(
-            "{what}: {cause} gives {n:.0} cells (limit {MAX_CELLS})"
-        )))
+        Err(invalid(
+            cause,
+            format!("{what}: {cause} gives {n:.0} cells (limit {MAX_CELLS})"),
+        ))
     }
 }
 
@@ -311,7 +315,7 @@ pub fn grid_solid(lines: [&[f64]; 3], kind: CellKind, keep: impl Fn([f64; 3]) ->
 /// of `names` (dimension 3; omitted when empty), `"volume"` (every kept cell) and the six
 /// boundary-face groups of [`grid_solid`].
 ///
-/// Errors ([`Error::InvalidInput`]): `kind` not a hexahedron, grid lines not finite and
+/// Errors ([`Error::param`]): `kind` not a hexahedron, grid lines not finite and
 /// strictly increasing, more than [`MAX_CELLS`] grid cells, a group index out of range, or no
 /// cell kept.
 pub fn grid_solid_groups(
@@ -332,16 +336,18 @@ fn grid_solid_impl(
 ) -> Result<Mesh> {
     const WHAT: &str = "grid solid";
     if !matches!(kind, CellKind::Hex8 | CellKind::Hex20 | CellKind::Hex27) {
-        return Err(invalid(format!(
-            "{WHAT}: cell kind must be hex8, hex20 or hex27, got {kind}"
-        )));
+        return Err(invalid(
+            "kind",
+            format!("{WHAT}: cell kind must be hex8, hex20 or hex27, got {kind}"),
+        ));
     }
     for (axis, l) in lines.iter().enumerate() {
         let name = ["x", "y", "z"][axis];
         if l.len() < 2 || l.iter().any(|v| !v.is_finite()) || l.windows(2).any(|w| w[1] <= w[0]) {
-            return Err(invalid(format!(
-                "{WHAT}: the {name} grid lines must be at least 2 finite, strictly increasing values"
-            )));
+            return Err(invalid(
+                "lines",
+                format!("{WHAT}: the {name} grid lines must be at least 2 finite, strictly increasing values"),
+            ));
         }
     }
     let n = [lines[0].len() - 1, lines[1].len() - 1, lines[2].len() - 1];
@@ -351,9 +357,10 @@ fn grid_solid_impl(
         CellKind::Hex20 => CellKind::Quad8,
         CellKind::Hex27 => CellKind::Quad9,
         other => {
-            return Err(Error::InvalidInput(format!(
-                "{WHAT}: the solid table is meshed with hexahedra (hex8, hex20, hex27), not {other}"
-            )));
+            return Err(invalid(
+                "kind",
+                format!("{WHAT}: the solid table is meshed with hexahedra (hex8, hex20, hex27), not {other}"),
+            ));
         }
     };
     let mut b = Builder::new([lines[0].to_vec(), lines[1].to_vec(), lines[2].to_vec()]);
@@ -371,10 +378,10 @@ fn grid_solid_impl(
                 ];
                 let Some(g) = classify(c) else { continue };
                 if g >= named.len() {
-                    return Err(invalid(format!(
-                        "{WHAT}: group index {g} out of range ({} group names)",
-                        named.len()
-                    )));
+                    return Err(invalid(
+                        "names",
+                        format!("{WHAT}: group index {g} out of range ({} group names)", named.len()),
+                    ));
                 }
                 kept += 1;
                 let base = [i as u32, j as u32, k as u32];
@@ -397,7 +404,7 @@ fn grid_solid_impl(
         }
     }
     if kept == 0 {
-        return Err(invalid(format!("{WHAT}: no grid cell is kept")));
+        return Err(invalid("keep", format!("{WHAT}: no grid cell is kept")));
     }
     Ok(b.finish())
 }
@@ -587,10 +594,10 @@ impl SandwichParams {
         self.validate_geometry()?;
         positive(W, "elem_size", self.elem_size)?;
         if !matches!(self.shell_kind, CellKind::Quad4 | CellKind::Quad8 | CellKind::Quad9) {
-            return Err(invalid(format!(
-                "{W}: shell_kind must be quad4, quad8 or quad9, got {}",
-                self.shell_kind
-            )));
+            return Err(invalid(
+                "shell_kind",
+                format!("{W}: shell_kind must be quad4, quad8 or quad9, got {}", self.shell_kind),
+            ));
         }
         Ok(())
     }
@@ -605,7 +612,7 @@ impl SandwichParams {
         positive(W, "bottom_thickness", self.bottom_thickness)?;
         positive(W, "web_height", self.web_height)?;
         if self.long_webs.is_empty() && self.trans_webs.is_empty() {
-            return Err(invalid(format!(
+            return Err(Error::InvalidInput(format!(
                 "{W}: long_webs and trans_webs are both empty: the plates need at least one web between them"
             )));
         }
@@ -638,27 +645,33 @@ impl SandwichParams {
             positive(W, tname, t)?;
             for &p in pos.iter() {
                 if !p.is_finite() {
-                    return Err(invalid(format!("{W}: {name}: position {p} is not finite")));
+                    return Err(invalid(name, format!("{W}: {name}: position {p} is not finite")));
                 }
                 if p.abs() + 0.5 * t > half + tol {
-                    return Err(invalid(format!(
-                        "{W}: {name}: the web at {axis} = {p} (thickness {tname} = {t}) lies outside the plates: \
+                    return Err(invalid(
+                        name,
+                        format!(
+                            "{W}: {name}: the web at {axis} = {p} (thickness {tname} = {t}) lies outside the plates: \
                          |{axis}| + {tname}/2 = {} exceeds {limit} = {half}",
-                        p.abs() + 0.5 * t
-                    )));
+                            p.abs() + 0.5 * t
+                        ),
+                    ));
                 }
             }
             let mut s: Vec<f64> = pos.to_vec();
             s.sort_by(f64::total_cmp);
             for w in s.windows(2) {
                 if w[1] - w[0] < t - tol {
-                    return Err(invalid(format!(
-                        "{W}: {name}: the webs at {axis} = {} and {axis} = {} overlap: their distance {} is less \
+                    return Err(invalid(
+                        name,
+                        format!(
+                            "{W}: {name}: the webs at {axis} = {} and {axis} = {} overlap: their distance {} is less \
                          than {tname} = {t}",
-                        w[0],
-                        w[1],
-                        w[1] - w[0]
-                    )));
+                            w[0],
+                            w[1],
+                            w[1] - w[0]
+                        ),
+                    ));
                 }
             }
         }
@@ -890,25 +903,34 @@ impl HelixParams {
         positive(W, "turns", self.turns)?;
         positive(W, "wire_diameter", self.wire_diameter)?;
         if self.elems_per_turn < 3 {
-            return Err(invalid(format!(
-                "{W}: elems_per_turn must be at least 3, got {}",
-                self.elems_per_turn
-            )));
+            return Err(invalid(
+                "elems_per_turn",
+                format!("{W}: elems_per_turn must be at least 3, got {}", self.elems_per_turn),
+            ));
         }
         if !matches!(self.kind, CellKind::Line2 | CellKind::Line3) {
-            return Err(invalid(format!("{W}: kind must be line2 or line3, got {}", self.kind)));
+            return Err(invalid(
+                "kind",
+                format!("{W}: kind must be line2 or line3, got {}", self.kind),
+            ));
         }
         if self.wire_diameter >= self.mean_diameter {
-            return Err(invalid(format!(
-                "{W}: wire_diameter = {} must be less than mean_diameter = {}",
-                self.wire_diameter, self.mean_diameter
-            )));
+            return Err(invalid(
+                "wire_diameter",
+                format!(
+                    "{W}: wire_diameter = {} must be less than mean_diameter = {}",
+                    self.wire_diameter, self.mean_diameter
+                ),
+            ));
         }
         if self.pitch <= self.wire_diameter {
-            return Err(invalid(format!(
-                "{W}: pitch = {} must exceed wire_diameter = {}: the coils would touch",
-                self.pitch, self.wire_diameter
-            )));
+            return Err(invalid(
+                "pitch",
+                format!(
+                    "{W}: pitch = {} must exceed wire_diameter = {}: the coils would touch",
+                    self.pitch, self.wire_diameter
+                ),
+            ));
         }
         let n = self.turns * self.elems_per_turn as f64;
         check_cell_count(W, "turns × elems_per_turn", n)
@@ -1033,14 +1055,16 @@ fn check_i_section(what: &str, h: f64, b: f64, s: f64, t: f64, length: f64) -> R
     positive(what, "t", t)?;
     positive(what, "length", length)?;
     if 2.0 * t >= h {
-        return Err(invalid(format!(
-            "{what}: flange thickness t = {t} leaves no web: 2t must be less than the depth h = {h}"
-        )));
+        return Err(invalid(
+            "t",
+            format!("{what}: flange thickness t = {t} leaves no web: 2t must be less than the depth h = {h}"),
+        ));
     }
     if s >= b {
-        return Err(invalid(format!(
-            "{what}: web thickness s = {s} must be less than the flange width b = {b}"
-        )));
+        return Err(invalid(
+            "s",
+            format!("{what}: web thickness s = {s} must be less than the flange width b = {b}"),
+        ));
     }
     Ok(())
 }
@@ -1123,7 +1147,7 @@ pub fn i_beam_line(length: f64, n_elem: usize) -> Result<Mesh> {
     const W: &str = "I-beam line";
     positive(W, "length", length)?;
     if n_elem == 0 {
-        return Err(invalid(format!("{W}: n_elem must be at least 1, got 0")));
+        return Err(invalid("n_elem", format!("{W}: n_elem must be at least 1, got 0")));
     }
     check_cell_count(W, "n_elem", n_elem as f64)?;
     let xl: Vec<f64> = (0..=n_elem)

@@ -88,7 +88,7 @@ pub(crate) fn materials<'m>(mesh: &'m Mesh, spec: &ModelSpec) -> Result<(Vec<Mat
         group_mat_idx.push((grp, (materials.len() - 1) as u16));
     }
     if materials.len() > u16::MAX as usize {
-        return Err(Error::InvalidInput("too many materials".into()));
+        return Err(Error::param("ModelSpec::group_materials", "too many materials"));
     }
     Ok((materials, group_mat_idx))
 }
@@ -112,9 +112,10 @@ fn selected_solid_cells(mesh: &Mesh, spec: &ModelSpec) -> Result<Vec<Vec<bool>>>
             }
         }
         if !any {
-            return Err(Error::InvalidInput(format!(
-                "group '{g}' has no volume cells: a solid formulation needs tet, hex or wedge cells"
-            )));
+            return Err(Error::group(
+                g.as_str(),
+                format!("group '{g}' has no volume cells: a solid formulation needs tet, hex or wedge cells"),
+            ));
         }
     }
     Ok(selected)
@@ -184,10 +185,13 @@ pub(crate) fn shell_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Resul
         for c in &grp.cells {
             let b = &mesh.blocks[c.block as usize];
             if !crate::element::shell::supports(b.kind) {
-                return Err(Error::InvalidInput(format!(
-                    "group '{}' has {} cells (element {}): a shell needs tri3 or quad4 surface cells",
-                    sp.group, b.kind, b.tags[c.index as usize]
-                )));
+                return Err(Error::group(
+                    sp.group.as_str(),
+                    format!(
+                        "group '{}' has {} cells (element {}): a shell needs tri3 or quad4 surface cells",
+                        sp.group, b.kind, b.tags[c.index as usize]
+                    ),
+                ));
             }
             set.kinds.push(b.kind);
             set.conn.extend_from_slice(b.cell(c.index as usize));
@@ -195,7 +199,10 @@ pub(crate) fn shell_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Resul
             set.tags.push(b.tags[c.index as usize]);
         }
         if set.tags.is_empty() {
-            return Err(Error::InvalidInput(format!("shell group '{}' is empty", sp.group)));
+            return Err(Error::group(
+                sp.group.as_str(),
+                format!("shell group '{}' is empty", sp.group),
+            ));
         }
         shells.push(set);
     }
@@ -244,10 +251,13 @@ pub(crate) fn beam_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result
                 if b.kind.dim() == 0 {
                     continue;
                 }
-                return Err(Error::InvalidInput(format!(
-                    "group '{}' has {} cells (element {}): a beam needs line2 or line3 cells",
-                    bp.group, b.kind, b.tags[c.index as usize]
-                )));
+                return Err(Error::group(
+                    bp.group.as_str(),
+                    format!(
+                        "group '{}' has {} cells (element {}): a beam needs line2 or line3 cells",
+                        bp.group, b.kind, b.tags[c.index as usize]
+                    ),
+                ));
             }
             let cell = b.cell(c.index as usize);
             let mut xm = [0.0; 3];
@@ -263,10 +273,10 @@ pub(crate) fn beam_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result
             set.orient.push(beam_orientation(bp.orientation, xm));
         }
         if set.tags.is_empty() {
-            return Err(Error::InvalidInput(format!(
-                "beam group '{}' has no line cells",
-                bp.group
-            )));
+            return Err(Error::group(
+                bp.group.as_str(),
+                format!("beam group '{}' has no line cells", bp.group),
+            ));
         }
         beams.push(set);
     }
@@ -298,26 +308,32 @@ pub(crate) fn reference_nodes(mesh: &Mesh, spec: &ModelSpec) -> Result<(Vec<Refe
         let grp = mesh.group(&c.group)?;
         let gn = mesh.group_nodes(grp);
         if gn.is_empty() {
-            return Err(Error::InvalidInput(format!("coupling: group '{}' is empty", c.group)));
+            return Err(Error::group(
+                c.group.as_str(),
+                format!("coupling: group '{}' is empty", c.group),
+            ));
         }
         if references.iter().any(|r| r.group == c.group) {
-            return Err(Error::InvalidInput(format!("group '{}' is coupled twice", c.group)));
+            return Err(Error::group(
+                c.group.as_str(),
+                format!("group '{}' is coupled twice", c.group),
+            ));
         }
         if let Some(ax) = c.guided {
             if ax > 2 {
-                return Err(Error::InvalidInput(format!(
-                    "coupling '{}': guided axis must be x, y or z",
-                    c.group
-                )));
+                return Err(Error::group(
+                    c.group.as_str(),
+                    format!("coupling '{}': guided axis must be x, y or z", c.group),
+                ));
             }
         }
         let p = match c.reference {
             Some(x) if x.iter().all(|v| v.is_finite()) => x,
             Some(x) => {
-                return Err(Error::InvalidInput(format!(
-                    "coupling '{}': reference point {x:?} is not finite",
-                    c.group
-                )));
+                return Err(Error::group(
+                    c.group.as_str(),
+                    format!("coupling '{}': reference point {x:?} is not finite", c.group),
+                ));
             }
             None => {
                 let mut p = [0.0; 3];
@@ -350,11 +366,14 @@ fn point_of(mesh: &Mesh, references: &[ReferenceNode], g: &str) -> Result<usize>
     let gn = mesh.group_nodes(mesh.group(g)?);
     match gn.as_slice() {
         [a] => Ok(*a as usize),
-        _ => Err(Error::InvalidInput(format!(
-            "group '{g}' has {} nodes: a point mass with inertia or a spring needs a coupled group or a \
+        _ => Err(Error::group(
+            g,
+            format!(
+                "group '{g}' has {} nodes: a point mass with inertia or a spring needs a coupled group or a \
              one-node group",
-            gn.len()
-        ))),
+                gn.len()
+            ),
+        )),
     }
 }
 
@@ -370,10 +389,13 @@ pub(crate) fn point_masses(
     let mut masses3 = DiscreteSet::new(1, 3);
     for pm in &spec.point_masses {
         if !(pm.mass.is_finite() && pm.mass >= 0.0) || pm.inertia.iter().any(|v| !v.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "point mass on '{}': mass must be non-negative and finite, got {}",
-                pm.group, pm.mass
-            )));
+            return Err(Error::group(
+                pm.group.as_str(),
+                format!(
+                    "point mass on '{}': mass must be non-negative and finite, got {}",
+                    pm.group, pm.mass
+                ),
+            ));
         }
         let rotary = pm.inertia.iter().any(|&v| v != 0.0);
         if rotary {
@@ -402,11 +424,14 @@ pub(crate) fn point_masses(
                 ),
             ];
             if let Some((what, v, _)) = minors.iter().find(|(_, v, t)| *v < -t) {
-                return Err(Error::InvalidInput(format!(
-                    "point mass on '{}': the inertia tensor (Ixx,Iyy,Izz,Ixy,Iyz,Ixz = {:?} kg·m²) is not \
+                return Err(Error::group(
+                    pm.group.as_str(),
+                    format!(
+                        "point mass on '{}': the inertia tensor (Ixx,Iyy,Izz,Ixy,Iyz,Ixz = {:?} kg·m²) is not \
                      positive semi-definite ({what} = {v:.3e} < 0)",
-                    pm.group, pm.inertia
-                )));
+                        pm.group, pm.inertia
+                    ),
+                ));
             }
         }
         let single = references.iter().any(|r| r.group == pm.group)
@@ -432,10 +457,13 @@ pub(crate) fn point_masses(
             );
         } else {
             if rotary {
-                return Err(Error::InvalidInput(format!(
-                    "point mass on '{}': rotary inertia needs a coupled group (--couple {})",
-                    pm.group, pm.group
-                )));
+                return Err(Error::group(
+                    pm.group.as_str(),
+                    format!(
+                        "point mass on '{}': rotary inertia needs a coupled group (--couple {})",
+                        pm.group, pm.group
+                    ),
+                ));
             }
             let gn = mesh.group_nodes(mesh.group(&pm.group)?);
             let share = pm.mass / gn.len() as f64;
@@ -464,10 +492,10 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
     let mut springs2 = DiscreteSet::new(2, 6);
     for sp in &spec.springs {
         if sp.k.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
-            return Err(Error::InvalidInput(format!(
-                "spring on '{}': stiffnesses must be non-negative",
-                sp.a
-            )));
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!("spring on '{}': stiffnesses must be non-negative", sp.a),
+            ));
         }
         let a = point_of(mesh, references, &sp.a)?;
         match &sp.b {
@@ -500,30 +528,36 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
         let n = if sp.b.is_some() { 12 } else { 6 };
         let what = format!("spring '{}' on '{}'", sp.label, sp.a);
         if sp.k.len() != n * n {
-            return Err(Error::InvalidInput(format!(
-                "{what}: the stiffness matrix needs {} entries ({n}×{n}), got {}",
-                n * n,
-                sp.k.len()
-            )));
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!(
+                    "{what}: the stiffness matrix needs {} entries ({n}×{n}), got {}",
+                    n * n,
+                    sp.k.len()
+                ),
+            ));
         }
         if sp.k.iter().any(|v| !v.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "{what}: the stiffness matrix is not finite"
-            )));
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!("{what}: the stiffness matrix is not finite"),
+            ));
         }
         let scale = sp.k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let km = nalgebra::DMatrix::from_row_slice(n, n, &sp.k);
         if (0..n).any(|i| (0..n).any(|j| (km[(i, j)] - km[(j, i)]).abs() > 1e-9 * scale)) {
-            return Err(Error::InvalidInput(format!(
-                "{what}: the stiffness matrix is not symmetric"
-            )));
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!("{what}: the stiffness matrix is not symmetric"),
+            ));
         }
         // Positive semi-definite to rounding: a negative eigenvalue would make K indefinite.
         let lmin = km.symmetric_eigenvalues().iter().fold(f64::INFINITY, |a, &v| a.min(v));
         if lmin < -1e-9 * scale {
-            return Err(Error::InvalidInput(format!(
-                "{what}: the stiffness matrix is not positive semi-definite (eigenvalue {lmin:.3e})"
-            )));
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!("{what}: the stiffness matrix is not positive semi-definite (eigenvalue {lmin:.3e})"),
+            ));
         }
         let a = point_of(mesh, references, &sp.a)?;
         match &sp.b {
@@ -605,7 +639,7 @@ pub(crate) fn fixes(
         let grp = mesh.group(g)?;
         let gn = mesh.group_nodes(grp);
         if gn.is_empty() {
-            return Err(Error::InvalidInput(format!("group '{g}' has no nodes to fix")));
+            return Err(Error::group(g.as_str(), format!("group '{g}' has no nodes to fix")));
         }
         let mut count = 0;
         for a in gn {
@@ -617,9 +651,10 @@ pub(crate) fn fixes(
             cons.fixed[a as usize] |= m;
         }
         if count == 0 {
-            return Err(Error::InvalidInput(format!(
-                "group '{g}' shares no node with the volume elements: nothing to fix"
-            )));
+            return Err(Error::group(
+                g.as_str(),
+                format!("group '{g}' shares no node with the volume elements: nothing to fix"),
+            ));
         }
     }
     Ok(fixed_by)
@@ -644,16 +679,22 @@ pub(crate) fn couplings(
         for &s in gn {
             let s = s as usize;
             if let Some(gi) = fixed_by[s] {
-                return Err(Error::InvalidInput(format!(
-                    "conflicting constraints: group '{}' is coupled, but its node {} is also fixed by '{}'",
-                    r.group, mesh.node_tags[s], spec.fixes[gi].0
-                )));
+                return Err(Error::node(
+                    mesh.node_tags[s],
+                    format!(
+                        "conflicting constraints: group '{}' is coupled, but its node {} is also fixed by '{}'",
+                        r.group, mesh.node_tags[s], spec.fixes[gi].0
+                    ),
+                ));
             }
             if coupled[..ri].iter().any(|g| g.contains(&(s as u32))) {
-                return Err(Error::InvalidInput(format!(
-                    "conflicting constraints: node {} belongs to two coupled groups",
-                    mesh.node_tags[s]
-                )));
+                return Err(Error::node(
+                    mesh.node_tags[s],
+                    format!(
+                        "conflicting constraints: node {} belongs to two coupled groups",
+                        mesh.node_tags[s]
+                    ),
+                ));
             }
             let d = [nodes[s][0] - xr[0], nodes[s][1] - xr[1], nodes[s][2] - xr[2]];
             let rr = |c: usize| NCOMP * rnode + c;
@@ -810,26 +851,35 @@ pub(crate) fn prescribed(
             Some(r) if r.node == a => format!("the reference node of '{g}'"),
             _ => format!("node {}", mesh.node_tags.get(a).copied().unwrap_or(a as u64)),
         };
+        // The DOF a conflict is at: a mesh node's component, or the group of a reference node.
+        let at = |a: usize, comp: &str, msg: String| match mesh.node_tags.get(a) {
+            Some(&tag) => Error::dof(tag, comp, msg),
+            None => Error::group(g.as_str(), msg),
+        };
         for (c, v) in vals.iter().enumerate() {
             let Some(v) = v else { continue };
             if !v.is_finite() {
-                return Err(Error::InvalidInput(format!(
-                    "prescribed displacement on '{g}' is not finite"
-                )));
+                return Err(Error::group(
+                    g.as_str(),
+                    format!("prescribed displacement on '{g}' is not finite"),
+                ));
             }
             // A non-zero value on a component no node of the group has (a rotation of solid
             // nodes) would be dropped: the run would answer another question.
             if *v != 0.0 && !targets.iter().any(|&a| active[a] & (1 << c) != 0) {
-                return Err(Error::InvalidInput(format!(
-                    "prescribed displacement on '{g}': {} = {v} but no node of the group has that degree of \
+                return Err(Error::group(
+                    g.as_str(),
+                    format!(
+                        "prescribed displacement on '{g}': {} = {v} but no node of the group has that degree of \
                      freedom ({}); prescribe it on a coupled group (--couple {g}) or on shell or beam nodes",
-                    COMPONENT_NAMES[c],
-                    if c >= 3 {
-                        "solid nodes have no rotations"
-                    } else {
-                        "it belongs to no element"
-                    }
-                )));
+                        COMPONENT_NAMES[c],
+                        if c >= 3 {
+                            "solid nodes have no rotations"
+                        } else {
+                            "it belongs to no element"
+                        }
+                    ),
+                ));
             }
         }
         for &a in &targets {
@@ -840,19 +890,27 @@ pub(crate) fn prescribed(
                 }
                 let comp = COMPONENT_NAMES[c];
                 if cons.mpc.contains_key(&(NCOMP * a + c)) {
-                    return Err(Error::InvalidInput(format!(
-                        "conflicting constraints: '{g}' prescribes {comp} of {}, which is coupled; prescribe \
+                    return Err(at(
+                        a,
+                        comp,
+                        format!(
+                            "conflicting constraints: '{g}' prescribes {comp} of {}, which is coupled; prescribe \
                          the coupled group instead",
-                        name(a)
-                    )));
+                            name(a)
+                        ),
+                    ));
                 }
                 match cons.value.get(&(NCOMP * a + c)) {
                     Some(old) if old != v => {
-                        return Err(Error::InvalidInput(format!(
-                            "conflicting constraints: {comp} of {} is prescribed twice ({old} and {v}, the \
+                        return Err(at(
+                            a,
+                            comp,
+                            format!(
+                                "conflicting constraints: {comp} of {} is prescribed twice ({old} and {v}, the \
                              second by '{g}')",
-                            name(a)
-                        )));
+                                name(a)
+                            ),
+                        ));
                     }
                     Some(_) => {}
                     // Held at zero already: prescribing zero agrees (a support sharing an edge).
@@ -873,10 +931,14 @@ pub(crate) fn prescribed(
                                 .map(|(f, _)| format!("it is fixed by '{f}'"))
                                 .unwrap_or_else(|| "it is already fixed".into()),
                         };
-                        return Err(Error::InvalidInput(format!(
-                            "conflicting constraints: '{g}' prescribes {comp} = {v} of {}, but {by}",
-                            name(a)
-                        )));
+                        return Err(at(
+                            a,
+                            comp,
+                            format!(
+                                "conflicting constraints: '{g}' prescribes {comp} = {v} of {}, but {by}",
+                                name(a)
+                            ),
+                        ));
                     }
                     None => {}
                 }

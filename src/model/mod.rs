@@ -6,10 +6,12 @@
 
 mod build;
 mod coarse;
+pub mod load;
 mod orient;
 pub mod sets;
 pub mod spec;
 
+pub use load::{GroupForce, Load};
 pub use sets::{BeamSet, DiscreteSet, ReferenceNode, ShellSet, SolidSet};
 pub use spec::{
     BeamPart, CouplingSpec, ModelSpec, Orientation, PointMassSpec, ShellPart, SpringMatrixSpec, SpringSpec,

@@ -87,13 +87,17 @@ pub(crate) fn orient_shells(shells: &mut [ShellSet]) -> Result<Vec<String>> {
                 let (s, e) = cells[c];
                 format!("element {} of '{}'", shells[s].tags[e], shells[s].group)
             };
-            return Err(Error::InvalidInput(format!(
-                "shell normals cannot be oriented consistently: the surface through {} and {} is \
+            let (s, e) = cells[c];
+            return Err(Error::element(
+                shells[s].tags[e],
+                format!(
+                    "shell normals cannot be oriented consistently: the surface through {} and {} is \
                  one-sided (Möbius-like), so a shell offset has no side to apply to; give offset 0 \
                  there or split the surface",
-                name(c),
-                name(d)
-            )));
+                    name(c),
+                    name(d)
+                ),
+            ));
         }
         let negative = region.iter().filter(|&&c| orient[c] < 0).count();
         let keep = if 2 * negative > region.len() { -1 } else { 1 };

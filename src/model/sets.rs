@@ -178,7 +178,12 @@ impl BeamSet {
     }
 
     fn context(&self, e: usize) -> impl Fn(Error) -> Error + '_ {
-        move |err: Error| Error::InvalidInput(format!("beam '{}', element {}: {err}", self.group, self.tags[e]))
+        move |err: Error| {
+            Error::element(
+                self.tags[e],
+                format!("beam '{}', element {}: {err}", self.group, self.tags[e]),
+            )
+        }
     }
 
     /// Length of element `e` ([`beam::length`]).

@@ -209,6 +209,39 @@ pub fn rigid_analysis(
     nodes: &[[f64; 3]],
     phi: MatRef<'_, f64>,
 ) -> RigidAnalysis {
+    let (comp, nc) = connected_parts(k, dofs, nodes.len());
+    let parts = PartShapes::of(&comp, nc, dofs, nodes);
+    // Rigid vectors, each row about its part's centroid, rotations scaled by 1/size.
+    let r = part_rigid_vectors(&comp, &parts, dofs, nodes);
+    let (mut kr, mut mr) = (Mat::<f64>::zeros(dofs.n_free, 6), Mat::<f64>::zeros(dofs.n_free, 6));
+    k.mul_block(r.as_ref(), kr.as_mut());
+    m.mul_block(r.as_ref(), mr.as_mut());
+    let (gk, gm) = part_grams(&comp, nc, &r, &kr, &mr);
+    let (kd, md) = (k.diagonal(), m.diagonal());
+    let scale = kd
+        .iter()
+        .zip(&md)
+        .filter(|&(_, &mi)| mi > 0.0)
+        .map(|(&ki, &mi)| ki / mi)
+        .fold(0.0f64, f64::max);
+    let tol = 1e-13 * scale;
+    let (basis, free) = free_motions(&gk, &gm, tol, &comp, &parts, dofs, nodes.len());
+    let rigid = if basis.is_empty() {
+        vec![false; phi.ncols()]
+    } else {
+        modes_in_span(m, phi, &basis, &comp, nc, &mr)
+    };
+    RigidAnalysis {
+        n_parts: nc,
+        free,
+        rigid,
+    }
+}
+
+/// The connected parts of the free equations (union of equations coupled by `k`, and of the
+/// equations of one node among the first `n_nodes`): the part of each equation, numbered by
+/// first equation, and the number of parts.
+fn connected_parts(k: &SymMatrix, dofs: &DofMap, n_nodes: usize) -> (Vec<usize>, usize) {
     let n = dofs.n_free;
     // Union-find over equations.
     let mut parent: Vec<usize> = (0..n).collect();
@@ -228,7 +261,7 @@ pub fn rigid_analysis(
             }
         }
     }
-    for a in 0..nodes.len().min(dofs.n_nodes()) {
+    for a in 0..n_nodes.min(dofs.n_nodes()) {
         let (lo, hi) = (dofs.first[a], dofs.first[a + 1]);
         for e in lo + 1..hi {
             let (x, y) = (find(&mut parent, lo), find(&mut parent, e));
@@ -245,34 +278,59 @@ pub fn rigid_analysis(
         comp[e] = *comp_of_root.entry(r).or_insert(next);
     }
     let nc = comp_of_root.len();
-    // Centroid and size of each part.
-    let mut sum = vec![[0.0; 3]; nc];
-    let mut cnt = vec![0usize; nc];
-    let mut lo = vec![[f64::INFINITY; 3]; nc];
-    let mut hi = vec![[f64::NEG_INFINITY; 3]; nc];
-    let mut first_node = vec![usize::MAX; nc];
-    for a in 0..nodes.len().min(dofs.n_nodes()) {
-        if dofs.first[a] == dofs.first[a + 1] {
-            continue;
+    (comp, nc)
+}
+
+/// Per part: its number of nodes with free DOFs, its first node, its centroid and its size
+/// (bounding-box diagonal, 1 when zero or not finite).
+struct PartShapes {
+    count: Vec<usize>,
+    first_node: Vec<usize>,
+    centre: Vec<[f64; 3]>,
+    size: Vec<f64>,
+}
+
+impl PartShapes {
+    fn of(comp: &[usize], nc: usize, dofs: &DofMap, nodes: &[[f64; 3]]) -> PartShapes {
+        let mut sum = vec![[0.0; 3]; nc];
+        let mut cnt = vec![0usize; nc];
+        let mut lo = vec![[f64::INFINITY; 3]; nc];
+        let mut hi = vec![[f64::NEG_INFINITY; 3]; nc];
+        let mut first_node = vec![usize::MAX; nc];
+        for a in 0..nodes.len().min(dofs.n_nodes()) {
+            if dofs.first[a] == dofs.first[a + 1] {
+                continue;
+            }
+            let c = comp[dofs.first[a]];
+            cnt[c] += 1;
+            first_node[c] = first_node[c].min(a);
+            for d in 0..3 {
+                sum[c][d] += nodes[a][d];
+                lo[c][d] = lo[c][d].min(nodes[a][d]);
+                hi[c][d] = hi[c][d].max(nodes[a][d]);
+            }
         }
-        let c = comp[dofs.first[a]];
-        cnt[c] += 1;
-        first_node[c] = first_node[c].min(a);
-        for d in 0..3 {
-            sum[c][d] += nodes[a][d];
-            lo[c][d] = lo[c][d].min(nodes[a][d]);
-            hi[c][d] = hi[c][d].max(nodes[a][d]);
+        let centre: Vec<[f64; 3]> = (0..nc).map(|c| sum[c].map(|s| s / cnt[c].max(1) as f64)).collect();
+        let size: Vec<f64> = (0..nc)
+            .map(|c| {
+                let d: f64 = (0..3).map(|i| (hi[c][i] - lo[c][i]).powi(2)).sum::<f64>().sqrt();
+                if d > 0.0 && d.is_finite() { d } else { 1.0 }
+            })
+            .collect();
+        PartShapes {
+            count: cnt,
+            first_node,
+            centre,
+            size,
         }
     }
-    let centre: Vec<[f64; 3]> = (0..nc).map(|c| sum[c].map(|s| s / cnt[c].max(1) as f64)).collect();
-    let size: Vec<f64> = (0..nc)
-        .map(|c| {
-            let d: f64 = (0..3).map(|i| (hi[c][i] - lo[c][i]).powi(2)).sum::<f64>().sqrt();
-            if d > 0.0 && d.is_finite() { d } else { 1.0 }
-        })
-        .collect();
-    // Rigid vectors, each row about its part's centroid, rotations scaled by 1/size.
-    let mut r = Mat::<f64>::zeros(n, 6);
+}
+
+/// The six rigid-body vectors `R` (n_free × 6) of every part, about the part's centroid, the
+/// rotations scaled by 1/size.
+fn part_rigid_vectors(comp: &[usize], parts: &PartShapes, dofs: &DofMap, nodes: &[[f64; 3]]) -> Mat<f64> {
+    let (centre, size) = (&parts.centre, &parts.size);
+    let mut r = Mat::<f64>::zeros(dofs.n_free, 6);
     for (a, x) in nodes.iter().enumerate().take(dofs.n_nodes()) {
         for comp_i in 0..6 {
             let Some(e) = dofs.eq_of(a, comp_i) else { continue };
@@ -289,13 +347,20 @@ pub fn rigid_analysis(
             }
         }
     }
-    let (mut kr, mut mr) = (Mat::<f64>::zeros(n, 6), Mat::<f64>::zeros(n, 6));
-    k.mul_block(r.as_ref(), kr.as_mut());
-    m.mul_block(r.as_ref(), mr.as_mut());
+    r
+}
+
+/// The 6 × 6 matrices `G_K = RᵀKR`, `G_M = RᵀMR` of each part, from `KR` and `MR`.
+fn part_grams(
+    comp: &[usize],
+    nc: usize,
+    r: &Mat<f64>,
+    kr: &Mat<f64>,
+    mr: &Mat<f64>,
+) -> (Vec<nalgebra::Matrix6<f64>>, Vec<nalgebra::Matrix6<f64>>) {
     let mut gk = vec![nalgebra::Matrix6::<f64>::zeros(); nc];
     let mut gm = vec![nalgebra::Matrix6::<f64>::zeros(); nc];
-    for e in 0..n {
-        let c = comp[e];
+    for (e, &c) in comp.iter().enumerate() {
         for i in 0..6 {
             if r[(e, i)] == 0.0 {
                 continue;
@@ -306,19 +371,26 @@ pub fn rigid_analysis(
             }
         }
     }
-    let (kd, md) = (k.diagonal(), m.diagonal());
-    let scale = kd
-        .iter()
-        .zip(&md)
-        .filter(|&(_, &mi)| mi > 0.0)
-        .map(|(&ki, &mi)| ki / mi)
-        .fold(0.0f64, f64::max);
-    let tol = 1e-13 * scale;
+    (gk, gm)
+}
+
+/// The free motions of each part: the generalised eigenvectors of (`G_K`, `G_M`) with Rayleigh
+/// quotient below `tol`, as (part, coefficient vector of R), M-orthonormal; and the parts that
+/// have any, described.
+fn free_motions(
+    gk: &[nalgebra::Matrix6<f64>],
+    gm: &[nalgebra::Matrix6<f64>],
+    tol: f64,
+    comp: &[usize],
+    parts: &PartShapes,
+    dofs: &DofMap,
+    n_nodes: usize,
+) -> (Vec<(usize, nalgebra::Vector6<f64>)>, Vec<FreePart>) {
     const NAMES: [&str; 6] = ["ux", "uy", "uz", "rx", "ry", "rz"];
     // Free motions per part: coefficient vectors (6) of R.
     let mut basis: Vec<(usize, nalgebra::Vector6<f64>)> = Vec::new();
     let mut free = Vec::new();
-    for c in 0..nc {
+    for c in 0..gk.len() {
         let gms = (gm[c] + gm[c].transpose()) * 0.5;
         let gks = (gk[c] + gk[c].transpose()) * 0.5;
         let em = gms.symmetric_eigen();
@@ -351,42 +423,49 @@ pub fn rigid_analysis(
             .filter(|&d| gms[(d, d)] > 1e-10 * emax && gks[(d, d)] / gms[(d, d)] < tol)
             .map(|d| NAMES[d])
             .collect();
-        let node_list = (0..nodes.len().min(dofs.n_nodes()))
+        let node_list = (0..n_nodes.min(dofs.n_nodes()))
             .filter(|&a| dofs.first[a] < dofs.first[a + 1] && comp[dofs.first[a]] == c)
             .collect();
         free.push(FreePart {
-            nodes: cnt[c],
-            first_node: first_node[c],
+            nodes: parts.count[c],
+            first_node: parts.first_node[c],
             node_list,
             motions,
             count,
         });
     }
-    // Modes in the span of the free motions. The motions f_j = R y_j of a part are M-orthonormal
-    // (yᵢᵀ G_M y_j = δᵢⱼ by construction) and parts do not share equations, so the M-norm² of
-    // φ's component in their span is Σ_j (f_jᵀ M φ)², with f_jᵀ M φ = y_jᵀ (Σ_{e in part} MR_e φ_e).
+    (basis, free)
+}
+
+/// Per mode of `phi`: whether it lies in the span of the free motions `basis` (to 1e-8 of its
+/// M-norm²). The motions f_j = R y_j of a part are M-orthonormal (yᵢᵀ G_M y_j = δᵢⱼ by
+/// construction) and parts do not share equations, so the M-norm² of φ's component in their
+/// span is Σ_j (f_jᵀ M φ)², with f_jᵀ M φ = y_jᵀ (Σ_{e in part} MR_e φ_e).
+fn modes_in_span(
+    m: &SymMatrix,
+    phi: MatRef<'_, f64>,
+    basis: &[(usize, nalgebra::Vector6<f64>)],
+    comp: &[usize],
+    nc: usize,
+    mr: &Mat<f64>,
+) -> Vec<bool> {
+    let n = comp.len();
     let mut rigid = vec![false; phi.ncols()];
-    if !basis.is_empty() {
-        let mut mphi = Mat::<f64>::zeros(n, phi.ncols());
-        m.mul_block(phi, mphi.as_mut());
-        for (k, flag) in rigid.iter_mut().enumerate() {
-            let mut p = vec![nalgebra::Vector6::<f64>::zeros(); nc];
-            for e in 0..n {
-                let v = phi[(e, k)];
-                if v != 0.0 {
-                    for i in 0..6 {
-                        p[comp[e]][i] += v * mr[(e, i)];
-                    }
+    let mut mphi = Mat::<f64>::zeros(n, phi.ncols());
+    m.mul_block(phi, mphi.as_mut());
+    for (k, flag) in rigid.iter_mut().enumerate() {
+        let mut p = vec![nalgebra::Vector6::<f64>::zeros(); nc];
+        for e in 0..n {
+            let v = phi[(e, k)];
+            if v != 0.0 {
+                for i in 0..6 {
+                    p[comp[e]][i] += v * mr[(e, i)];
                 }
             }
-            let inside: f64 = basis.iter().map(|(c, y)| p[*c].dot(y).powi(2)).sum();
-            let norm: f64 = (0..n).map(|e| phi[(e, k)] * mphi[(e, k)]).sum();
-            *flag = norm > 0.0 && 1.0 - inside / norm < 1e-8;
         }
+        let inside: f64 = basis.iter().map(|(c, y)| p[*c].dot(y).powi(2)).sum();
+        let norm: f64 = (0..n).map(|e| phi[(e, k)] * mphi[(e, k)]).sum();
+        *flag = norm > 0.0 && 1.0 - inside / norm < 1e-8;
     }
-    RigidAnalysis {
-        n_parts: nc,
-        free,
-        rigid,
-    }
+    rigid
 }

@@ -174,9 +174,10 @@ impl StressField {
 
     fn check(self) -> Result<()> {
         match self {
-            StressField::Component(i) if i >= 6 => Err(Error::InvalidInput(format!(
-                "stress component {i} does not exist (Voigt components are 0..6: xx, yy, zz, yz, xz, xy)"
-            ))),
+            StressField::Component(i) if i >= 6 => Err(Error::param(
+                "StressField::Component",
+                format!("stress component {i} does not exist (Voigt components are 0..6: xx, yy, zz, yz, xz, xy)"),
+            )),
             _ => Ok(()),
         }
     }
@@ -285,6 +286,7 @@ pub fn tresca(s: &[f64; 6]) -> f64 {
 
 /// Checks `u` against the node count.
 fn check_displacements(n_nodes: usize, u: &[f64]) -> Result<()> {
+    // Stays Error::InvalidInput: tests/unit/stress.rs matches on the variant.
     if u.len() != 3 * n_nodes {
         return Err(Error::InvalidInput(format!(
             "stress recovery: the displacement vector has {} values, expected 3 per node = {} for {} nodes",
@@ -294,12 +296,15 @@ fn check_displacements(n_nodes: usize, u: &[f64]) -> Result<()> {
         )));
     }
     if let Some(i) = u.iter().position(|v| !v.is_finite()) {
-        return Err(Error::InvalidInput(format!(
-            "stress recovery: non-finite displacement {} at node index {} (component {})",
-            u[i],
-            i / 3,
-            i % 3
-        )));
+        return Err(Error::param(
+            "u",
+            format!(
+                "stress recovery: non-finite displacement {} at node index {} (component {})",
+                u[i],
+                i / 3,
+                i % 3
+            ),
+        ));
     }
     Ok(())
 }
@@ -310,10 +315,13 @@ fn gather_u(set: &impl ElementSet, e: usize, n_nodes: usize, u: &[f64], ue: &mut
     for (a, &g) in nodes.iter().enumerate() {
         let g = g as usize;
         if g >= n_nodes {
-            return Err(Error::InvalidInput(format!(
-                "stress recovery: element {} uses node index {g}, but only {n_nodes} nodes were given",
-                set.tag(e).unwrap_or(e as u64)
-            )));
+            return Err(Error::param(
+                "n_nodes",
+                format!(
+                    "stress recovery: element {} uses node index {g}, but only {n_nodes} nodes were given",
+                    set.tag(e).unwrap_or(e as u64)
+                ),
+            ));
         }
         ue[3 * a..3 * a + 3].copy_from_slice(&u[3 * g..3 * g + 3]);
     }
@@ -330,7 +338,7 @@ fn gather(set: &SolidSet, e: usize, n_nodes: usize, u: &[f64], x: &mut [[f64; 3]
 /// The sampling points and extrapolation matrix of [`Recovery::Extrapolated`] for `kind`:
 /// `(points, E)` with `E` row-major `n_nodes × n_points`, so that the stress at node `a` is
 /// `Σ_q E[a][q] σ(ξ_q)`.
-/// [`Error::InvalidInput`] for a kind that is not a solid.
+/// [`Error::param`] for a kind that is not a solid.
 fn extrapolation(kind: CellKind) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
     let nodes = shape::reference_nodes(kind);
     let nn = nodes.len();
@@ -351,9 +359,10 @@ fn extrapolation(kind: CellKind) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
         | CellKind::Quad4
         | CellKind::Quad8
         | CellKind::Quad9 => {
-            return Err(Error::InvalidInput(format!(
-                "stress extrapolation: {kind} is not a solid cell kind"
-            )));
+            return Err(Error::param(
+                "kind",
+                format!("stress extrapolation: {kind} is not a solid cell kind"),
+            ));
         }
     };
     let nl = linear.n_nodes();
@@ -389,8 +398,8 @@ fn extrapolation(kind: CellKind) -> Result<(Vec<[f64; 3]>, Vec<f64>)> {
 /// - `u`: displacements, node-major, 3 per node (m).
 ///
 /// # Errors
-/// [`Error::InvalidInput`] if `u` does not have `3 n_nodes` finite values or an element uses
-/// a node index `≥ n_nodes`; [`Error::InvertedElement`] if the
+/// [`Error::InvalidInput`] if `u` does not have `3 n_nodes` values, [`Error::param`] if one
+/// is not finite or an element uses a node index `≥ n_nodes`; [`Error::InvertedElement`] if the
 /// Jacobian determinant is not positive at a node of an element.
 pub fn nodal_stress<S: ElementSet>(solids: &[S], n_nodes: usize, u: &[f64]) -> Result<NodalStress> {
     nodal_stress_with(solids, n_nodes, u, Recovery::Direct)
@@ -569,7 +578,7 @@ impl GaussPointStress {
     /// `"(gauss points)"`); `None` if there are no points.
     ///
     /// # Errors
-    /// [`Error::InvalidInput`] for `StressField::Component(i)` with `i ≥ 6`.
+    /// [`Error::param`] for `StressField::Component(i)` with `i ≥ 6`.
     pub fn peak(&self, field: StressField) -> Result<Option<GroupMax>> {
         field.check()?;
         let mut best: Option<(usize, f64)> = None;
@@ -627,16 +636,19 @@ impl NodalStress {
 /// [`StressField::Component`] (largest magnitude, signed).
 ///
 /// # Errors
-/// [`Error::InvalidInput`] if `ns` was computed for another node count than `mesh` has, or
+/// [`Error::param`] if `ns` was computed for another node count than `mesh` has, or
 /// for `Component(i)` with `i ≥ 6`.
 pub fn group_maxima(mesh: &Mesh, ns: &NodalStress, field: StressField) -> Result<Vec<GroupMax>> {
     field.check()?;
     if ns.len() != mesh.n_nodes() {
-        return Err(Error::InvalidInput(format!(
-            "stress maxima: {} nodal stresses for a mesh of {} nodes",
-            ns.len(),
-            mesh.n_nodes()
-        )));
+        return Err(Error::param(
+            "ns",
+            format!(
+                "stress maxima: {} nodal stresses for a mesh of {} nodes",
+                ns.len(),
+                mesh.n_nodes()
+            ),
+        ));
     }
     let entry = |group: &str, nodes: &mut dyn Iterator<Item = usize>| -> Option<GroupMax> {
         let mut best: Option<(usize, f64)> = None;
