@@ -1,11 +1,12 @@
 //! The vibratory-table application and the command line, above the FE core (feature `app`).
 //!
 //! - [`dynamics`]: the lumped two-mass machine (paper §5–§8), electromagnet, transient, plots.
-//! - [`design`], [`sweep`], [`converge`]: the design chain and the studies built on the core.
-//! - [`scene`], [`report`], [`cli`]: scene files, batch runs, text reports, clap options.
+//! - [`design`]: the design chain built on the core.
+//! - [`studies`]: scene files and their runs, batch runs and merges, sweeps, convergence studies.
+//! - [`report`], [`cli`]: the report model and its renderers, clap options.
+//! - [`toml_file`]: the one reader of vibrofem's TOML input files (lines, keys, typed errors).
 //! - [`export`], [`slepc`]: K, M and the DOF map for other solvers; the SLEPc/MPI engine.
 pub mod cli;
-pub mod converge;
 pub mod design;
 pub mod design_search;
 pub mod dynamics;
@@ -14,7 +15,19 @@ pub mod harmonic;
 pub mod machine3d;
 pub mod machines_cli;
 pub mod report;
-pub mod scene;
 pub mod slepc;
-pub mod sweep;
+pub mod studies;
 pub mod toml_file;
+
+/// The scene file and batch runs at their former path `app::scene` (the Python bindings and the
+/// tests name it).
+pub mod scene {
+    pub use super::studies::batch::*;
+    pub use super::studies::scene::*;
+}
+/// Sweeps and the merge of batch shards at their former path `app::sweep`.
+pub mod sweep {
+    pub use super::studies::merge::merge;
+    pub use super::studies::sweep::*;
+}
+pub use studies::converge;

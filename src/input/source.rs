@@ -49,10 +49,9 @@ pub fn load(spec: &str, length_scale: f64) -> Result<Mesh> {
     if !path.exists() {
         if let Some((prefix, _)) = spec.split_once(':') {
             if !prefix.is_empty() && !prefix.contains(['/', '\\', '.']) {
-                return Err(Error::param(
-                    "spec",
-                    format!("unknown generator '{spec}' (known generators: {GENERATORS}); no file of that name either"),
-                ));
+                return Err(Error::param("spec", format!(
+                    "unknown generator '{spec}' (known generators: {GENERATORS}); no file of that name either"
+                )));
             }
         }
     }
@@ -69,27 +68,14 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
             _ => Err(Error::param("spec", format!("generator '{spec}': expected {usage}"))),
         }
     };
-    let mut m = if let Some(rest) = spec.strip_prefix("sandwich:") {
-        let mut it = rest.splitn(2, ',');
-        let preset = it.next().unwrap_or("").trim();
-        if preset != "paper" {
-            return Err(Error::param(
-                "spec",
-                format!("generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"),
-            ));
-        }
-        let mut p = pm::SandwichParams::paper();
-        if let Some(h) = it.next() {
-            p.elem_size = nums(h, 1, "sandwich:paper[,ELEMENT_SIZE]")?[0];
-        }
-        pm::sandwich_table(&p)?
+    let mut m = if let Some(sw) = SandwichSpec::parse(spec)? {
+        pm::sandwich_table(&sw.params())?
     } else if let Some(rest) = spec.strip_prefix("ibeam-line:") {
         let v = nums(rest, 2, "ibeam-line:LENGTH,N_ELEMENTS")?;
         if v[1] < 1.0 || v[1].fract() != 0.0 {
-            return Err(Error::param(
-                "spec",
-                format!("generator '{spec}': the element count must be a whole number ≥ 1"),
-            ));
+            return Err(Error::param("spec", format!(
+                "generator '{spec}': the element count must be a whole number ≥ 1"
+            )));
         }
         pm::i_beam_line(v[0], v[1] as usize)?
     } else if let Some(rest) = spec.strip_prefix("ibeam-shell:") {
@@ -113,14 +99,36 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
 
 /// The `box:` and `helix:` generators; `None` for any other spec.
 fn structured(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
-    if let Some(rest) = spec.strip_prefix("box:") {
+    if let Some(b) = BoxSpec::parse(spec)? {
+        return b.mesh(length_scale).map(Some);
+    }
+    if let Some(h) = HelixSpec::parse(spec)? {
+        return h.mesh(length_scale).map(Some);
+    }
+    Ok(None)
+}
+
+/// A `box:LX,LY,LZ:NX,NY,NZ:KIND` spec: a structured box of solid cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxSpec {
+    /// Edge lengths (in the spec's length unit).
+    pub size: [f64; 3],
+    /// Divisions along x, y, z.
+    pub divisions: [usize; 3],
+    /// Solid cell kind.
+    pub kind: CellKind,
+}
+
+impl BoxSpec {
+    /// The spec parsed; `None` if `spec` is not a `box:` spec.
+    pub fn parse(spec: &str) -> Result<Option<BoxSpec>> {
+        let Some(rest) = spec.strip_prefix("box:") else {
+            return Ok(None);
+        };
         let bad = |why: &str| {
-            Error::param(
-                "spec",
-                format!(
-                    "mesh '{spec}': {why}; expected box:LX,LY,LZ:NX,NY,NZ:KIND, e.g. box:0.3,0.3,0.02:20,20,4:hex20"
-                ),
-            )
+            Error::param("spec", format!(
+                "mesh '{spec}': {why}; expected box:LX,LY,LZ:NX,NY,NZ:KIND, e.g. box:0.3,0.3,0.02:20,20,4:hex20"
+            ))
         };
         let parts: Vec<&str> = rest.split(':').collect();
         if parts.len() != 3 {
@@ -144,43 +152,158 @@ fn structured(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
             .copied()
             .find(|k| k.name() == parts[2].trim())
             .ok_or_else(|| bad("unknown cell kind (tet4, tet10, hex8, hex20, hex27, wedge6, wedge15)"))?;
-        let s = [size[0] * length_scale, size[1] * length_scale, size[2] * length_scale];
-        return generate::try_box_mesh(kind, s, [n[0], n[1], n[2]]).map(Some);
+        Ok(Some(BoxSpec {
+            size: [size[0], size[1], size[2]],
+            divisions: [n[0], n[1], n[2]],
+            kind,
+        }))
     }
-    if let Some(rest) = spec.strip_prefix("helix:") {
-        // helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3]
+
+    /// The mesh, lengths scaled to metres by `length_scale`.
+    pub fn mesh(&self, length_scale: f64) -> Result<Mesh> {
+        let s = self.size.map(|x| x * length_scale);
+        generate::try_box_mesh(self.kind, s, self.divisions)
+    }
+}
+
+impl std::fmt::Display for BoxSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [lx, ly, lz] = self.size;
+        let [nx, ny, nz] = self.divisions;
+        write!(f, "box:{lx},{ly},{lz}:{nx},{ny},{nz}:{}", self.kind.name())
+    }
+}
+
+/// A `helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,KIND]` spec: a helical coil centreline of line
+/// cells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HelixSpec {
+    /// Mean coil diameter (in the spec's length unit).
+    pub diameter: f64,
+    /// Pitch (in the spec's length unit).
+    pub pitch: f64,
+    /// Number of turns.
+    pub turns: f64,
+    /// Elements per turn.
+    pub per_turn: usize,
+    /// `line2` or `line3`, if written (default `line2`).
+    pub kind: Option<CellKind>,
+}
+
+impl HelixSpec {
+    /// The spec parsed; `None` if `spec` is not a `helix:` spec.
+    pub fn parse(spec: &str) -> Result<Option<HelixSpec>> {
+        let Some(rest) = spec.strip_prefix("helix:") else {
+            return Ok(None);
+        };
         let parts: Vec<&str> = rest.split(',').map(str::trim).collect();
         let bad = |why: &str| {
-            Error::param(
-                "spec",
-                format!(
-                    "mesh '{spec}': {why}; expected helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3], e.g. helix:0.032,0.01,6,24"
-                ),
-            )
+            Error::param("spec", format!(
+                "mesh '{spec}': {why}; expected helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3], e.g. helix:0.032,0.01,6,24"
+            ))
         };
         if parts.len() != 4 && parts.len() != 5 {
             return Err(bad("four or five fields needed"));
         }
         let num = |i: usize| parts[i].parse::<f64>().map_err(|_| bad("numbers expected"));
         let kind = match parts.get(4) {
-            None | Some(&"line2") => CellKind::Line2,
-            Some(&"line3") => CellKind::Line3,
+            None => None,
+            Some(&"line2") => Some(CellKind::Line2),
+            Some(&"line3") => Some(CellKind::Line3),
             Some(_) => return Err(bad("the element kind is line2 or line3")),
         };
         let per_turn = parts[3]
             .parse::<usize>()
             .map_err(|_| bad("elements per turn must be a whole number"))?;
-        let p = crate::mesh::parametric::HelixParams {
-            mean_diameter: num(0)? * length_scale,
-            pitch: num(1)? * length_scale,
+        Ok(Some(HelixSpec {
+            diameter: num(0)?,
+            pitch: num(1)?,
             turns: num(2)?,
-            elems_per_turn: per_turn,
+            per_turn,
+            kind,
+        }))
+    }
+
+    /// The mesh, lengths scaled to metres by `length_scale`.
+    pub fn mesh(&self, length_scale: f64) -> Result<Mesh> {
+        let p = crate::mesh::parametric::HelixParams {
+            mean_diameter: self.diameter * length_scale,
+            pitch: self.pitch * length_scale,
+            turns: self.turns,
+            elems_per_turn: self.per_turn,
             // The wire diameter belongs to the beam section (--beam); the generator only checks
             // that coils do not touch, so give it a value below the pitch.
-            wire_diameter: 0.5 * num(1)? * length_scale,
-            kind,
+            wire_diameter: 0.5 * self.pitch * length_scale,
+            kind: self.kind.unwrap_or(CellKind::Line2),
         };
-        return crate::mesh::parametric::helix_beam(&p).map(Some);
+        crate::mesh::parametric::helix_beam(&p)
     }
-    Ok(None)
+}
+
+impl std::fmt::Display for HelixSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "helix:{},{},{},{}",
+            self.diameter, self.pitch, self.turns, self.per_turn
+        )?;
+        match self.kind {
+            Some(k) => write!(f, ",{}", k.name()),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A `sandwich:paper[,ELEMENT_SIZE]` spec: the paper's work table as quad4 shells.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SandwichSpec {
+    /// Shell element size (in the spec's length unit), if written (default: the paper
+    /// reconstruction's, [`crate::mesh::parametric::SandwichParams::paper`]).
+    pub elem_size: Option<f64>,
+}
+
+impl SandwichSpec {
+    /// The spec parsed; `None` if `spec` is not a `sandwich:` spec.
+    pub fn parse(spec: &str) -> Result<Option<SandwichSpec>> {
+        let Some(rest) = spec.strip_prefix("sandwich:") else {
+            return Ok(None);
+        };
+        let mut it = rest.splitn(2, ',');
+        let preset = it.next().unwrap_or("").trim();
+        if preset != "paper" {
+            return Err(Error::param("spec", format!(
+                "generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"
+            )));
+        }
+        let elem_size = match it.next() {
+            None => None,
+            Some(h) => match h.trim().parse::<f64>() {
+                Ok(x) if x.is_finite() => Some(x),
+                _ => {
+                    return Err(Error::param("spec", format!(
+                        "generator '{spec}': expected sandwich:paper[,ELEMENT_SIZE]"
+                    )));
+                }
+            },
+        };
+        Ok(Some(SandwichSpec { elem_size }))
+    }
+
+    /// The table's parameters: the paper reconstruction with this element size.
+    pub fn params(&self) -> crate::mesh::parametric::SandwichParams {
+        let mut p = crate::mesh::parametric::SandwichParams::paper();
+        if let Some(h) = self.elem_size {
+            p.elem_size = h;
+        }
+        p
+    }
+}
+
+impl std::fmt::Display for SandwichSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.elem_size {
+            Some(h) => write!(f, "sandwich:paper,{h}"),
+            None => write!(f, "sandwich:paper"),
+        }
+    }
 }

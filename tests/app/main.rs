@@ -21,5 +21,6 @@ mod outputs;
 mod resource_limits;
 mod scenes;
 mod solid_elements;
+mod study_inputs;
 mod support;
 mod sweep;

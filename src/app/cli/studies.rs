@@ -17,7 +17,7 @@ pub struct RunArgs {
 }
 
 pub fn run_cmd(a: &RunArgs) -> Result<i32> {
-    let scene = crate::app::scene::Scene::load(&a.scene)?;
+    let scene = crate::app::studies::scene::Scene::load(&a.scene)?;
     check_outputs(&[], Some(&a.out))?;
     let report = scene.run(Some((&a.out, "")))?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?;
@@ -65,16 +65,20 @@ pub struct BatchArgs {
 pub fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     use std::io::IsTerminal;
     check_outputs(&[], Some(&a.out))?;
-    let opts = crate::app::scene::BatchOptions {
+    let opts = crate::app::studies::batch::BatchOptions {
         pattern: a.pattern.clone(),
         template: a.scene.clone(),
         out: a.out.clone(),
         jobs: a.jobs,
         force: a.force,
-        shard: a.shard.as_deref().map(crate::app::scene::parse_shard).transpose()?,
+        shard: a
+            .shard
+            .as_deref()
+            .map(crate::app::studies::batch::parse_shard)
+            .transpose()?,
         progress_bar: std::io::stderr().is_terminal(),
     };
-    let s = crate::app::scene::run_batch(&opts)?;
+    let s = crate::app::studies::batch::run_batch(&opts)?;
     outln!(
         "{:<48} {:>10} {:>8} {:>14} {:>9}",
         "file",
@@ -146,7 +150,7 @@ pub struct SweepArgs {
 }
 
 pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
-    use crate::app::sweep;
+    use crate::app::studies::sweep;
     let mut study = sweep::Study::load(&a.study)?;
     for s in &a.set {
         let (k, v) = sweep::parse_set(s)?;
@@ -156,7 +160,12 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
         None => {}
         Some("shell") => study.formulation = sweep::SweepFormulation::Shell,
         Some("solid") => study.formulation = sweep::SweepFormulation::Solid,
-        Some(f) => return Err(Error::InvalidInput(format!("--formulation '{f}': use shell or solid"))),
+        Some(f) => {
+            return Err(Error::option(
+                "--formulation",
+                format!("--formulation '{f}': use shell or solid"),
+            ));
+        }
     }
     if let Some(h) = a.solid_size {
         study.solid_size = h;
@@ -199,7 +208,7 @@ pub struct ConvergeArgs {
 }
 
 pub fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
-    use crate::app::converge;
+    use crate::app::studies::converge;
     let case = if std::path::Path::new(&a.case).is_file() {
         converge::from_scene(std::path::Path::new(&a.case), a.levels)?
     } else {
@@ -225,7 +234,7 @@ pub struct MergeArgs {
 
 pub fn merge_cmd(a: &MergeArgs) -> Result<i32> {
     check_outputs(&[], Some(&a.out))?;
-    let s = crate::app::sweep::merge(&a.dirs, Some(&a.out))?;
+    let s = crate::app::studies::merge::merge(&a.dirs, Some(&a.out))?;
     outln!(
         "{} cases ({} failed) merged from {} folders into {}",
         s.rows.len(),

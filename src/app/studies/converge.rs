@@ -14,24 +14,22 @@
 //! extrapolation of the reference formulation's last three levels (each halving the element size)
 //! when they converge monotonically at an order ≥ 1.5, else its finest level.
 
+use super::scene::{MeshSource, Scene};
 use crate::analysis::modal::ModalTarget;
-use crate::app::scene::{MeshSource, Scene};
+use crate::app::toml_file;
+use crate::input::source::{BoxSpec, HelixSpec, SandwichSpec};
+use crate::mesh::CellKind;
 use crate::mesh::parametric::SandwichParams;
 use crate::{Error, Result};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
 
-fn invalid(msg: impl Into<String>) -> Error {
-    Error::InvalidInput(msg.into())
-}
-
 /// How one run of a case is made.
 #[derive(Clone, Debug)]
 pub enum Runner {
-    /// A scene (TOML text); the value is its first elastic frequency (modal) or its stiffness
-    /// (static).
-    Scene(String),
+    /// A scene; the value is its first elastic frequency (modal) or its stiffness (static).
+    Scene(Box<Scene>),
     /// The S7 table as MITC4 mid-surface shells of this size (m); value: first elastic frequency.
     TableShell(f64),
     /// The S7 table as hex20 solids of this size (m); value: first elastic frequency.
@@ -179,8 +177,13 @@ pub struct Convergence {
     pub cheapest: Vec<(f64, Option<usize>)>,
 }
 
-fn scene_text(name: &str, mesh: &str, body: &str) -> String {
-    format!("[scene]\nversion = 1\nname = \"{name}\"\n\n[mesh]\ngenerator = \"{mesh}\"\n\n{body}")
+/// A built-in case's scene: its body (parts, supports, loads, analysis) on a generated mesh.
+fn builtin_scene(name: &str, mesh: &str, body: &str) -> Result<Runner> {
+    let text = format!("[scene]\nversion = 1\nname = \"{name}\"\n\n[mesh]\ngenerator = \"{mesh}\"\n\n{body}");
+    Ok(Runner::Scene(Box::new(Scene::parse(
+        Path::new("converge.toml"),
+        &text,
+    )?)))
 }
 
 const S1_SOLID: &str = "[[part]]\ngroup = \"volume\"\nformulation = \"solid\"\n\n[modal]\nmodes = 7\n";
@@ -195,233 +198,264 @@ const S5_BODY: &str = "[[material]]\nname = \"spring steel\"\nyoung = 2.002e11\n
                        [[couple]]\ngroup = \"end_top\"\nguided = \"z\"\n\n[[load]]\ngroup = \"end_top\"\n\
                        force = [0.0, 0.0, -600.0]\n";
 
-/// The built-in cases: `s1`, `s3`, `s5`, `s7`, and `tiny` (a fast S1 variant for tests).
-pub fn builtin(name: &str) -> Result<Case> {
-    let boxes = |dims: &str, kind: &str, divs: &[[usize; 3]], body: &str, form: &str| -> Vec<LevelSpec> {
-        divs.iter()
-            .map(|d| LevelSpec {
+/// Box levels of a built-in case: per formulation (its name, cell kind and the divisions of
+/// each level, coarse to fine), the scene `body` on a `box:` of `size`.
+fn box_levels(
+    name: &str,
+    size: [f64; 3],
+    body: &str,
+    forms: &[(&str, CellKind, &[[usize; 3]])],
+) -> Result<Vec<LevelSpec>> {
+    let mut levels = Vec::new();
+    for &(form, kind, divs) in forms {
+        for &d in divs {
+            let spec = BoxSpec {
+                size,
+                divisions: d,
+                kind,
+            };
+            levels.push(LevelSpec {
                 formulation: form.to_string(),
                 mesh: format!("{}×{}×{}", d[0], d[1], d[2]),
-                runner: Runner::Scene(scene_text(
-                    name,
-                    &format!("box:{dims}:{},{},{}:{kind}", d[0], d[1], d[2]),
-                    body,
-                )),
-            })
-            .collect()
-    };
-    let s1 = "0.3,0.3,0.02";
+                runner: builtin_scene(name, &spec.to_string(), body)?,
+            });
+        }
+    }
+    Ok(levels)
+}
+
+/// A case measuring the first elastic frequency (Hz).
+fn frequency_case(name: &str, levels: Vec<LevelSpec>, reference: &str, known: Option<(f64, &str)>) -> Case {
+    Case {
+        name: name.into(),
+        quantity: "first elastic frequency".into(),
+        unit: "Hz".into(),
+        levels,
+        reference: reference.into(),
+        known: known.map(|(v, s)| (v, s.to_string())),
+    }
+}
+
+/// A case measuring a stiffness (N/m).
+fn stiffness_case(name: &str, levels: Vec<LevelSpec>, reference: &str) -> Case {
+    Case {
+        name: name.into(),
+        quantity: "stiffness".into(),
+        unit: "N/m".into(),
+        levels,
+        reference: reference.into(),
+        known: None,
+    }
+}
+
+/// The built-in cases: `s1`, `s3`, `s5`, `s7`, and `tiny` (a fast S1 variant for tests).
+pub fn builtin(name: &str) -> Result<Case> {
+    use CellKind::{Hex8, Hex20, Line2, Line3, Tet4, Tet10};
+    let s1 = [0.3, 0.3, 0.02];
     match name {
         "s1" => {
-            let mut l = boxes(s1, "tet4", &[[6, 6, 1], [12, 12, 2], [24, 24, 4]], S1_SOLID, "tet4");
-            l.extend(boxes(
+            let levels = box_levels(
+                name,
                 s1,
-                "tet10",
-                &[[4, 4, 1], [8, 8, 2], [16, 16, 4]],
                 S1_SOLID,
-                "tet10",
-            ));
-            l.extend(boxes(
+                &[
+                    ("tet4", Tet4, &[[6, 6, 1], [12, 12, 2], [24, 24, 4]]),
+                    ("tet10", Tet10, &[[4, 4, 1], [8, 8, 2], [16, 16, 4]]),
+                    ("hex8", Hex8, &[[6, 6, 1], [12, 12, 2], [24, 24, 4]]),
+                    ("hex20", Hex20, &[[4, 4, 1], [8, 8, 2], [16, 16, 4]]),
+                ],
+            )?
+            .into_iter()
+            .chain(box_levels(
+                name,
                 s1,
-                "hex8",
-                &[[6, 6, 1], [12, 12, 2], [24, 24, 4]],
-                S1_SOLID,
-                "hex8",
-            ));
-            l.extend(boxes(
-                s1,
-                "hex20",
-                &[[4, 4, 1], [8, 8, 2], [16, 16, 4]],
-                S1_SOLID,
-                "hex20",
-            ));
-            l.extend(boxes(
-                s1,
-                "hex8",
-                &[[10, 10, 1], [20, 20, 1], [40, 40, 1]],
                 S1_SHELL,
-                "shell",
-            ));
-            Ok(Case {
-                name: "S1 free plate 300 × 300 × 20 mm".into(),
-                quantity: "first elastic frequency".into(),
-                unit: "Hz".into(),
-                levels: l,
-                reference: "hex20".into(),
-                known: Some((720.432, "hex20 45×45×9, 244 812 DOFs, README".into())),
-            })
+                &[("shell", Hex8, &[[10, 10, 1], [20, 20, 1], [40, 40, 1]])],
+            )?)
+            .collect();
+            Ok(frequency_case(
+                "S1 free plate 300 × 300 × 20 mm",
+                levels,
+                "hex20",
+                Some((720.432, "hex20 45×45×9, 244 812 DOFs, README")),
+            ))
         }
         "tiny" => {
-            let mut l = boxes(s1, "hex20", &[[2, 2, 1], [4, 4, 1], [8, 8, 1]], S1_SOLID, "hex20");
-            l.extend(boxes(s1, "hex8", &[[8, 8, 1], [16, 16, 1]], S1_SHELL, "shell"));
-            Ok(Case {
-                name: "tiny S1 plate".into(),
-                quantity: "first elastic frequency".into(),
-                unit: "Hz".into(),
-                levels: l,
-                reference: "hex20".into(),
-                known: None,
-            })
+            let levels = box_levels(
+                name,
+                s1,
+                S1_SOLID,
+                &[("hex20", Hex20, &[[2, 2, 1], [4, 4, 1], [8, 8, 1]])],
+            )?
+            .into_iter()
+            .chain(box_levels(
+                name,
+                s1,
+                S1_SHELL,
+                &[("shell", Hex8, &[[8, 8, 1], [16, 16, 1]])],
+            )?)
+            .collect();
+            Ok(frequency_case("tiny S1 plate", levels, "hex20", None))
         }
         "s3" => {
-            let d = "0.169,0.146,0.009";
-            let mut l = boxes(d, "tet4", &[[8, 6, 1], [16, 12, 2], [32, 24, 4]], S3_BODY, "tet4");
-            l.extend(boxes(
-                d,
-                "tet10",
-                &[[4, 3, 1], [8, 6, 2], [16, 12, 4]],
+            let levels = box_levels(
+                name,
+                [0.169, 0.146, 0.009],
                 S3_BODY,
-                "tet10",
-            ));
-            l.extend(boxes(
-                d,
-                "hex8",
-                &[[8, 6, 1], [16, 12, 2], [32, 24, 4]],
-                S3_BODY,
-                "hex8",
-            ));
-            l.extend(boxes(
-                d,
-                "hex20",
-                &[[4, 3, 1], [8, 6, 2], [16, 12, 4]],
-                S3_BODY,
-                "hex20",
-            ));
-            Ok(Case {
-                name: "S3 leaf spring 169 × 146 × 9 mm".into(),
-                quantity: "stiffness".into(),
-                unit: "N/m".into(),
-                levels: l,
-                reference: "hex20".into(),
-                known: None,
-            })
+                &[
+                    ("tet4", Tet4, &[[8, 6, 1], [16, 12, 2], [32, 24, 4]]),
+                    ("tet10", Tet10, &[[4, 3, 1], [8, 6, 2], [16, 12, 4]]),
+                    ("hex8", Hex8, &[[8, 6, 1], [16, 12, 2], [32, 24, 4]]),
+                    ("hex20", Hex20, &[[4, 3, 1], [8, 6, 2], [16, 12, 4]]),
+                ],
+            )?;
+            Ok(stiffness_case("S3 leaf spring 169 × 146 × 9 mm", levels, "hex20"))
         }
         "s5" => {
-            let helix = |n: usize, kind: &str| LevelSpec {
-                formulation: kind.to_string(),
-                mesh: format!("{n}/turn"),
-                runner: Runner::Scene(scene_text(name, &format!("helix:0.032,0.01,6,{n},{kind}"), S5_BODY)),
-            };
-            let mut l: Vec<LevelSpec> = [6, 12, 24, 48, 96].iter().map(|&n| helix(n, "line2")).collect();
-            l.extend([3, 6, 12, 24, 48].iter().map(|&n| helix(n, "line3")));
-            Ok(Case {
-                name: "S5 coil, beam helix".into(),
-                quantity: "stiffness".into(),
-                unit: "N/m".into(),
-                levels: l,
-                reference: "line3".into(),
-                known: None,
-            })
+            let mut levels = Vec::new();
+            for (kind, per_turn) in [(Line2, [6, 12, 24, 48, 96]), (Line3, [3, 6, 12, 24, 48])] {
+                for n in per_turn {
+                    let spec = HelixSpec {
+                        diameter: 0.032,
+                        pitch: 0.01,
+                        turns: 6.0,
+                        per_turn: n,
+                        kind: Some(kind),
+                    };
+                    levels.push(LevelSpec {
+                        formulation: kind.name().to_string(),
+                        mesh: format!("{n}/turn"),
+                        runner: builtin_scene(name, &spec.to_string(), S5_BODY)?,
+                    });
+                }
+            }
+            Ok(stiffness_case("S5 coil, beam helix", levels, "line3"))
         }
         "s7" => {
-            let mut l: Vec<LevelSpec> = [0.1, 0.05, 0.025]
-                .iter()
-                .map(|&h| LevelSpec {
-                    formulation: "shell".into(),
-                    mesh: format!("{} mm", h * 1e3),
-                    runner: Runner::TableShell(h),
-                })
-                .collect();
-            l.extend([0.1, 0.05, 0.025].iter().map(|&h| LevelSpec {
-                formulation: "hex20".into(),
+            let level = |form: &str, h: f64, runner: Runner| LevelSpec {
+                formulation: form.into(),
                 mesh: format!("{} mm", h * 1e3),
-                runner: Runner::TableSolid(h),
-            }));
-            Ok(Case {
-                name: "S7 sandwich table (reconstruction)".into(),
-                quantity: "first elastic frequency".into(),
-                unit: "Hz".into(),
-                levels: l,
-                reference: "hex20".into(),
-                known: Some((
-                    164.5,
-                    "graded hex20 50/12.5/6.25 mm, 69 177 DOFs, docs/formulations.md".into(),
-                )),
-            })
+                runner,
+            };
+            let sizes = [0.1, 0.05, 0.025];
+            let levels = (sizes.iter().map(|&h| level("shell", h, Runner::TableShell(h))))
+                .chain(sizes.iter().map(|&h| level("hex20", h, Runner::TableSolid(h))))
+                .collect();
+            Ok(frequency_case(
+                "S7 sandwich table (reconstruction)",
+                levels,
+                "hex20",
+                Some((164.5, "graded hex20 50/12.5/6.25 mm, 69 177 DOFs, docs/formulations.md")),
+            ))
         }
-        _ => Err(invalid(format!(
-            "converge: unknown case '{name}' (s1, s3, s5, s7, tiny, or a scene file)"
-        ))),
+        _ => Err(Error::param(
+            "case",
+            format!("converge: unknown case '{name}' (s1, s3, s5, s7, tiny, or a scene file)"),
+        )),
     }
 }
 
 /// Most refinement levels of a scene study.
 pub const MAX_LEVELS: usize = 6;
 
+/// A mesh generator a scene study can refine: the source grammar's specs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Refinable {
+    /// `box:`: divisions doubled per level (a single hex8 layer through the thickness stays one).
+    Box(BoxSpec),
+    /// `helix:`: elements per turn doubled per level.
+    Helix(HelixSpec),
+    /// `sandwich:paper[,SIZE]`: element size halved per level (default size 0.025).
+    Sandwich(SandwichSpec),
+}
+
+impl Refinable {
+    /// The generator of `spec`, if it is one that can be refined (`None`: another generator
+    /// or a malformed spec).
+    pub fn parse(spec: &str) -> Option<Refinable> {
+        if let Ok(Some(b)) = BoxSpec::parse(spec) {
+            return Some(Refinable::Box(b));
+        }
+        if let Ok(Some(h)) = HelixSpec::parse(spec) {
+            return Some(Refinable::Helix(h));
+        }
+        match SandwichSpec::parse(spec) {
+            Ok(Some(s)) => Some(Refinable::Sandwich(s)),
+            _ => None,
+        }
+    }
+
+    /// The generator spec of refinement level `k` (0: as given, each level halves the element
+    /// size).
+    pub fn level(&self, k: u32) -> String {
+        let f = 1usize << k;
+        match *self {
+            Refinable::Box(mut b) => {
+                let [nx, ny, nz] = b.divisions;
+                let nz = if nz == 1 && b.kind == CellKind::Hex8 { 1 } else { nz * f };
+                b.divisions = [nx * f, ny * f, nz];
+                b.to_string()
+            }
+            Refinable::Helix(mut h) => {
+                h.per_turn *= f;
+                h.to_string()
+            }
+            Refinable::Sandwich(s) => SandwichSpec {
+                elem_size: Some(s.elem_size.unwrap_or(0.025) / f as f64),
+            }
+            .to_string(),
+        }
+    }
+}
+
 /// A scene refined `levels` times by halving its element size: `box:` divisions doubled,
-/// `helix:` elements per turn doubled, `sandwich:paper,SIZE` size halved. One formulation (the
-/// scene's); the reference is its own finest levels.
+/// `helix:` elements per turn doubled, `sandwich:paper,SIZE` size halved ([`Refinable`]). One
+/// formulation (the scene's); the reference is its own finest levels.
 pub fn from_scene(path: &Path, levels: usize) -> Result<Case> {
     if levels > MAX_LEVELS {
-        return Err(invalid(format!(
-            "converge: --levels {levels}: at most {MAX_LEVELS} (each level halves the element size, so a 3D mesh grows \
-             8× per level; level {MAX_LEVELS} already has 32 768× the cells of the first)"
-        )));
+        return Err(Error::option(
+            "--levels",
+            format!(
+                "converge: --levels {levels}: at most {MAX_LEVELS} (each level halves the element size, so a 3D mesh \
+                 grows 8× per level; level {MAX_LEVELS} already has 32 768× the cells of the first)"
+            ),
+        ));
     }
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = toml_file::read(path)?;
     let scene = Scene::parse(path, &text)?;
-    let g = match &scene.mesh {
-        MeshSource::Generator(g) => g.clone(),
+    let refinable = match &scene.mesh {
+        MeshSource::Generator(g) => Refinable::parse(g).ok_or_else(|| {
+            toml_file::key_error(
+                path,
+                &text,
+                "mesh.generator",
+                format!("converge: cannot refine generator '{g}'"),
+            )
+        })?,
         _ => {
-            return Err(invalid(format!(
-                "converge: {}: only scenes with a box:, helix: or sandwich:paper generator can be refined",
-                path.display()
-            )));
+            let at = toml_file::line_of_table_key(&text, "mesh", 0, "file");
+            return Err(Error::key(
+                path.display().to_string(),
+                at.key.or(at.header),
+                "mesh",
+                "converge: only scenes with a box:, helix: or sandwich:paper generator can be refined",
+            ));
         }
     };
-    let bad = || invalid(format!("converge: {}: cannot refine generator '{g}'", path.display()));
-    let mut specs = Vec::new();
-    for k in 0..levels.max(1) {
-        let f = 1usize << k;
-        let spec = if let Some(rest) = g.strip_prefix("box:") {
-            let p: Vec<&str> = rest.split(':').collect();
-            if p.len() != 3 {
-                return Err(bad());
-            }
-            let d: Option<Vec<usize>> = p[1].split(',').map(|s| s.trim().parse::<usize>().ok()).collect();
-            let d = d.filter(|d| d.len() == 3).ok_or_else(bad)?;
-            let thin = |i: usize| if d[i] == 1 && p[2] == "hex8" { 1 } else { d[i] * f };
-            format!("box:{}:{},{},{}:{}", p[0], d[0] * f, d[1] * f, thin(2), p[2])
-        } else if let Some(rest) = g.strip_prefix("helix:") {
-            let mut p: Vec<String> = rest.split(',').map(|s| s.trim().to_string()).collect();
-            let n: usize = p.get(3).and_then(|s| s.parse().ok()).ok_or_else(bad)?;
-            p[3] = (n * f).to_string();
-            format!("helix:{}", p.join(","))
-        } else if let Some(rest) = g.strip_prefix("sandwich:paper") {
-            let h: f64 = match rest.strip_prefix(',') {
-                Some(s) => s.trim().parse().map_err(|_| bad())?,
-                None => 0.025,
-            };
-            format!("sandwich:paper,{}", h / f as f64)
-        } else {
-            return Err(bad());
-        };
-        specs.push(spec);
-    }
     let form = scene
         .parts
         .first()
         .map(|(_, f)| format!("{f:?}").to_lowercase())
         .unwrap_or_else(|| "model".into());
-    // Re-emit the scene text with each generator: replace the generator line.
-    let levels = specs
-        .into_iter()
-        .map(|s| {
-            let t: String = text
-                .lines()
-                .map(|l| {
-                    if l.trim_start().starts_with("generator") {
-                        format!("generator = \"{s}\"")
-                    } else {
-                        l.to_string()
-                    }
-                })
-                .collect::<Vec<_>>()
-                .join("\n");
+    let levels = (0..levels.max(1) as u32)
+        .map(|k| {
+            let spec = refinable.level(k);
+            let mut s = scene.clone();
+            s.mesh = MeshSource::Generator(spec.clone());
             LevelSpec {
                 formulation: form.clone(),
-                mesh: s,
-                runner: Runner::Scene(t),
+                mesh: spec,
+                runner: Runner::Scene(Box::new(s)),
             }
         })
         .collect();
@@ -458,8 +492,8 @@ pub fn run_level_modes(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>, O
     let t = Instant::now();
     let mut modes = None;
     let (value, dofs) = match &l.runner {
-        Runner::Scene(text) => {
-            let mut scene = Scene::parse(Path::new("converge.toml"), text)?;
+        Runner::Scene(scene) => {
+            let mut scene = (**scene).clone();
             if let Some((ModalTarget::Modes(n), None, _)) = &mut scene.modal {
                 *n += PAIRING_EXTRA;
             }
@@ -485,7 +519,7 @@ pub fn run_level_modes(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>, O
             } else {
                 let k = r
                     .stiffness()
-                    .ok_or_else(|| invalid(format!("{}: the scene gives no stiffness", l.mesh)))?;
+                    .ok_or_else(|| Error::param("case", format!("{}: the scene gives no stiffness", l.mesh)))?;
                 (k, r.statics.as_ref().map(|s| s.dofs).unwrap_or(0))
             }
         }
@@ -495,7 +529,7 @@ pub fn run_level_modes(l: &LevelSpec) -> Result<(f64, usize, f64, Option<u64>, O
             if !solid {
                 p.elem_size = *h;
             }
-            let (r, run, mesh) = crate::app::sweep::analyse_modes(
+            let (r, run, mesh) = super::sweep::analyse_modes(
                 &p,
                 crate::material::Material::steel(),
                 solid.then_some(*h),
@@ -540,7 +574,7 @@ pub fn run_case(case: &Case, progress: &dyn Fn(&str)) -> Result<Convergence> {
     let mut level_modes = Vec::new();
     for l in &case.levels {
         let (value, dofs, time_s, mem, modes) =
-            run_level_modes(l).map_err(|e| invalid(format!("{} {}: {e}", l.formulation, l.mesh)))?;
+            run_level_modes(l).map_err(|e| Error::InvalidInput(format!("{} {}: {e}", l.formulation, l.mesh)))?;
         level_modes.push(modes);
         progress(&format!(
             "{} {}: {value:.6e} {} ({dofs} DOFs, {time_s:.2} s)",
@@ -580,10 +614,10 @@ pub fn run_case(case: &Case, progress: &dyn Fn(&str)) -> Result<Convergence> {
         .map(|r| r.value)
         .collect();
     let finest = *refs.last().ok_or_else(|| {
-        invalid(format!(
-            "converge: no run of the reference formulation '{}'",
-            case.reference
-        ))
+        Error::param(
+            "case",
+            format!("converge: no run of the reference formulation '{}'", case.reference),
+        )
     })?;
     let (reference, kind, finest_is_ref) = match (&case.known, refs.len()) {
         (Some((v, src)), _) => (*v, format!("documented converged value ({src})"), false),

@@ -1,5 +1,4 @@
-//! Parametric studies of the sandwich work table (`vibrofem sweep`) and merging of batch shards
-//! (`vibrofem merge`).
+//! Parametric studies of the sandwich work table (`vibrofem sweep`).
 //!
 //! A study is either a scene whose mesh is `generator = "sandwich:paper[,SIZE]"` (its material is
 //! used) or a study file (TOML, see `docs/sweeps.md`):
@@ -31,8 +30,10 @@
 //! steel mass ([`SandwichParams::mass`]) are tabulated, the Pareto front (lighter and stiffer) is
 //! marked and plotted.
 
+use super::scene::{MeshSource, Scene};
 use crate::analysis::modal::{ModalOptions, ModalTarget, run_modal};
-use crate::app::scene::{BatchRow, BatchSummary, MeshSource, Scene, summary_csv};
+use crate::app::toml_file;
+use crate::input::source::SandwichSpec;
 use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::mesh::parametric::{SandwichParams, sandwich_table, sandwich_table_solid};
@@ -43,8 +44,9 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-fn invalid(msg: impl Into<String>) -> Error {
-    Error::InvalidInput(msg.into())
+/// A bad value of a table key (`table.top_thickness`): a field of [`TableSpec`].
+fn bad_key(key: &str, msg: String) -> Error {
+    Error::param(key, msg)
 }
 
 /// The table of a study: [`SandwichParams`] with the webs given by count and span (evenly spaced,
@@ -130,9 +132,10 @@ impl TableSpec {
             if v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 1e4 {
                 Ok(v as usize)
             } else {
-                Err(invalid(format!(
-                    "{key} = {v}: a web count must be a non-negative integer"
-                )))
+                Err(bad_key(
+                    key,
+                    format!("{key} = {v}: a web count must be a non-negative integer"),
+                ))
             }
         };
         match k {
@@ -154,10 +157,13 @@ impl TableSpec {
             }
             "elem_size" => self.elem_size = v,
             _ => {
-                return Err(invalid(format!(
-                    "unknown sweep key '{key}' (keys: {})",
-                    KEYS.iter().map(|k| format!("table.{k}")).collect::<Vec<_>>().join(", ")
-                )));
+                return Err(bad_key(
+                    key,
+                    format!(
+                        "unknown sweep key '{key}' (keys: {})",
+                        KEYS.iter().map(|k| format!("table.{k}")).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
             }
         }
         Ok(())
@@ -181,16 +187,16 @@ impl TableSpec {
             shell_kind: CellKind::Quad4,
         };
         if self.n_long_webs > 1 && (self.long_web_span.is_nan() || self.long_web_span <= 0.0) {
-            return Err(invalid(format!(
-                "long_web_span = {} must be positive",
-                self.long_web_span
-            )));
+            return Err(bad_key(
+                "table.long_web_span",
+                format!("long_web_span = {} must be positive", self.long_web_span),
+            ));
         }
         if self.n_trans_webs > 1 && (self.trans_web_span.is_nan() || self.trans_web_span <= 0.0) {
-            return Err(invalid(format!(
-                "trans_web_span = {} must be positive",
-                self.trans_web_span
-            )));
+            return Err(bad_key(
+                "table.trans_web_span",
+                format!("trans_web_span = {} must be positive", self.trans_web_span),
+            ));
         }
         p.validate()?;
         Ok(p)
@@ -199,7 +205,12 @@ impl TableSpec {
 
 /// Parse a range: `a:b:step` (inclusive of `b` within 1e-9 of a step), `v1,v2,…` or one value.
 pub fn parse_values(key: &str, s: &str) -> Result<Vec<f64>> {
-    let bad = |why: &str| invalid(format!("--set {key}={s}: {why}; expected a:b:step, v1,v2,… or a value"));
+    let bad = |why: &str| {
+        Error::option(
+            "--set",
+            format!("--set {key}={s}: {why}; expected a:b:step, v1,v2,… or a value"),
+        )
+    };
     let num = |t: &str| t.trim().parse::<f64>().ok().filter(|x| x.is_finite());
     if s.contains(':') {
         let p: Vec<&str> = s.split(':').collect();
@@ -232,7 +243,7 @@ pub fn parse_values(key: &str, s: &str) -> Result<Vec<f64>> {
 pub fn parse_set(arg: &str) -> Result<(String, Vec<f64>)> {
     let (k, v) = arg
         .split_once('=')
-        .ok_or_else(|| invalid(format!("--set '{arg}': expected KEY=a:b:step or KEY=v1,v2,…")))?;
+        .ok_or_else(|| Error::option("--set", format!("--set '{arg}': expected KEY=a:b:step or KEY=v1,v2,…")))?;
     let k = k.trim().to_string();
     let mut probe = TableSpec::default();
     probe.set(&k, 1.0)?;
@@ -348,44 +359,58 @@ struct RawMaterial {
 impl Study {
     /// Load a study file (`[study]` table) or a scene whose mesh is `sandwich:paper[,SIZE]`.
     pub fn load(path: &Path) -> Result<Study> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        let stem = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let is_study = text.lines().any(|l| l.trim() == "[study]");
-        if !is_study {
-            let scene = Scene::parse(path, &text)?;
-            let mut table = TableSpec::default();
-            match &scene.mesh {
-                MeshSource::Generator(g) if g.starts_with("sandwich:paper") => {
-                    if let Some((_, size)) = g.split_once(',') {
-                        table.elem_size = size
-                            .trim()
-                            .parse()
-                            .map_err(|_| invalid(format!("{}: generator '{g}': bad element size", path.display())))?;
-                    }
-                }
-                _ => {
-                    return Err(invalid(format!(
-                        "{}: a sweep needs a study file ([study]) or a scene with generator = \"sandwich:paper[,SIZE]\"",
-                        path.display()
-                    )));
-                }
-            }
-            return Ok(Study {
-                name: scene.name.clone(),
-                formulation: SweepFormulation::Shell,
-                solid_size: 0.025,
-                material: scene.spec.material,
-                table,
-                sweep: Vec::new(),
-                constraints: Constraints::default(),
-                check: CheckSpec::default(),
-            });
+        let text = toml_file::read(path)?;
+        if text.lines().any(|l| l.trim() == "[study]") {
+            Study::from_file(path, &text)
+        } else {
+            Study::from_scene(path, &text)
         }
-        let raw: RawStudyFile = crate::app::toml_file::parse(path, &text)?;
-        crate::app::toml_file::check_version(path, &text, "[study]", raw.study.version)?;
+    }
+
+    /// A scene on `sandwich:paper[,SIZE]`: the paper's table at that size, the scene's material,
+    /// nothing swept yet.
+    fn from_scene(path: &Path, text: &str) -> Result<Study> {
+        let scene = Scene::parse(path, text)?;
+        let mut table = TableSpec::default();
+        let generator = match &scene.mesh {
+            MeshSource::Generator(g) if g.starts_with("sandwich:paper") => g,
+            _ => {
+                return Err(toml_file::file_error(
+                    path.display().to_string(),
+                    None,
+                    "a sweep needs a study file ([study]) or a scene with generator = \"sandwich:paper[,SIZE]\"",
+                ));
+            }
+        };
+        match SandwichSpec::parse(generator) {
+            Ok(Some(SandwichSpec { elem_size: Some(h) })) => table.elem_size = h,
+            Ok(Some(SandwichSpec { elem_size: None })) => {}
+            _ => {
+                return Err(toml_file::key_error(
+                    path,
+                    text,
+                    "mesh.generator",
+                    format!("generator '{generator}': bad element size"),
+                ));
+            }
+        }
+        Ok(Study {
+            name: scene.name.clone(),
+            formulation: SweepFormulation::Shell,
+            solid_size: 0.025,
+            material: scene.spec.material,
+            table,
+            sweep: Vec::new(),
+            constraints: Constraints::default(),
+            check: CheckSpec::default(),
+        })
+    }
+
+    /// A study file (`[study]`, `[material]`, `[table]`, `[sweep]`, `[constraints]`,
+    /// `[check]`).
+    fn from_file(path: &Path, text: &str) -> Result<Study> {
+        let raw: RawStudyFile = toml_file::parse(path, text)?;
+        toml_file::check_version(path, text, "[study]", raw.study.version)?;
         let material = match raw.material {
             None => Material::steel(),
             Some(m) => Material {
@@ -396,25 +421,28 @@ impl Study {
         };
         let mut sweep = Vec::new();
         for (k, v) in &raw.sweep {
+            let at = |msg: String| {
+                let line = toml_file::line_of_table_key(text, "sweep", 0, k).key;
+                toml_file::file_error(path.display().to_string(), line, msg)
+            };
             let vals = match v {
                 toml::Value::String(s) => parse_values(k, s)?,
                 toml::Value::Array(a) => a
                     .iter()
                     .map(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
                     .collect::<Option<Vec<f64>>>()
-                    .ok_or_else(|| invalid(format!("{}: [sweep] '{k}': values must be numbers", path.display())))?,
+                    .ok_or_else(|| at(format!("[sweep] '{k}': values must be numbers")))?,
                 toml::Value::Float(f) => vec![*f],
                 toml::Value::Integer(i) => vec![*i as f64],
-                _ => {
-                    return Err(invalid(format!(
-                        "{}: [sweep] '{k}': expected a range or a list",
-                        path.display()
-                    )));
-                }
+                _ => return Err(at(format!("[sweep] '{k}': expected a range or a list"))),
             };
-            TableSpec::default().set(k, 1.0)?;
+            TableSpec::default().set(k, 1.0).map_err(|e| at(strip(e)))?;
             sweep.push((k.clone(), vals));
         }
+        let stem = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
         Ok(Study {
             name: raw.study.name.unwrap_or(stem),
             formulation: raw.study.formulation.unwrap_or(SweepFormulation::Shell),
@@ -437,51 +465,84 @@ impl Study {
         }
     }
 
-    /// Every combination (the first key varies slowest) as its values and validated parameters.
-    /// Nothing is meshed: an out-of-range value is reported with its key before any analysis.
-    pub fn designs(&self) -> Result<Vec<(Vec<f64>, TableSpec, SandwichParams)>> {
-        // Each value alone first, so that the message names the one bad key.
+    /// Each swept value alone on the base table, so that a message names the one bad key.
+    pub fn check_values(&self) -> Result<()> {
         for (k, vals) in &self.sweep {
             for &v in vals {
                 let mut t = self.table.clone();
                 t.set(k, v)?;
-                t.params().map_err(|e| invalid(format!("{k} = {v}: {}", strip(e))))?;
+                t.params().map_err(|e| bad_key(k, format!("{k} = {v}: {}", strip(e))))?;
             }
         }
-        let n: usize = self.sweep.iter().map(|(_, v)| v.len()).product();
-        if n > 100_000 {
-            return Err(invalid(format!("the sweep has {n} combinations (at most 100 000)")));
+        Ok(())
+    }
+
+    /// How many designs the study has, counted from the list lengths before any design is
+    /// built: a key that lists no value, or more than [`MAX_DESIGNS`] combinations, is refused
+    /// with the count (as the product of the lengths where it overflows).
+    pub fn count(&self) -> Result<usize> {
+        if let Some((k, _)) = self.sweep.iter().find(|(_, v)| v.is_empty()) {
+            return Err(bad_key(
+                k,
+                format!("the sweep has 0 combinations ('{k}' lists no value)"),
+            ));
         }
-        let mut out = Vec::with_capacity(n);
-        for i in 0..n {
-            let mut rem = i;
-            let mut vals = vec![0.0; self.sweep.len()];
-            for (j, (_, v)) in self.sweep.iter().enumerate().rev() {
-                vals[j] = v[rem % v.len()];
-                rem /= v.len();
+        let n = self.sweep.iter().try_fold(1usize, |n, (_, v)| n.checked_mul(v.len()));
+        let shown = match n {
+            Some(n) if n <= MAX_DESIGNS => return Ok(n),
+            Some(n) => n.to_string(),
+            None => {
+                let lens: Vec<String> = self.sweep.iter().map(|(_, v)| v.len().to_string()).collect();
+                lens.join(" × ")
             }
-            let mut t = self.table.clone();
-            for ((k, _), v) in self.sweep.iter().zip(&vals) {
-                t.set(k, *v)?;
-            }
-            let p = t.params().map_err(|e| {
-                let what: Vec<String> = self
-                    .sweep
-                    .iter()
-                    .zip(&vals)
-                    .map(|((k, _), v)| format!("{k} = {v}"))
-                    .collect();
-                invalid(format!("{}: {}", what.join(", "), strip(e)))
-            })?;
-            out.push((vals, t, p));
+        };
+        Err(Error::param(
+            "sweep",
+            format!("the sweep has {shown} combinations (at most 100 000)"),
+        ))
+    }
+
+    /// Design `i` (0-based; the first key varies slowest): its values and validated parameters.
+    pub fn design(&self, i: usize) -> Result<(Vec<f64>, TableSpec, SandwichParams)> {
+        let mut rem = i;
+        let mut vals = vec![0.0; self.sweep.len()];
+        for (j, (_, v)) in self.sweep.iter().enumerate().rev() {
+            vals[j] = v[rem % v.len()];
+            rem /= v.len();
         }
-        Ok(out)
+        let mut t = self.table.clone();
+        for ((k, _), v) in self.sweep.iter().zip(&vals) {
+            t.set(k, *v)?;
+        }
+        let p = t.params().map_err(|e| {
+            let what: Vec<String> = self
+                .sweep
+                .iter()
+                .zip(&vals)
+                .map(|((k, _), v)| format!("{k} = {v}"))
+                .collect();
+            Error::param("sweep", format!("{}: {}", what.join(", "), strip(e)))
+        })?;
+        Ok((vals, t, p))
+    }
+
+    /// Every combination (the first key varies slowest) as its values and validated parameters.
+    /// Nothing is meshed: an out-of-range value is reported with its key before any analysis,
+    /// and the combinations are counted ([`Study::count`]) before any is built.
+    pub fn designs(&self) -> Result<Vec<(Vec<f64>, TableSpec, SandwichParams)>> {
+        self.check_values()?;
+        let n = self.count()?;
+        (0..n).map(|i| self.design(i)).collect()
     }
 }
 
+/// The most combinations a study may have ([`Study::count`]).
+pub const MAX_DESIGNS: usize = 100_000;
+
+/// The message of an error without its place (to be given another).
 fn strip(e: Error) -> String {
     match e {
-        Error::InvalidInput(s) => s,
+        Error::InvalidInput(s) | Error::Invalid { msg: s, .. } => s,
         e => e.to_string(),
     }
 }
@@ -665,30 +726,35 @@ pub const LARGE_SWEEP: usize = 1000;
 /// check the best designs (`[check] designs`), and write the outputs.
 pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     use rayon::prelude::*;
-    let designs = study.designs()?;
+    // Values, then the count, then the size: all before any design is built or meshed.
+    study.check_values()?;
+    let total = study.count()?;
     if let Some(h) = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size)
         && (h.is_nan() || h <= 0.0)
     {
-        return Err(invalid(format!("solid_size = {h} must be positive")));
+        return Err(Error::param("solid_size", format!("solid_size = {h} must be positive")));
     }
     let solid = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size);
-    let total = designs.len();
     if total > LARGE_SWEEP && !opts.yes {
         // The size of one design's model, from its mesh (no analysis).
-        let p = &designs[0].2;
+        let p = study.design(0)?.2;
         let dofs = match solid {
-            None => 6 * sandwich_table(p)?.n_nodes(),
-            Some(h) => 3 * sandwich_table_solid(p, h, CellKind::Hex20)?.n_nodes(),
+            None => 6 * sandwich_table(&p)?.n_nodes(),
+            Some(h) => 3 * sandwich_table_solid(&p, h, CellKind::Hex20)?.n_nodes(),
         };
-        return Err(invalid(format!(
-            "the study has {total} designs (more than {LARGE_SWEEP}) of about {dofs} DOFs each: that is hours of work; \
-             rerun with --yes to start it, or narrow the ranges (--set)"
-        )));
+        return Err(Error::option(
+            "--yes",
+            format!(
+                "the study has {total} designs (more than {LARGE_SWEEP}) of about {dofs} DOFs each: that is hours of \
+                 work; rerun with --yes to start it, or narrow the ranges (--set)"
+            ),
+        ));
     }
+    let designs = study.designs()?;
     let done = std::sync::atomic::AtomicUsize::new(0);
     let one = |(i, (vals, _t, p)): (usize, &(Vec<f64>, TableSpec, SandwichParams))| -> Result<SweepRow> {
         let r = analyse(p, study.material, solid)
-            .map_err(|e| invalid(format!("case {} ({}): {e}", i + 1, describe(study, vals))))?;
+            .map_err(|e| Error::InvalidInput(format!("case {} ({}): {e}", i + 1, describe(study, vals))))?;
         let mass = p.mass(study.material.density);
         let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
         if opts.progress {
@@ -719,7 +785,7 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(jobs)
             .build()
-            .map_err(|e| invalid(format!("sweep: cannot start {jobs} workers: {e}")))?;
+            .map_err(|e| Error::param("jobs", format!("sweep: cannot start {jobs} workers: {e}")))?;
         pool.install(|| designs.par_iter().enumerate().map(one).collect())
     };
     let mut rows = rows?;
@@ -974,84 +1040,4 @@ pub fn write_pareto_svg(o: &SweepOutcome, path: &Path) -> Result<()> {
         .map_err(perr(path))?;
     root.present().map_err(perr(path))?;
     Ok(())
-}
-
-// ---------------------------------------------------------------------------------------------
-// Merge of batch shards.
-
-/// Rows equal as results (status `resumed` equals `ok`; wall time ignored).
-fn same_result(a: &BatchRow, b: &BatchRow) -> bool {
-    let st = |s: &str| {
-        if s == "resumed" {
-            "ok".to_string()
-        } else {
-            s.to_string()
-        }
-    };
-    st(&a.status) == st(&b.status)
-        && a.error == b.error
-        && a.dofs == b.dofs
-        && a.mass_kg == b.mass_kg
-        && a.frequencies_hz == b.frequencies_hz
-        && a.first_elastic_hz == b.first_elastic_hz
-        && a.stiffness == b.stiffness
-        && a.max_displacement == b.max_displacement
-        && a.max_von_mises == b.max_von_mises
-}
-
-/// Join the `summary.json` of batch shard folders into one summary sorted by file; a case in
-/// several folders must have the same results there (else an error naming it). Writes
-/// `out/summary.csv` and `out/summary.json` when `out` is given.
-pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
-    if dirs.is_empty() {
-        return Err(invalid("merge: no input folder"));
-    }
-    let mut rows: Vec<(BatchRow, PathBuf)> = Vec::new();
-    let mut jobs = 1;
-    for d in dirs {
-        let p = d.join("summary.json");
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
-        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| invalid(format!("{}: {e}", p.display())))?;
-        let r: Vec<BatchRow> = v
-            .get("rows")
-            .cloned()
-            .ok_or_else(|| invalid(format!("{}: no 'rows' (not a batch summary)", p.display())))
-            .and_then(|r| serde_json::from_value(r).map_err(|e| invalid(format!("{}: {e}", p.display()))))?;
-        jobs = jobs.max(v.get("jobs").and_then(|j| j.as_u64()).unwrap_or(1) as usize);
-        rows.extend(r.into_iter().map(|r| (r, d.clone())));
-    }
-    rows.sort_by(|a, b| a.0.file.cmp(&b.0.file));
-    let mut merged: Vec<(BatchRow, PathBuf)> = Vec::new();
-    for (r, d) in rows {
-        if let Some((last, ld)) = merged.last()
-            && last.file == r.file
-        {
-            if !same_result(last, &r) {
-                return Err(invalid(format!(
-                    "merge: case '{}' is in {} and {} with different results",
-                    r.file,
-                    ld.display(),
-                    d.display()
-                )));
-            }
-            continue;
-        }
-        merged.push((r, d));
-    }
-    let rows: Vec<BatchRow> = merged.into_iter().map(|(r, _)| r).collect();
-    let summary = BatchSummary {
-        failed: rows.iter().filter(|r| r.is_failure()).count(),
-        resumed: rows.iter().filter(|r| r.status == "resumed").count(),
-        rows,
-        jobs,
-    };
-    if let Some(out) = out {
-        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
-        let csv = out.join("summary.csv");
-        std::fs::write(&csv, summary_csv(&summary.rows)).map_err(|e| Error::io(&csv, e))?;
-        let js = out.join("summary.json");
-        let text = serde_json::to_string_pretty(&summary).map_err(|e| Error::output("JSON", e))?;
-        std::fs::write(&js, text).map_err(|e| Error::io(&js, e))?;
-    }
-    Ok(summary)
 }

@@ -1,0 +1,162 @@
+//! Study inputs (sweeps, convergence scenes): sizes counted before any design is built, files
+//! with a byte-order mark, and errors that name their place as data.
+
+use std::path::PathBuf;
+use vibrofem::At;
+use vibrofem::app::studies::converge;
+use vibrofem::app::studies::sweep::{self, Study, SweepOptions};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("vibrofem-test-study-inputs-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn study_file(name: &str, text: &str) -> PathBuf {
+    let p = tmp(name).join("study.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const BASE: &str = "[study]\nversion = 1\nname = \"t\"\n[table]\nelem_size = 0.1\n";
+
+/// Issue 28, item 8 (the sweep's part): the combinations are counted before they are built, and
+/// the count cannot wrap. Five keys of 8192 valid values each are 2^65 designs: the product of
+/// the lengths wrapped to 0 in a usize and the sweep "succeeded" with no design at all.
+#[test]
+fn sweep_counts_its_designs_before_building_them() {
+    let mut s = Study::load(&study_file("count", BASE)).unwrap();
+    let n = 8192;
+    let values = |a: f64, step: f64| (0..n).map(|i| a + step * i as f64).collect::<Vec<f64>>();
+    s.set("table.top_thickness", values(0.02, 1e-7));
+    s.set("table.bottom_thickness", values(0.008, 1e-7));
+    s.set("table.long_web_thickness", values(0.004, 1e-7));
+    s.set("table.web_height", values(0.1, 1e-6));
+    s.set("table.length", values(1.2, 1e-5));
+    let t = std::time::Instant::now();
+    let e = s.designs().err().expect("2^65 designs must be refused");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("8192 × 8192 × 8192 × 8192 × 8192 combinations") && msg.contains("at most 100 000"),
+        "{msg}"
+    );
+    assert_eq!(e.at(), Some(At::Param { name: "sweep".into() }));
+    let e = sweep::run_sweep(
+        &s,
+        &SweepOptions {
+            out: None,
+            jobs: 1,
+            progress: false,
+            yes: true,
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("combinations"), "{e}");
+    // 300 × 300 designs: refused by the 1000-design limit with the count, before the 90 000 are
+    // built (each built design is validated: that alone would take a while).
+    let mut s = Study::load(&study_file("large", BASE)).unwrap();
+    s.set("table.top_thickness", values(0.02, 1e-6)[..300].to_vec());
+    s.set("table.bottom_thickness", values(0.008, 1e-6)[..300].to_vec());
+    let e = sweep::run_sweep(
+        &s,
+        &SweepOptions {
+            out: None,
+            jobs: 1,
+            progress: false,
+            yes: false,
+        },
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("the study has 90000 designs (more than 1000)"),
+        "{e}"
+    );
+    assert_eq!(e.at(), Some(At::Option { name: "--yes".into() }));
+    assert!(t.elapsed().as_secs_f64() < 30.0, "{:?}", t.elapsed());
+    // A key that lists no value is refused (it made a sweep of no design).
+    let mut s = Study::load(&study_file("empty", BASE)).unwrap();
+    s.set("table.top_thickness", vec![]);
+    let e = s.designs().unwrap_err().to_string();
+    assert!(e.contains("0 combinations") && e.contains("table.top_thickness"), "{e}");
+}
+
+/// A study file saved with a UTF-8 byte-order mark (Windows editors) is a study file: the mark
+/// hid its `[study]` line, and the file was read as a scene ("missing [scene] table").
+#[test]
+fn study_file_with_a_byte_order_mark_is_read() {
+    let p = study_file(
+        "bom",
+        &format!("\u{feff}{BASE}[sweep]\n\"table.top_thickness\" = [0.02, 0.025]\n"),
+    );
+    let s = Study::load(&p).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.name, "t");
+    assert_eq!(s.sweep.len(), 1);
+    assert_eq!(s.count().unwrap(), 2);
+}
+
+/// Study errors name their place as data: the option, the key (file, line), the parameter.
+#[test]
+fn study_errors_name_their_place() {
+    let e = sweep::parse_set("table.top_thickness").unwrap_err();
+    assert_eq!(e.at(), Some(At::Option { name: "--set".into() }));
+    let e = sweep::parse_set("table.nonsense=1").unwrap_err();
+    assert!(e.to_string().contains("unknown sweep key"), "{e}");
+    assert_eq!(
+        e.at(),
+        Some(At::Param {
+            name: "table.nonsense".into()
+        })
+    );
+    // A [sweep] key that is not a table key: the file and the line of the key.
+    let p = study_file("badkey", &format!("{BASE}[sweep]\n\"table.nonsense\" = [1.0]\n"));
+    let e = Study::load(&p).unwrap_err();
+    assert!(
+        e.to_string().contains("line 7: unknown sweep key 'table.nonsense'"),
+        "{e}"
+    );
+    // A scene on a mesh file cannot be refined: the [mesh] key of the file.
+    let d = tmp("refine");
+    let scene = d.join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[scene]\nversion = 1\n[mesh]\nfile = \"m.msh\"\n[[part]]\ngroup = \"v\"\nformulation = \"solid\"\n[modal]\n",
+    )
+    .unwrap();
+    let e = converge::from_scene(&scene, 2).unwrap_err();
+    assert!(e.to_string().contains("can be refined"), "{e}");
+    match e.at() {
+        Some(At::Key { line, key, .. }) => assert_eq!((line, key.as_str()), (Some(4), "mesh")),
+        other => panic!("{other:?}"),
+    }
+    let e = converge::from_scene(&scene, 30).unwrap_err();
+    assert_eq!(
+        e.at(),
+        Some(At::Option {
+            name: "--levels".into()
+        })
+    );
+    assert!(converge::builtin("s9").unwrap_err().at().is_some());
+}
+
+/// Refinement levels are built from the source grammar's types: `box:` divisions doubled (a
+/// single hex8 layer stays one), `helix:` elements per turn doubled, `sandwich:` size halved.
+#[test]
+fn converge_refines_generators_by_their_grammar() {
+    use converge::Refinable;
+    let b = Refinable::parse("box:0.3,0.3,0.02:4,4,1:hex8").unwrap();
+    assert_eq!(b.level(0), "box:0.3,0.3,0.02:4,4,1:hex8");
+    assert_eq!(b.level(2), "box:0.3,0.3,0.02:16,16,1:hex8");
+    let b = Refinable::parse("box:0.3,0.3,0.02:4,4,1:hex20").unwrap();
+    assert_eq!(b.level(1), "box:0.3,0.3,0.02:8,8,2:hex20");
+    let h = Refinable::parse("helix:0.032,0.01,6,12").unwrap();
+    assert_eq!(h.level(1), "helix:0.032,0.01,6,24");
+    let h = Refinable::parse("helix:0.032,0.01,6,12,line3").unwrap();
+    assert_eq!(h.level(2), "helix:0.032,0.01,6,48,line3");
+    let s = Refinable::parse("sandwich:paper").unwrap();
+    assert_eq!(s.level(0), "sandwich:paper,0.025");
+    assert_eq!(s.level(1), "sandwich:paper,0.0125");
+    assert!(Refinable::parse("ibeam-line:1,10").is_none());
+    assert!(Refinable::parse("box:1,1:2,2,2:hex8").is_none());
+}
