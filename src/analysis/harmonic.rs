@@ -22,6 +22,9 @@ use faer::c64;
 use faer::linalg::solvers::SolveCore;
 use faer::sparse::{SparseColMat, SymbolicSparseColMat};
 
+// The loads are plain data of the model layer (read by `crate::input` too), re-exported here.
+pub use crate::model::GroupForce;
+
 /// How the structure dissipates.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Damping {
@@ -357,8 +360,6 @@ pub fn peak(u: &[c64; 3]) -> f64 {
     let h = 0.5 * (aa - bb);
     (0.5 * (aa + bb) + (h * h + ab * ab).sqrt()).max(0.0).sqrt()
 }
-
-pub use crate::model::GroupForce;
 
 /// Free-DOF load vector of group forces with their phases.
 pub fn group_load(sys: &System, mesh: &crate::mesh::Mesh, forces: &[GroupForce]) -> Result<Vec<c64>> {

@@ -24,6 +24,7 @@ use serde::Serialize;
 use std::sync::Arc;
 use std::time::Instant;
 
+// The loads are plain data of the model layer (read by `crate::input` too), re-exported here.
 pub use crate::model::Load;
 
 /// A static analysis.
