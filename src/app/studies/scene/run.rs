@@ -42,7 +42,9 @@ impl Scene {
         match &self.mesh {
             MeshSource::File(p) => crate::io::gmsh::read(p, self.length_scale),
             MeshSource::Generator(g) => generate(g, self.length_scale).map_err(|e| match e {
-                Error::InvalidInput(m) => toml_file::file_error(file, None, format!("[mesh] {m}")),
+                Error::InvalidInput(m) | Error::Invalid { msg: m, .. } => {
+                    toml_file::file_error(file, None, format!("[mesh] {m}"))
+                }
                 e => e,
             }),
             MeshSource::Missing => Err(toml_file::file_error(
@@ -350,10 +352,10 @@ pub fn run(path: &Path) -> Result<SceneReport> {
 /// not a generator is an error (a scene names files with `file =`).
 pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
     if !crate::input::source::is_generator(spec) {
-        return Err(Error::InvalidInput(format!(
-            "unknown generator '{spec}' ({})",
-            crate::input::source::GENERATORS
-        )));
+        return Err(Error::param(
+            "generator",
+            format!("unknown generator '{spec}' ({})", crate::input::source::GENERATORS),
+        ));
     }
     crate::input::source::load(spec, length_scale)
 }
