@@ -352,10 +352,10 @@ pub fn run(path: &Path) -> Result<SceneReport> {
 /// not a generator is an error (a scene names files with `file =`).
 pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
     if !crate::input::source::is_generator(spec) {
-        return Err(Error::InvalidInput(format!(
-            "unknown generator '{spec}' ({})",
-            crate::input::source::GENERATORS
-        )));
+        return Err(Error::param(
+            "generator",
+            format!("unknown generator '{spec}' ({})", crate::input::source::GENERATORS),
+        ));
     }
     crate::input::source::load(spec, length_scale)
 }
