@@ -7,11 +7,9 @@
 pub mod cli;
 pub mod converge;
 pub mod design;
-pub mod design_search;
 pub mod dynamics;
 pub mod export;
 pub mod harmonic;
-pub mod machine3d;
 pub mod machines_cli;
 pub mod report;
 pub mod scene;

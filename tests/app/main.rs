@@ -9,6 +9,7 @@ mod cli;
 mod cli_15;
 mod cli_15b;
 mod design;
+mod design_inputs;
 mod dynamics;
 mod export_engine;
 mod harmonic;
