@@ -218,15 +218,7 @@ pub fn superpose(
         })
         .collect();
     let res = if residual {
-        let sigma = residual_shift(modes)?;
-        let mut r = solve_real_shifted(sys, sigma, load)?;
-        for j in 0..k {
-            let c = q[j] / (modes.lambda[j] - sigma);
-            for i in 0..n {
-                r[i] -= c * phi[(i, j)];
-            }
-        }
-        Some(r)
+        Some(static_correction(sys, modes, &q, load)?)
     } else {
         None
     };
@@ -255,6 +247,79 @@ pub fn superpose(
         out.push(u);
     }
     Ok(out)
+}
+
+/// The static (residual) correction for the modes after the first `q.len()` of `modes`:
+/// R F̂ = (K − σM)⁻¹F̂ − Σ_j φ_j q_j / (λ_j − σ), with q_j = φ_jᵀF̂ (one factorisation, one solve).
+fn static_correction(sys: &System, modes: &ModalRun, q: &[c64], load: &[c64]) -> Result<Vec<c64>> {
+    let sigma = residual_shift(modes)?;
+    let phi = &modes.vectors;
+    let mut r = solve_real_shifted(sys, sigma, load)?;
+    for (j, &qj) in q.iter().enumerate() {
+        let c = qj / (modes.lambda[j] - sigma);
+        for (i, ri) in r.iter_mut().enumerate() {
+            *ri -= c * phi[(i, j)];
+        }
+    }
+    Ok(r)
+}
+
+/// Steady-state response at one angular frequency ω (rad/s) by modal superposition with a full
+/// modal damping matrix: discrete dashpots (C not proportional to K or M) couple the modes, so
+/// the modal coordinates solve (Λ − ω²I + iωC_r) q = Φᵀ F̂ together, with C_r = Φᵀ C Φ given as
+/// `modal_damping` over the first `modal_damping.nrows()` modes of `modes`. With `residual`, the
+/// static correction for the modes left out is added as in [`superpose`].
+pub fn superpose_coupled(
+    sys: &System,
+    modes: &ModalRun,
+    load: &[c64],
+    omega: f64,
+    modal_damping: &nalgebra::DMatrix<f64>,
+    residual: bool,
+) -> Result<Vec<c64>> {
+    let n = check_request(sys, load, &[omega], &Damping::Ratio(0.0))?;
+    let k = modal_damping.nrows();
+    let phi = &modes.vectors;
+    if modal_damping.ncols() != k || k > phi.ncols() || phi.nrows() != n {
+        return Err(Error::param(
+            "modal_damping",
+            format!(
+                "a {}×{} modal damping matrix for {} modes of {} rows (the system has {n} free DOFs)",
+                modal_damping.nrows(),
+                modal_damping.ncols(),
+                phi.ncols(),
+                phi.nrows()
+            ),
+        ));
+    }
+    let q: Vec<c64> = (0..k)
+        .map(|j| (0..n).fold(c64::new(0.0, 0.0), |s, i| s + load[i] * phi[(i, j)]))
+        .collect();
+    let a = nalgebra::DMatrix::from_fn(k, k, |i, j| {
+        let diag = if i == j { modes.lambda[i] - omega * omega } else { 0.0 };
+        nalgebra::Complex::new(diag, omega * modal_damping[(i, j)])
+    });
+    let rhs = nalgebra::DVector::from_fn(k, |j, _| nalgebra::Complex::new(q[j].re, q[j].im));
+    let x = a.lu().solve(&rhs).ok_or_else(|| Error::Singular {
+        equation: None,
+        at: None,
+        msg: format!(
+            "the reduced dynamic stiffness Λ − ω²I + iωC_r is singular at {:.6} Hz",
+            omega / (2.0 * std::f64::consts::PI)
+        ),
+    })?;
+    let mut u = if residual {
+        static_correction(sys, modes, &q, load)?
+    } else {
+        vec![c64::new(0.0, 0.0); n]
+    };
+    for j in 0..k {
+        let c = c64::new(x[j].re, x[j].im);
+        for (i, ui) in u.iter_mut().enumerate() {
+            *ui += c * phi[(i, j)];
+        }
+    }
+    Ok(u)
 }
 
 /// Solve (K − σM) x = f for a complex f with the real LDLᵀ on the system's ordering (real and

@@ -8,11 +8,9 @@
 //! - [`export`], [`slepc`]: K, M and the DOF map for other solvers; the SLEPc/MPI engine.
 pub mod cli;
 pub mod design;
-pub mod design_search;
 pub mod dynamics;
 pub mod export;
 pub mod harmonic;
-pub mod machine3d;
 pub mod machines_cli;
 pub mod report;
 pub mod slepc;

@@ -3,9 +3,9 @@
 //! two-mass model.
 
 use vibrofem::app::design::{Design, coil_fe, leaf_fe};
+use vibrofem::app::design::{analyse, coil_stiffness, leaf_end_stiffness, leaf_matrix};
 use vibrofem::app::dynamics::electromagnet::RectifiedDrive;
 use vibrofem::app::dynamics::two_mass::TwoMass;
-use vibrofem::app::machine3d::{analyse, coil_stiffness, leaf_end_stiffness, leaf_matrix};
 
 #[test]
 fn condensed_leaf_reproduces_the_fe_leaf() {
@@ -227,7 +227,7 @@ fn machine_layout_errors_name_the_key() {
 fn channel_spacers_add_their_flanges() {
     // Channel No. 10 (GOST 8240): flanges 46 × 7.6 mm on both plates along each of the three
     // longitudinal webs; the flange strips' equivalent thickness keeps the steel's mass exact.
-    use vibrofem::app::design_search::table_mass;
+    use vibrofem::app::design::table_mass;
     let d = Design::paper();
     let mut c = d.clone();
     c.spacers = "channel10".into();
@@ -244,7 +244,7 @@ fn channel_spacers_add_their_flanges() {
 
 #[test]
 fn search_reports_the_lightest_passing_variant() {
-    use vibrofem::app::design_search::search;
+    use vibrofem::app::design::search;
     // Two table variants (3 transverse webs, top 16 and 20 mm): both reach the amplitude and
     // the first-mode limit. With the given 10 % uniformity limit neither passes (their
     // work-surface amplitude varies by about 15 % with the reconstruction's leaf layout); with

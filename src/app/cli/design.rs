@@ -1,6 +1,8 @@
 //! `vibrofem design`: the vibratory-table design chain and, when it fails, the search.
 
 use super::{check_outputs, emit};
+use crate::app::design;
+use crate::app::report::render;
 use crate::{Error, Result};
 use std::path::PathBuf;
 
@@ -20,94 +22,77 @@ pub struct DesignArgs {
 }
 
 pub fn design_cmd(a: &DesignArgs) -> Result<i32> {
-    use std::io::IsTerminal;
     let d = match &a.file {
-        Some(f) => crate::app::design::Design::from_toml(f)?,
-        None => crate::app::design::Design::paper(),
+        Some(f) => design::Design::from_toml(f)?,
+        None => design::Design::paper(),
     };
     if !a.yes {
         // A design file's sizes are all valid alone, yet a 5 mm element size or a 10 m plate
         // makes minutes of work: say so before starting.
-        let dofs = crate::app::design::estimate_dofs(&d)?;
-        if dofs > crate::app::design::LARGE_DESIGN_DOFS {
-            return Err(Error::InvalidInput(format!(
-                "the design's FE models have about {dofs} DOFs (more than {}): minutes to hours of work; \
-                 rerun with --yes to start it, or coarsen the mesh sizes",
-                crate::app::design::LARGE_DESIGN_DOFS
-            )));
+        let dofs = design::estimate_dofs(&d)?;
+        if dofs > design::LARGE_DESIGN_DOFS {
+            return Err(Error::option(
+                "--yes",
+                format!(
+                    "the design's FE models have about {dofs} DOFs (more than {}): minutes to hours of work; \
+                     rerun with --yes to start it, or coarsen the mesh sizes",
+                    design::LARGE_DESIGN_DOFS
+                ),
+            ));
         }
     }
     check_outputs(&[], Some(&a.out))?;
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new_spinner();
-        b.enable_steady_tick(std::time::Duration::from_millis(120));
-        Some(b)
-    } else {
-        None
-    };
     let t0 = std::time::Instant::now();
-    let progress = |step: &str| match &bar {
-        Some(b) => b.set_message(step.to_string()),
-        None => eprintln!("[{:6.1} s] {step}", t0.elapsed().as_secs_f64()),
-    };
-    let r = crate::app::design::run_design(&d, Some(&a.out), &progress);
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
-    let r = r?;
-    let json = serde_json::to_string_pretty(&r).map_err(|e| Error::output("JSON", e))?;
-    std::fs::write(a.out.join("report.json"), &json).map_err(|e| Error::io(a.out.join("report.json"), e))?;
-    std::fs::write(a.out.join("report.md"), crate::app::design::report_markdown(&r))
-        .map_err(|e| Error::io(a.out.join("report.md"), e))?;
-    let html = a.out.join("report.html");
-    std::fs::write(&html, crate::app::design::report_html(&r, &a.out)).map_err(|e| Error::io(&html, e))?;
+    let r = with_progress(t0, |p| design::run_design(&d, Some(&a.out), p))?;
+    let report = design::report::report(&r);
+    render::write_all(&report, &a.out)?;
     if a.json {
-        outln!("{json}");
+        outln!("{}", render::json(&report)?);
     } else {
-        out!("{}", crate::app::design::verdict_text(&r));
+        out!("{}", render::text(&report));
         outln!(
-            "
-report: {}/report.md (plots and mode shapes beside it)",
+            "\nreport: {}/report.md (plots and mode shapes beside it)",
             a.out.display()
         );
     }
     if d.search.enabled && r.checks.iter().any(|c| !c.ok) {
         // Issue 13 item 3: a failing design is followed by the lightest passing variant.
         let vdir = a.out.join("passing-variant");
-        let bar = if std::io::stderr().is_terminal() {
-            let b = indicatif::ProgressBar::new_spinner();
-            b.enable_steady_tick(std::time::Duration::from_millis(120));
-            Some(b)
-        } else {
-            None
-        };
-        let progress = |step: &str| match &bar {
-            Some(b) => b.set_message(step.to_string()),
-            None => eprintln!("[{:6.1} s] {step}", t0.elapsed().as_secs_f64()),
-        };
         std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
-        let o = crate::app::design_search::search(&d, Some(&vdir), &progress);
-        if let Some(b) = &bar {
-            b.finish_and_clear();
-        }
-        let o = o?;
-        let text = crate::app::design_search::search_text(&d, &o);
+        let o = with_progress(t0, |p| design::search(&d, Some(&vdir), p))?;
+        let text = design::search_text(&d, &o);
         std::fs::write(a.out.join("search.txt"), &text).map_err(|e| Error::io(a.out.join("search.txt"), e))?;
         if !a.json {
             outln!("\n{text}");
         }
         if let Some((_, vr)) = &o.best {
-            let vjson = serde_json::to_string_pretty(vr).map_err(|e| Error::output("JSON", e))?;
-            std::fs::write(vdir.join("report.json"), &vjson).map_err(|e| Error::io(vdir.join("report.json"), e))?;
-            std::fs::write(vdir.join("report.md"), crate::app::design::report_markdown(vr))
-                .map_err(|e| Error::io(vdir.join("report.md"), e))?;
-            let vhtml = vdir.join("report.html");
-            std::fs::write(&vhtml, crate::app::design::report_html(vr, &vdir)).map_err(|e| Error::io(&vhtml, e))?;
+            let vreport = design::report::report(vr);
+            render::write_all(&vreport, &vdir)?;
             if !a.json {
-                out!("{}", crate::app::design::verdict_text(vr));
+                out!("{}", render::text(&vreport));
                 outln!("\nreport of the passing variant: {}/report.md", vdir.display());
             }
         }
     }
     Ok(0)
+}
+
+/// Run `work`, telling the user each step it starts: a spinner on a terminal, else timed lines
+/// on stderr (seconds since `t0`).
+fn with_progress<T>(t0: std::time::Instant, work: impl FnOnce(&dyn Fn(&str)) -> Result<T>) -> Result<T> {
+    use std::io::IsTerminal;
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    });
+    let progress = |step: &str| match &bar {
+        Some(b) => b.set_message(step.to_string()),
+        None => eprintln!("[{:6.1} s] {step}", t0.elapsed().as_secs_f64()),
+    };
+    let r = work(&progress);
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    r
 }

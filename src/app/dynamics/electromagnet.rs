@@ -47,14 +47,16 @@ impl RectifiedDrive {
     /// A validated drive: P_em (N, finite, ≥ 0), ω (rad/s, finite, > 0).
     pub fn new(p_em: f64, omega_mains: f64) -> Result<Self> {
         if !(p_em.is_finite() && p_em >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "electromagnet peak pull P_em must be finite and ≥ 0 N, got {p_em}"
-            )));
+            return Err(Error::param(
+                "p_em",
+                format!("electromagnet peak pull P_em must be finite and ≥ 0 N, got {p_em}"),
+            ));
         }
         if !(omega_mains.is_finite() && omega_mains > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "mains angular frequency ω must be finite and > 0 rad/s, got {omega_mains}"
-            )));
+            return Err(Error::param(
+                "omega_mains",
+                format!("mains angular frequency ω must be finite and > 0 rad/s, got {omega_mains}"),
+            ));
         }
         Ok(RectifiedDrive { p_em, omega_mains })
     }
@@ -62,12 +64,13 @@ impl RectifiedDrive {
     /// `n` magnets of peak pull `p_each` (N) each, on mains ω (rad/s): P_em = n·p_each.
     pub fn from_magnets(n: usize, p_each: f64, omega_mains: f64) -> Result<Self> {
         if n == 0 {
-            return Err(Error::InvalidInput("number of electromagnets must be ≥ 1".into()));
+            return Err(Error::param("n_magnets", "number of electromagnets must be ≥ 1"));
         }
         if !(p_each.is_finite() && p_each >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "peak pull per electromagnet must be finite and ≥ 0 N, got {p_each}"
-            )));
+            return Err(Error::param(
+                "p_each",
+                format!("peak pull per electromagnet must be finite and ≥ 0 N, got {p_each}"),
+            ));
         }
         Self::new(n as f64 * p_each, omega_mains)
     }
@@ -125,15 +128,19 @@ impl RectifiedDrive {
 /// |X1|/F at Ω: P_em = (3π/4)·X1/(|X1|/F). Divide by the number of magnets for the per-magnet pull.
 pub fn required_peak_force(model: &TwoMass, omega: f64, x1_target: f64) -> Result<f64> {
     if !(x1_target.is_finite() && x1_target > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "target amplitude X1 must be finite and > 0 m, got {x1_target}"
-        )));
+        return Err(Error::param(
+            "x1_target",
+            format!("target amplitude X1 must be finite and > 0 m, got {x1_target}"),
+        ));
     }
     let s = model.steady_state(omega, 1.0)?;
     if s.amp1().is_nan() || s.amp1() <= 0.0 {
-        return Err(Error::InvalidInput(format!(
-            "the active mass does not move at Ω = {omega} rad/s (anti-resonance): no pull reaches X1 = {x1_target} m"
-        )));
+        return Err(Error::param(
+            "omega",
+            format!(
+                "the active mass does not move at Ω = {omega} rad/s (anti-resonance): no pull reaches X1 = {x1_target} m"
+            ),
+        ));
     }
     Ok(3.0 * PI / 4.0 * x1_target / s.amp1())
 }
@@ -144,7 +151,7 @@ pub fn required_peak_force(model: &TwoMass, omega: f64, x1_target: f64) -> Resul
 pub fn peak_force_from_gamma(x1: f64, m1: f64, omega: f64, gamma1: f64) -> Result<f64> {
     for (name, v) in [("X1", x1), ("m1", m1), ("Ω", omega), ("γ1", gamma1)] {
         if !(v.is_finite() && v > 0.0) {
-            return Err(Error::InvalidInput(format!("{name} must be finite and > 0, got {v}")));
+            return Err(Error::param(name, format!("{name} must be finite and > 0, got {v}")));
         }
     }
     Ok(3.0 * PI / 4.0 * x1 * m1 * omega * omega / gamma1)
@@ -155,14 +162,16 @@ pub fn peak_force_from_gamma(x1: f64, m1: f64, omega: f64, gamma1: f64) -> Resul
 /// pulled together); see [`TwoMass::static_response`]. Paper: 1884/3.808e7 = 0.0495 mm.
 pub fn static_offset(c12: f64, p_const: f64) -> Result<f64> {
     if !(c12.is_finite() && c12 > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "c12 must be finite and > 0 N/m, got {c12}"
-        )));
+        return Err(Error::param(
+            "c12",
+            format!("c12 must be finite and > 0 N/m, got {c12}"),
+        ));
     }
     if !p_const.is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "constant pull must be finite, got {p_const} N"
-        )));
+        return Err(Error::param(
+            "p_const",
+            format!("constant pull must be finite, got {p_const} N"),
+        ));
     }
     Ok(p_const / c12)
 }
@@ -199,7 +208,10 @@ impl PeriodicResponse {
     /// Errors: invalid model, and (undamped model) a harmonic at a natural frequency.
     pub fn new(model: &TwoMass, drive: &RectifiedDrive, n_harmonics: u32) -> Result<Self> {
         if n_harmonics == 0 {
-            return Err(Error::InvalidInput("harmonic balance needs at least 1 harmonic".into()));
+            return Err(Error::param(
+                "n_harmonics",
+                "harmonic balance needs at least 1 harmonic",
+            ));
         }
         let omega = drive.omega_force();
         let static_x = model.static_response(drive.constant())?;

@@ -11,9 +11,10 @@ use crate::{Error, Result};
 
 fn pos(name: &str, v: f64, unit: &str) -> Result<()> {
     if !(v.is_finite() && v > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "{name} must be finite and > 0 {unit}, got {v}"
-        )));
+        return Err(Error::param(
+            name,
+            format!("{name} must be finite and > 0 {unit}, got {v}"),
+        ));
     }
     Ok(())
 }
@@ -41,21 +42,24 @@ pub fn isolation_frequency_hz(c13: f64, total_mass: f64) -> Result<f64> {
 /// Errors: r or ζ negative/non-finite, and r = 1 with ζ = 0 (undamped resonance: unbounded).
 pub fn transmissibility(r: f64, zeta: f64) -> Result<f64> {
     if !(r.is_finite() && r >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "frequency ratio r must be finite and ≥ 0, got {r}"
-        )));
+        return Err(Error::param(
+            "r",
+            format!("frequency ratio r must be finite and ≥ 0, got {r}"),
+        ));
     }
     if !(zeta.is_finite() && zeta >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "damping ratio ζ must be finite and ≥ 0, got {zeta}"
-        )));
+        return Err(Error::param(
+            "zeta",
+            format!("damping ratio ζ must be finite and ≥ 0, got {zeta}"),
+        ));
     }
     let a = 1.0 - r * r;
     let b = 2.0 * zeta * r;
     let den = (a * a + b * b).sqrt();
     if den == 0.0 {
-        return Err(Error::InvalidInput(
-            "transmissibility at r = 1 with no damping: the isolator is at resonance (unbounded)".into(),
+        return Err(Error::param(
+            "r",
+            "transmissibility at r = 1 with no damping: the isolator is at resonance (unbounded)",
         ));
     }
     Ok((1.0 + b * b).sqrt() / den)
@@ -72,9 +76,10 @@ pub fn spring_index(mean_d: f64, wire_d: f64) -> Result<f64> {
 /// Paper: C = 32/6 = 5.333 → 1.288 (the paper rounds to 1.28).
 pub fn wahl_factor(c: f64) -> Result<f64> {
     if !(c.is_finite() && c > 1.0) {
-        return Err(Error::InvalidInput(format!(
-            "spring index C = D/d must be finite and > 1, got {c}"
-        )));
+        return Err(Error::param(
+            "c",
+            format!("spring index C = D/d must be finite and > 1, got {c}"),
+        ));
     }
     Ok((4.0 * c - 1.0) / (4.0 * c - 4.0) + 0.615 / c)
 }
@@ -95,12 +100,13 @@ pub fn coil_turns_for_stiffness(k: f64, g: f64, wire_d: f64, mean_d: f64) -> Res
 /// Paper: Q = 600 N, D = 32 mm, d = 6 mm, K = 1.28 → 289.7 MPa (291.6 MPa with K = 1.2884).
 pub fn coil_shear_stress(q: f64, k_factor: f64, mean_d: f64, wire_d: f64) -> Result<f64> {
     if !q.is_finite() {
-        return Err(Error::InvalidInput(format!("axial load Q must be finite, got {q} N")));
+        return Err(Error::param("q", format!("axial load Q must be finite, got {q} N")));
     }
     if !(k_factor.is_finite() && k_factor >= 1.0) {
-        return Err(Error::InvalidInput(format!(
-            "stress factor K must be finite and ≥ 1, got {k_factor}"
-        )));
+        return Err(Error::param(
+            "k_factor",
+            format!("stress factor K must be finite and ≥ 1, got {k_factor}"),
+        ));
     }
     pos("mean coil diameter D", mean_d, "m")?;
     pos("wire diameter d", wire_d, "m")?;
@@ -150,10 +156,13 @@ impl CoilSpring {
         pos("active turns i_n", self.turns, "")?;
         pos("shear modulus G", self.shear_modulus, "Pa")?;
         if self.mean_d <= self.wire_d {
-            return Err(Error::InvalidInput(format!(
-                "coil spring: mean diameter D = {} m must exceed the wire diameter d = {} m",
-                self.mean_d, self.wire_d
-            )));
+            return Err(Error::param(
+                "mean_d",
+                format!(
+                    "coil spring: mean diameter D = {} m must exceed the wire diameter d = {} m",
+                    self.mean_d, self.wire_d
+                ),
+            ));
         }
         Ok(())
     }

@@ -14,7 +14,7 @@
 //! - [`plot`]: SVG figures.
 //!
 //! Units are SI throughout: kg, m, s, N, N/m, N·s/m, rad/s (angular frequencies) and Hz (where
-//! named `_hz`). Bad input gives [`crate::Error::InvalidInput`] naming the parameter; nothing panics.
+//! named `_hz`). Bad input gives [`crate::Error::param`] naming the parameter; nothing panics.
 //!
 //! Which mass carries the isolators is in doubt in the paper (printed k-terms against eq. (1)):
 //! see [`KTerms`].

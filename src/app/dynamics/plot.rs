@@ -91,8 +91,8 @@ pub fn write_frequency_response_svg(
     } else {
         (1e-6, 1.0)
     };
-    let (pmin, pmax) = finite_range(p1.iter().chain(&p2).copied());
 
+    let data = Curves { fs, a1, a2, p1, p2 };
     let root = SVGBackend::new(path, (W, H)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;
     let (top, bottom) = root.split_vertically(H / 2);
@@ -103,122 +103,164 @@ pub fn write_frequency_response_svg(
             super::KTerms::AsPrinted => "k-terms as printed",
         }
     );
-    {
-        let mut ch = ChartBuilder::on(&top)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(f_lo..f_hi, (amin..amax).log_scale())
-            .map_err(perr(path))?;
-        ch.configure_mesh()
-            .x_desc("frequency, Hz")
-            .y_desc("amplitude, mm")
-            .draw()
-            .map_err(perr(path))?;
-        ch.draw_series(LineSeries::new(
-            fs.iter().zip(&a1).filter(|(_, a)| **a > 0.0).map(|(f, a)| (*f, *a)),
-            C1.stroke_width(2),
+    draw_amplitudes(&top, path, title, &data, (f_lo, f_hi), (amin, amax), op.as_ref())?;
+    draw_phases(&bottom, path, &data, (f_lo, f_hi), op.as_ref())?;
+    root.present().map_err(perr(path))?;
+    Ok(())
+}
+
+/// The sampled response curves: frequencies (Hz), amplitudes (mm) and unwrapped phases (deg).
+struct Curves {
+    fs: Vec<f64>,
+    a1: Vec<f64>,
+    a2: Vec<f64>,
+    p1: Vec<f64>,
+    p2: Vec<f64>,
+}
+
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+
+/// The amplitude panel: |X1|, |X2| on a log scale, the operating point dashed and dotted.
+fn draw_amplitudes(
+    area: &Area,
+    path: &Path,
+    title: String,
+    data: &Curves,
+    (f_lo, f_hi): (f64, f64),
+    (amin, amax): (f64, f64),
+    op: Option<&super::two_mass::SteadyState>,
+) -> Result<()> {
+    let Curves { fs, a1, a2, .. } = data;
+    let mut ch = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(f_lo..f_hi, (amin..amax).log_scale())
+        .map_err(perr(path))?;
+    ch.configure_mesh()
+        .x_desc("frequency, Hz")
+        .y_desc("amplitude, mm")
+        .draw()
+        .map_err(perr(path))?;
+    ch.draw_series(LineSeries::new(
+        fs.iter()
+            .zip(a1.iter())
+            .filter(|(_, a)| **a > 0.0)
+            .map(|(f, a)| (*f, *a)),
+        C1.stroke_width(2),
+    ))
+    .map_err(perr(path))?
+    .label("|X1| active mass m1")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C1.stroke_width(2)));
+    ch.draw_series(LineSeries::new(
+        fs.iter()
+            .zip(a2.iter())
+            .filter(|(_, a)| **a > 0.0)
+            .map(|(f, a)| (*f, *a)),
+        C2.stroke_width(2),
+    ))
+    .map_err(perr(path))?
+    .label("|X2| reactive mass m2")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C2.stroke_width(2)));
+    if let Some(s) = op {
+        let f = s.freq_hz();
+        ch.draw_series(DashedLineSeries::new(
+            vec![(f, amin), (f, amax)],
+            6,
+            4,
+            BLACK.stroke_width(1),
         ))
         .map_err(perr(path))?
-        .label("|X1| active mass m1")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C1.stroke_width(2)));
-        ch.draw_series(LineSeries::new(
-            fs.iter().zip(&a2).filter(|(_, a)| **a > 0.0).map(|(f, a)| (*f, *a)),
-            C2.stroke_width(2),
+        .label(format!(
+            "operating point {f:.1} Hz: X1 = {:.4} mm, X2 = {:.4} mm",
+            s.amp1() * 1e3,
+            s.amp2() * 1e3
         ))
-        .map_err(perr(path))?
-        .label("|X2| reactive mass m2")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C2.stroke_width(2)));
-        if let Some(s) = &op {
-            let f = s.freq_hz();
-            ch.draw_series(DashedLineSeries::new(
-                vec![(f, amin), (f, amax)],
-                6,
-                4,
-                BLACK.stroke_width(1),
-            ))
-            .map_err(perr(path))?
-            .label(format!(
-                "operating point {f:.1} Hz: X1 = {:.4} mm, X2 = {:.4} mm",
-                s.amp1() * 1e3,
-                s.amp2() * 1e3
-            ))
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
-            for (a, c) in [(s.amp1() * 1e3, C1), (s.amp2() * 1e3, C2)] {
-                if a > 0.0 {
-                    ch.draw_series(std::iter::once(Circle::new((f, a), 5, c.filled())))
-                        .map_err(perr(path))?;
-                }
-            }
-        }
-        ch.configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(perr(path))?;
-    }
-    {
-        let mut ch = ChartBuilder::on(&bottom)
-            .caption("Phase against the force on m2", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(f_lo..f_hi, pmin..pmax)
-            .map_err(perr(path))?;
-        ch.configure_mesh()
-            .x_desc("frequency, Hz")
-            .y_desc("phase, deg")
-            .draw()
-            .map_err(perr(path))?;
-        ch.draw_series(LineSeries::new(
-            fs.iter().copied().zip(p1.iter().copied()),
-            C1.stroke_width(2),
-        ))
-        .map_err(perr(path))?
-        .label("φ1 active mass")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C1.stroke_width(2)));
-        ch.draw_series(LineSeries::new(
-            fs.iter().copied().zip(p2.iter().copied()),
-            C2.stroke_width(2),
-        ))
-        .map_err(perr(path))?
-        .label("φ2 reactive mass")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C2.stroke_width(2)));
-        if let Some(s) = &op {
-            let f = s.freq_hz();
-            ch.draw_series(DashedLineSeries::new(
-                vec![(f, pmin), (f, pmax)],
-                6,
-                4,
-                BLACK.stroke_width(1),
-            ))
-            .map_err(perr(path))?;
-            // Mark the operating phases on the unwrapped curves (nearest sample's branch).
-            let i = fs
-                .iter()
-                .enumerate()
-                .min_by(|a, b| (a.1 - f).abs().total_cmp(&(b.1 - f).abs()))
-                .map(|(i, _)| i)
-                .unwrap_or(0);
-            for (ph, curve, c) in [(s.phase1(), &p1, C1), (s.phase2(), &p2, C2)] {
-                let mut v = ph.to_degrees();
-                if let Some(&near) = curve.get(i) {
-                    v += 360.0 * ((near - v) / 360.0).round();
-                }
-                ch.draw_series(std::iter::once(Circle::new((f, v), 5, c.filled())))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+        for (a, c) in [(s.amp1() * 1e3, C1), (s.amp2() * 1e3, C2)] {
+            if a > 0.0 {
+                ch.draw_series(std::iter::once(Circle::new((f, a), 5, c.filled())))
                     .map_err(perr(path))?;
             }
         }
-        ch.configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(perr(path))?;
     }
-    root.present().map_err(perr(path))?;
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(perr(path))?;
+    Ok(())
+}
+
+/// The phase panel: both masses' unwrapped phases, the operating phases marked on their branch.
+fn draw_phases(
+    area: &Area,
+    path: &Path,
+    data: &Curves,
+    (f_lo, f_hi): (f64, f64),
+    op: Option<&super::two_mass::SteadyState>,
+) -> Result<()> {
+    let Curves { fs, p1, p2, .. } = data;
+    let (pmin, pmax) = finite_range(p1.iter().chain(p2).copied());
+    let mut ch = ChartBuilder::on(area)
+        .caption("Phase against the force on m2", ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(f_lo..f_hi, pmin..pmax)
+        .map_err(perr(path))?;
+    ch.configure_mesh()
+        .x_desc("frequency, Hz")
+        .y_desc("phase, deg")
+        .draw()
+        .map_err(perr(path))?;
+    ch.draw_series(LineSeries::new(
+        fs.iter().copied().zip(p1.iter().copied()),
+        C1.stroke_width(2),
+    ))
+    .map_err(perr(path))?
+    .label("φ1 active mass")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C1.stroke_width(2)));
+    ch.draw_series(LineSeries::new(
+        fs.iter().copied().zip(p2.iter().copied()),
+        C2.stroke_width(2),
+    ))
+    .map_err(perr(path))?
+    .label("φ2 reactive mass")
+    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], C2.stroke_width(2)));
+    if let Some(s) = op {
+        let f = s.freq_hz();
+        ch.draw_series(DashedLineSeries::new(
+            vec![(f, pmin), (f, pmax)],
+            6,
+            4,
+            BLACK.stroke_width(1),
+        ))
+        .map_err(perr(path))?;
+        // Mark the operating phases on the unwrapped curves (nearest sample's branch).
+        let i = fs
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - f).abs().total_cmp(&(b.1 - f).abs()))
+            .map(|(i, _)| i)
+            .unwrap_or(0);
+        for (ph, curve, c) in [(s.phase1(), p1, C1), (s.phase2(), p2, C2)] {
+            let mut v = ph.to_degrees();
+            if let Some(&near) = curve.get(i) {
+                v += 360.0 * ((near - v) / 360.0).round();
+            }
+            ch.draw_series(std::iter::once(Circle::new((f, v), 5, c.filled())))
+                .map_err(perr(path))?;
+        }
+    }
+    ch.configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(perr(path))?;
     Ok(())
 }
 
@@ -229,7 +271,7 @@ pub fn write_transient_svg(path: impl AsRef<Path>, tr: &Transient, offsets: Opti
     let path = path.as_ref();
     ensure_parent(path)?;
     if tr.t.len() < 2 {
-        return Err(Error::InvalidInput("transient plot: fewer than 2 samples".into()));
+        return Err(Error::param("tr", "transient plot: fewer than 2 samples"));
     }
     let stride = tr.t.len().div_ceil(8000).max(1);
     let t0 = tr.t[0];
@@ -299,14 +341,16 @@ pub fn write_electromagnet_svg(
     ensure_parent(path)?;
     let drive = RectifiedDrive::new(drive.p_em, drive.omega_mains)?;
     if n_harmonics == 0 || n_harmonics > 1000 {
-        return Err(Error::InvalidInput(format!(
-            "electromagnet plot: n_harmonics must be in 1..=1000, got {n_harmonics}"
-        )));
+        return Err(Error::param(
+            "n_harmonics",
+            format!("electromagnet plot: n_harmonics must be in 1..=1000, got {n_harmonics}"),
+        ));
     }
     if !(mains_periods.is_finite() && mains_periods > 0.0 && mains_periods <= 1000.0) {
-        return Err(Error::InvalidInput(format!(
-            "electromagnet plot: mains_periods must be in (0, 1000], got {mains_periods}"
-        )));
+        return Err(Error::param(
+            "mains_periods",
+            format!("electromagnet plot: mains_periods must be in (0, 1000], got {mains_periods}"),
+        ));
     }
     let t_end = mains_periods * std::f64::consts::TAU / drive.omega_mains;
     let npts = 2000;

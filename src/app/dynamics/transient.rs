@@ -100,24 +100,28 @@ pub fn simulate_startup(model: &TwoMass, drive: &RectifiedDrive, opts: &Transien
     model.validate()?;
     let drive = RectifiedDrive::new(drive.p_em, drive.omega_mains)?;
     if !(opts.t_end.is_finite() && opts.t_end > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "transient: t_end must be finite and > 0 s, got {}",
-            opts.t_end
-        )));
+        return Err(Error::param(
+            "t_end",
+            format!("transient: t_end must be finite and > 0 s, got {}", opts.t_end),
+        ));
     }
     if opts.samples_per_period < 20 {
-        return Err(Error::InvalidInput(format!(
-            "transient: samples_per_period must be ≥ 20, got {}",
-            opts.samples_per_period
-        )));
+        return Err(Error::param(
+            "samples_per_period",
+            format!(
+                "transient: samples_per_period must be ≥ 20, got {}",
+                opts.samples_per_period
+            ),
+        ));
     }
     let omega = drive.omega_force();
     let dt = std::f64::consts::TAU / omega / opts.samples_per_period as f64;
     let n_out = (opts.t_end / dt - 1e-9).ceil() as usize;
     if n_out > 50_000_000 {
-        return Err(Error::InvalidInput(format!(
-            "transient: {n_out} output samples requested; shorten t_end or lower samples_per_period"
-        )));
+        return Err(Error::param(
+            "t_end",
+            format!("transient: {n_out} output samples requested; shorten t_end or lower samples_per_period"),
+        ));
     }
     let t_out: Vec<f64> = (0..=n_out).map(|i| i as f64 * dt).collect();
     let t_last = t_out[n_out];
@@ -213,9 +217,10 @@ impl Transient {
     pub fn summary(&self, n_last: usize) -> Result<TransientSummary> {
         let np = self.whole_periods();
         if n_last == 0 || n_last > np {
-            return Err(Error::InvalidInput(format!(
-                "transient summary: n_last must be in 1..={np} (whole periods simulated), got {n_last}"
-            )));
+            return Err(Error::param(
+                "n_last",
+                format!("transient summary: n_last must be in 1..={np} (whole periods simulated), got {n_last}"),
+            ));
         }
         let m = self.samples_per_period;
         let end = np * m;

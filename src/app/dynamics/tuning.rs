@@ -8,9 +8,10 @@ pub const G_ACCEL: f64 = 9.81;
 
 fn pos(name: &str, v: f64, unit: &str) -> Result<()> {
     if !(v.is_finite() && v > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "{name} must be finite and > 0 {unit}, got {v}"
-        )));
+        return Err(Error::param(
+            name,
+            format!("{name} must be finite and > 0 {unit}, got {v}"),
+        ));
     }
     Ok(())
 }
@@ -30,9 +31,10 @@ pub fn c12_from_detuning(m1: f64, m2: f64, omega: f64, z: f64) -> Result<f64> {
     let mr = reduced_mass(m1, m2)?;
     pos("forcing frequency Ω", omega, "rad/s")?;
     if !(z.is_finite() && z > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "resonance tuning z = Ω/ω0 must be finite and > 0, got {z}"
-        )));
+        return Err(Error::param(
+            "z",
+            format!("resonance tuning z = Ω/ω0 must be finite and > 0, got {z}"),
+        ));
     }
     Ok(mr * (omega / z).powi(2))
 }
@@ -56,16 +58,20 @@ pub fn reactive_mass_for_detuning(m1: f64, c12: f64, omega: f64, z: f64) -> Resu
     pos("c12 (leaf-spring stiffness)", c12, "N/m")?;
     pos("forcing frequency Ω", omega, "rad/s")?;
     if !(z.is_finite() && z > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "resonance tuning z = Ω/ω0 must be finite and > 0, got {z}"
-        )));
+        return Err(Error::param(
+            "z",
+            format!("resonance tuning z = Ω/ω0 must be finite and > 0, got {z}"),
+        ));
     }
     let mr = c12 * z * z / (omega * omega);
     if mr >= m1 {
-        return Err(Error::InvalidInput(format!(
-            "tuning z = {z} with c12 = {c12} N/m needs a reduced mass {mr:.4} kg ≥ m1 = {m1} kg: \
+        return Err(Error::param(
+            "z",
+            format!(
+                "tuning z = {z} with c12 = {c12} N/m needs a reduced mass {mr:.4} kg ≥ m1 = {m1} kg: \
              no reactive mass m2 can reach it (stiffen the leaves or raise z)"
-        )));
+            ),
+        ));
     }
     Ok(m1 * mr / (m1 - mr))
 }
@@ -80,26 +86,29 @@ pub fn damping_from_loss_factor(c: f64, psi: f64, omega: f64) -> Result<f64> {
     pos("stiffness c", c, "N/m")?;
     pos("forcing frequency Ω", omega, "rad/s")?;
     if !(psi.is_finite() && psi >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "loss factor ψ must be finite and ≥ 0, got {psi}"
-        )));
+        return Err(Error::param(
+            "psi",
+            format!("loss factor ψ must be finite and ≥ 0, got {psi}"),
+        ));
     }
     Ok(c * psi / omega)
 }
 
 fn check_leaf(n_leaves: usize, e: f64, b: f64, l: f64, k_clamp: f64) -> Result<()> {
     if n_leaves == 0 {
-        return Err(Error::InvalidInput(
-            "number of leaves (elastic pairs) i must be ≥ 1".into(),
+        return Err(Error::param(
+            "n_leaves",
+            "number of leaves (elastic pairs) i must be ≥ 1",
         ));
     }
     pos("Young's modulus E", e, "Pa")?;
     pos("leaf width b", b, "m")?;
     pos("leaf free length l", l, "m")?;
     if !(k_clamp.is_finite() && k_clamp > 0.0 && k_clamp <= 1.0) {
-        return Err(Error::InvalidInput(format!(
-            "clamping coefficient k must be in (0, 1], got {k_clamp}"
-        )));
+        return Err(Error::param(
+            "k_clamp",
+            format!("clamping coefficient k must be in (0, 1], got {k_clamp}"),
+        ));
     }
     Ok(())
 }
@@ -131,9 +140,10 @@ pub fn leaf_bending_stress(e: f64, h: f64, l: f64, delta: f64) -> Result<f64> {
     pos("leaf thickness h", h, "m")?;
     pos("leaf free length l", l, "m")?;
     if !delta.is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "deflection Δ must be finite, got {delta} m"
-        )));
+        return Err(Error::param(
+            "delta",
+            format!("deflection Δ must be finite, got {delta} m"),
+        ));
     }
     Ok(3.0 * e * h * delta.abs() / (l * l))
 }
@@ -153,25 +163,27 @@ pub fn overload_g(x: f64, omega: f64) -> f64 {
 pub fn drive_power(omega: f64, eta: f64, terms: &[(f64, f64, f64)], x1: f64, m_pr: f64) -> Result<f64> {
     pos("forcing frequency Ω", omega, "rad/s")?;
     if !(eta.is_finite() && eta > 0.0 && eta <= 1.0) {
-        return Err(Error::InvalidInput(format!(
-            "drive efficiency η must be in (0, 1], got {eta}"
-        )));
+        return Err(Error::param(
+            "eta",
+            format!("drive efficiency η must be in (0, 1], got {eta}"),
+        ));
     }
     if !(m_pr.is_finite() && m_pr >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "attached load mass m_pr must be ≥ 0 kg, got {m_pr}"
-        )));
+        return Err(Error::param(
+            "m_pr",
+            format!("attached load mass m_pr must be ≥ 0 kg, got {m_pr}"),
+        ));
     }
     if !x1.is_finite() {
-        return Err(Error::InvalidInput(format!("amplitude X1 must be finite, got {x1} m")));
+        return Err(Error::param("x1", format!("amplitude X1 must be finite, got {x1} m")));
     }
     let mut s = x1 * x1 * m_pr;
     for (j, &(x, m, g)) in terms.iter().enumerate() {
         if !x.is_finite() {
-            return Err(Error::InvalidInput(format!(
-                "amplitude X{} must be finite, got {x} m",
-                j + 1
-            )));
+            return Err(Error::param(
+                "terms",
+                format!("amplitude X{} must be finite, got {x} m", j + 1),
+            ));
         }
         pos(&format!("mass m{}", j + 1), m, "kg")?;
         pos(&format!("dynamic factor γ{}", j + 1), g, "")?;

@@ -145,27 +145,30 @@ pub const RESONANCE_REL_TOL: f64 = 1e-10;
 
 fn positive(name: &str, v: f64, unit: &str) -> Result<()> {
     if !(v.is_finite() && v > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "two-mass model: {name} must be finite and > 0 {unit}, got {v}"
-        )));
+        return Err(Error::param(
+            name,
+            format!("two-mass model: {name} must be finite and > 0 {unit}, got {v}"),
+        ));
     }
     Ok(())
 }
 
 fn non_negative(name: &str, v: f64, unit: &str) -> Result<()> {
     if !(v.is_finite() && v >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "two-mass model: {name} must be finite and ≥ 0 {unit}, got {v}"
-        )));
+        return Err(Error::param(
+            name,
+            format!("two-mass model: {name} must be finite and ≥ 0 {unit}, got {v}"),
+        ));
     }
     Ok(())
 }
 
 pub(crate) fn check_omega(name: &str, omega: f64) -> Result<()> {
     if !(omega.is_finite() && omega >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "{name} must be finite and ≥ 0 rad/s, got {omega}"
-        )));
+        return Err(Error::param(
+            name,
+            format!("{name} must be finite and ≥ 0 rad/s, got {omega}"),
+        ));
     }
     Ok(())
 }
@@ -173,7 +176,7 @@ pub(crate) fn check_omega(name: &str, omega: f64) -> Result<()> {
 impl TwoMass {
     /// Builds a validated model with the eq. (1) k-terms. Units: kg, N/m, N·s/m.
     ///
-    /// Errors ([`Error::InvalidInput`], naming the parameter): a mass or stiffness that is not
+    /// Errors ([`Error::Invalid`], naming the parameter): a mass or stiffness that is not
     /// finite and > 0; a damping coefficient that is negative or not finite.
     pub fn new(m1: f64, m2: f64, c12: f64, c13: f64, mu1: f64, mu12: f64, mu13: f64) -> Result<Self> {
         let m = TwoMass {
@@ -288,9 +291,10 @@ impl TwoMass {
         self.validate()?;
         check_omega("forcing frequency Ω", omega)?;
         if !force.is_finite() {
-            return Err(Error::InvalidInput(format!(
-                "force amplitude F must be finite, got {force} N"
-            )));
+            return Err(Error::param(
+                "force",
+                format!("force amplitude F must be finite, got {force} N"),
+            ));
         }
         // Eq. (3)–(4) in a form free of cancellation: with s = −k12 = c12 + iΩμ12 (the coupling) and
         // the grounded parts p1 = k11 + k12, p2 = k22 + k21 (computed directly, not by subtraction),
@@ -307,25 +311,29 @@ impl TwoMass {
         let scale = (p1 * p2).norm() + sc.norm() * (p1.norm() + p2.norm());
         if d.norm().is_nan() || d.norm() <= RESONANCE_REL_TOL * scale {
             let wn = self.natural_frequencies()?;
-            return Err(Error::InvalidInput(format!(
-                "excitation at Ω = {omega} rad/s ({:.6} Hz) is at an undamped resonance of the two-mass \
+            return Err(Error::param(
+                "omega",
+                format!(
+                    "excitation at Ω = {omega} rad/s ({:.6} Hz) is at an undamped resonance of the two-mass \
                  model (natural frequencies {:.6} Hz and {:.6} Hz, damping μ1 = {}, μ12 = {}, μ13 = {} N·s/m): \
                  the steady-state amplitude is unbounded; add damping or move the excitation",
-                omega / (2.0 * std::f64::consts::PI),
-                wn[0] / (2.0 * std::f64::consts::PI),
-                wn[1] / (2.0 * std::f64::consts::PI),
-                self.mu1,
-                self.mu12,
-                self.mu13
-            )));
+                    omega / (2.0 * std::f64::consts::PI),
+                    wn[0] / (2.0 * std::f64::consts::PI),
+                    wn[1] / (2.0 * std::f64::consts::PI),
+                    self.mu1,
+                    self.mu12,
+                    self.mu13
+                ),
+            ));
         }
         // Unit-force receptances (eq. (3) with F = 1), m/N.
         let h1 = p2 / d;
         let h2 = -p1 / d;
         if !(h1.re.is_finite() && h1.im.is_finite() && h2.re.is_finite() && h2.im.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "steady state at Ω = {omega} rad/s is not finite (parameters out of floating-point range?)"
-            )));
+            return Err(Error::param(
+                "omega",
+                format!("steady state at Ω = {omega} rad/s is not finite (parameters out of floating-point range?)"),
+            ));
         }
         Ok(SteadyState {
             omega,
@@ -344,7 +352,7 @@ impl TwoMass {
     pub fn static_response(&self, p: f64) -> Result<(f64, f64)> {
         self.validate()?;
         if !p.is_finite() {
-            return Err(Error::InvalidInput(format!("static force P must be finite, got {p} N")));
+            return Err(Error::param("p", format!("static force P must be finite, got {p} N")));
         }
         // K x = (−P, P). det K = c12·c13 > 0.
         let (_, _, k) = self.matrices();
@@ -432,8 +440,9 @@ impl TwoMass {
         self.validate()?;
         check_range(f_lo, f_hi, n)?;
         if self.is_undamped() {
-            return Err(Error::InvalidInput(
-                "resonance peaks of an undamped two-mass model are unbounded; use the natural frequencies".into(),
+            return Err(Error::param(
+                "damping",
+                "resonance peaks of an undamped two-mass model are unbounded; use the natural frequencies",
             ));
         }
         let tau = std::f64::consts::TAU;
@@ -490,14 +499,16 @@ impl TwoMass {
 
 fn check_range(f_lo: f64, f_hi: f64, n: usize) -> Result<()> {
     if !(f_lo.is_finite() && f_hi.is_finite() && f_lo >= 0.0 && f_hi > f_lo) {
-        return Err(Error::InvalidInput(format!(
-            "frequency range must satisfy 0 ≤ f_lo < f_hi (finite, Hz), got {f_lo} … {f_hi}"
-        )));
+        return Err(Error::param(
+            "f_lo",
+            format!("frequency range must satisfy 0 ≤ f_lo < f_hi (finite, Hz), got {f_lo} … {f_hi}"),
+        ));
     }
     if n < 3 {
-        return Err(Error::InvalidInput(format!(
-            "frequency sweep needs at least 3 points, got {n}"
-        )));
+        return Err(Error::param(
+            "n",
+            format!("frequency sweep needs at least 3 points, got {n}"),
+        ));
     }
     Ok(())
 }

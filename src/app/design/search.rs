@@ -10,105 +10,16 @@
 //! the table's free–free modal analysis (first elastic mode against the limit) and, for those
 //! that pass it, the whole chain with the 3D machine. The first candidate whose chain passes
 //! every check is the lightest passing one.
-
-use crate::app::design::{Design, DesignReport, run_design, table_fe, table_parts};
+use super::chain::run_design;
+use super::file::{Design, bad};
+use super::parts::{coil_fe, table_fe, table_mass};
+use super::results::DesignReport;
+use crate::Result;
 use crate::app::dynamics::electromagnet::RectifiedDrive;
 use crate::app::dynamics::two_mass::TwoMass;
 use crate::app::sweep::TableSpec;
-use crate::{Error, Result};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use std::f64::consts::TAU;
-
-/// What the search may vary (`[search]` of a design file).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SearchDesign {
-    /// Search when a check fails.
-    pub enabled: bool,
-    /// Top-plate thicknesses (m).
-    pub top_thickness: Vec<f64>,
-    /// Bottom-plate thicknesses (m).
-    pub bottom_thickness: Vec<f64>,
-    /// Bottom-plate widths (m).
-    pub bottom_width: Vec<f64>,
-    /// Numbers of longitudinal webs.
-    pub n_long_webs: Vec<usize>,
-    /// Distances between the outermost longitudinal webs (m; the webs evenly spaced, centred);
-    /// spans that would put a web within 10 mm of the bottom plate's edge are skipped.
-    pub long_web_span: Vec<f64>,
-    /// Numbers of transverse webs (evenly spaced over `trans_web_span`).
-    pub n_trans_webs: Vec<usize>,
-    /// Span of the transverse webs (m).
-    pub trans_web_span: f64,
-    /// Spacers: `"plates"`, `"channel10"`.
-    pub spacers: Vec<String>,
-    /// At most this many whole chains (each some seconds).
-    pub max_full_runs: usize,
-}
-
-impl Default for SearchDesign {
-    /// The family the built-in design's search covers: the bottom plate as wide as the top one
-    /// with the longitudinal webs spread over 500 mm, three transverse webs, top plates of 12 to
-    /// 20 mm, plate webs or channels. (A broader list, 288 variants with 400 mm bottom plates and
-    /// webs over 300 mm, found no passing variant in its six lightest whole chains: docs/design.md.)
-    fn default() -> Self {
-        SearchDesign {
-            enabled: true,
-            top_thickness: vec![0.012, 0.016, 0.02],
-            bottom_thickness: vec![0.008],
-            bottom_width: vec![0.6],
-            n_long_webs: vec![3, 5],
-            long_web_span: vec![0.5],
-            n_trans_webs: vec![3],
-            trans_web_span: 1.1,
-            spacers: vec!["plates".into(), "channel10".into()],
-            max_full_runs: 4,
-        }
-    }
-}
-
-impl SearchDesign {
-    /// Check the lists (non-empty, positive, known spacer names).
-    pub fn validate(&self) -> Result<()> {
-        let bad = |k: &str, m: String| crate::app::toml_file::bad_value(k, format!("design: 'search.{k}' {m}"));
-        for (k, v) in [
-            ("top_thickness", &self.top_thickness),
-            ("bottom_thickness", &self.bottom_thickness),
-            ("bottom_width", &self.bottom_width),
-            ("long_web_span", &self.long_web_span),
-        ] {
-            if v.is_empty() || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
-                return Err(bad(k, format!("must list positive values, got {v:?}")));
-            }
-        }
-        if self.n_long_webs.is_empty() || self.n_trans_webs.is_empty() || self.spacers.is_empty() {
-            return Err(bad("n_long_webs", "n_trans_webs and spacers must not be empty".into()));
-        }
-        if let Some(s) = self
-            .spacers
-            .iter()
-            .find(|s| !["plates", "channel10"].contains(&s.as_str()))
-        {
-            return Err(bad("spacers", format!("lists '{s}': plates or channel10")));
-        }
-        if self.n_long_webs.iter().chain(&self.n_trans_webs).any(|&n| n > 50) {
-            return Err(bad("n_long_webs", "and n_trans_webs must be at most 50".into()));
-        }
-        if !(self.trans_web_span.is_finite() && self.trans_web_span > 0.0) {
-            return Err(bad(
-                "trans_web_span",
-                format!("must be positive, got {}", self.trans_web_span),
-            ));
-        }
-        if self.max_full_runs == 0 || self.max_full_runs > 50 {
-            return Err(bad(
-                "max_full_runs",
-                format!("must be 1 to 50, got {}", self.max_full_runs),
-            ));
-        }
-        Ok(())
-    }
-}
 
 /// One candidate and how far it got.
 #[derive(Clone, Debug, Serialize)]
@@ -135,36 +46,6 @@ pub struct SearchOutcome {
     pub best: Option<(Design, DesignReport)>,
     /// The given table with plate and with channel spacers: (spacers, mass kg, f1 Hz).
     pub spacer_effect: Vec<(String, f64, f64)>,
-}
-
-/// Steel mass of the design's table (kg): shell areas × thickness × density.
-pub fn table_mass(d: &Design) -> Result<f64> {
-    let (mesh, _, thick) = table_parts(d)?;
-    let mut m = 0.0;
-    for (g, t) in thick {
-        let grp = mesh.group(&g)?;
-        for c in &grp.cells {
-            let b = &mesh.blocks[c.block as usize];
-            let nn = b.kind.n_nodes();
-            let x: Vec<[f64; 3]> = b.conn[c.index as usize * nn..(c.index as usize + 1) * nn]
-                .iter()
-                .map(|&a| mesh.nodes[a as usize])
-                .collect();
-            if nn < 4 {
-                continue;
-            }
-            // Planar quad: half the cross product of its diagonals.
-            let d1 = [x[2][0] - x[0][0], x[2][1] - x[0][1], x[2][2] - x[0][2]];
-            let d2 = [x[3][0] - x[1][0], x[3][1] - x[1][1], x[3][2] - x[1][2]];
-            let cr = [
-                d1[1] * d2[2] - d1[2] * d2[1],
-                d1[2] * d2[0] - d1[0] * d2[2],
-                d1[0] * d2[1] - d1[1] * d2[0],
-            ];
-            m += 0.5 * (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt() * t * d.steel[2];
-        }
-    }
-    Ok(m)
 }
 
 fn label(t: &TableSpec, spacers: &str) -> String {
@@ -205,12 +86,10 @@ fn screen_x1(d: &Design, m_table: f64, k_coil: f64) -> Result<f64> {
     Ok(tm.steady_state(omega, f)?.amp1())
 }
 
-/// Search the variants of `d`'s table for the lightest that passes every check.
-/// The whole chains write their plots to `out` (the passing variant's last).
-pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)) -> Result<SearchOutcome> {
+/// Every variant of `d`'s table that the `[search]` lists give (webs within 10 mm of the bottom
+/// plate's edge and invalid tables skipped), at most 1000.
+fn variants(d: &Design) -> Result<Vec<Design>> {
     let s = &d.search;
-    s.validate()?;
-    let k_coil = crate::app::design::coil_fe(d)?;
     let lw = &d.table.long_webs;
     let span = if lw.len() > 1 {
         lw.iter().copied().fold(f64::NEG_INFINITY, f64::max) - lw.iter().copied().fold(f64::INFINITY, f64::min)
@@ -272,11 +151,21 @@ pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)
         }
     }
     if designs.len() > 1000 {
-        return Err(Error::InvalidInput(format!(
-            "design search: {} variants (more than 1000); shorten the lists of [search]",
-            designs.len()
-        )));
+        return Err(bad(
+            "search",
+            format!("gives {} variants (more than 1000): shorten its lists", designs.len()),
+        ));
     }
+    Ok(designs)
+}
+
+/// Search the variants of `d`'s table for the lightest that passes every check.
+/// The whole chains write their plots to `out` (the passing variant's last).
+pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)) -> Result<SearchOutcome> {
+    let s = &d.search;
+    s.validate()?;
+    let k_coil = coil_fe(d)?;
+    let designs = variants(d)?;
     progress(&format!(
         "design search: {} variants, masses and amplitude screen",
         designs.len()

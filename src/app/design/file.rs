@@ -1,0 +1,723 @@
+//! The design file: every input of the chain ([`Design`] and its parts), read from TOML and
+//! checked before any work.
+//!
+//! Defaults are the paper's 100 Hz table ([`Design::paper`]); a TOML file gives the same fields
+//! (unknown keys are errors, missing ones take the paper's values). [`Design::validate`] checks
+//! the range of every value and names the key; [`Design::from_toml`] adds the file and the line.
+//! The `[machine]` layout ([`MachineDesign`]) and the `[search]` lists ([`SearchDesign`]) are
+//! part of the file and are read and checked here too.
+
+use crate::material::Material;
+use crate::mesh::CellKind;
+use crate::mesh::parametric::SandwichParams;
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// A design: every input of the chain, SI units. Defaults are the paper's table.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Design {
+    /// Format version (1).
+    pub version: u32,
+    /// Name of the design.
+    pub name: String,
+    /// Forced-vibration frequency, Hz.
+    pub excitation_hz: f64,
+    /// Target work-table amplitude, m.
+    pub target_amplitude: f64,
+    /// Target detuning z = Ω/ω0 (for `tune`).
+    pub target_detuning: f64,
+    /// `"none"`, `"leaf"` (iterate the leaf thickness to reach `target_detuning`) or `"mass"`
+    /// (report the reactive mass that would reach it, keep the design as given).
+    pub tune: String,
+    /// Structural steel of the table.
+    pub steel: [f64; 3],
+    /// Work table.
+    pub table: TableDesign,
+    /// Masses.
+    pub masses: MassDesign,
+    /// Leaf springs.
+    pub leaf: LeafDesign,
+    /// Coil isolators.
+    pub coil: CoilDesign,
+    /// Electromagnetic drive.
+    pub drive: DriveDesign,
+    /// Viscous damping, N·s/m.
+    pub damping: DampingDesign,
+    /// The 3D machine: layout of leaves, magnets and isolators, and its limits.
+    pub machine: MachineDesign,
+    /// What spaces the plates: `"plates"` (flat webs, the S7 reconstruction) or `"channel10"`
+    /// (the paper's words: channel No. 10 of GOST 8240, h = 100 mm, flanges 46 × 7.6 mm on the
+    /// plates, web 4.5 mm; see [`table_parts`]).
+    pub spacers: String,
+    /// The search for a passing variant when a check fails.
+    pub search: SearchDesign,
+}
+
+/// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
+pub type TableDesign = SandwichParams;
+
+/// Masses of the two-mass system.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MassDesign {
+    /// Load on the table (concrete products and moulds), kg.
+    pub load: f64,
+    /// Share of the load moving with the table in m1 (k_pr).
+    pub load_share: f64,
+    /// Other parts of the active mass (armatures, shoes, clamps), kg.
+    pub active_extra: f64,
+    /// Reactive mass m2 (magnet cores, frame, tuning plates), kg.
+    pub reactive: f64,
+}
+
+/// Flat leaf springs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LeafDesign {
+    /// Free length, m.
+    pub length: f64,
+    /// Width, m.
+    pub width: f64,
+    /// Thickness, m (the starting value when tuning).
+    pub thickness: f64,
+    /// Number of leaves in parallel.
+    pub count: usize,
+    /// Clamping coefficient k_c.
+    pub clamping: f64,
+    /// Spring steel E, ν, ρ.
+    pub material: [f64; 3],
+    /// Allowable stress [σ₋₁], Pa.
+    pub allowable: f64,
+    /// hex20 divisions along length, width, thickness.
+    pub divisions: [usize; 3],
+}
+
+/// Coil isolators.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CoilDesign {
+    /// Wire diameter, m.
+    pub wire: f64,
+    /// Mean coil diameter, m.
+    pub mean_diameter: f64,
+    /// Active turns.
+    pub turns: f64,
+    /// Pitch, m.
+    pub pitch: f64,
+    /// Number of isolators.
+    pub count: usize,
+    /// Shear modulus G, Pa (E = 2G(1+ν) with ν = 0.3).
+    pub shear_modulus: f64,
+    /// Allowable shear stress under the static load, Pa.
+    pub allowable_shear: f64,
+    /// Beam elements (3-node) per turn.
+    pub elements_per_turn: usize,
+}
+
+/// Electromagnetic drive.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DriveDesign {
+    /// Number of single-stroke magnets.
+    pub magnets: usize,
+    /// Peak pull of one magnet P_em, N.
+    pub pull: f64,
+    /// Drive efficiency η for eq. (6).
+    pub efficiency: f64,
+    /// Installed electrical power, W.
+    pub installed_power: f64,
+    /// Transient simulation length, s.
+    pub transient_s: f64,
+    /// Overload at which eq. (6) sizes the drive, g (the paper: 11 g, a margin over 8 g).
+    pub power_overload_g: f64,
+    /// Load share m_pr in eq. (6), kg (the paper: 100 kg, "taken with a margin").
+    pub power_load_share: f64,
+}
+
+/// Damping coefficients.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DampingDesign {
+    /// External damping on m1 (the load), N·s/m.
+    pub mu1: f64,
+    /// Damping in the leaf springs, N·s/m.
+    pub mu12: f64,
+    /// Damping in the isolators, N·s/m.
+    pub mu13: f64,
+}
+
+impl Default for Design {
+    fn default() -> Self {
+        Design::paper()
+    }
+}
+impl Default for MassDesign {
+    fn default() -> Self {
+        // The paper's m1 = 206.7 kg is the CAD mass of the active part; its work organ weighs
+        // 163 kg, so 43.7 kg are other active parts. The load is carried by μ1 (load_share 0).
+        MassDesign {
+            load: 120.0,
+            load_share: 0.0,
+            active_extra: 206.7 - 163.0,
+            reactive: 161.8,
+        }
+    }
+}
+impl Default for LeafDesign {
+    fn default() -> Self {
+        LeafDesign {
+            length: 0.169,
+            width: 0.146,
+            thickness: 0.009,
+            count: 8,
+            clamping: 0.75,
+            material: [2.1e11, 0.3, 7850.0],
+            allowable: 170e6,
+            divisions: [24, 8, 2],
+        }
+    }
+}
+impl Default for CoilDesign {
+    fn default() -> Self {
+        CoilDesign {
+            wire: 0.006,
+            mean_diameter: 0.032,
+            turns: 6.0,
+            pitch: 0.010,
+            count: 8,
+            shear_modulus: 7.7e10,
+            allowable_shear: 560e6,
+            // Line3 beams, 12 per turn: converged to 0.03 % (validation/springs_s3_s4_s5.py).
+            elements_per_turn: 12,
+        }
+    }
+}
+impl Default for DriveDesign {
+    fn default() -> Self {
+        DriveDesign {
+            magnets: 8,
+            pull: 370.0,
+            efficiency: 0.57,
+            installed_power: 8.0 * 330.0,
+            transient_s: 0.6,
+            power_overload_g: 11.0,
+            power_load_share: 100.0,
+        }
+    }
+}
+impl Default for DampingDesign {
+    fn default() -> Self {
+        DampingDesign {
+            mu1: 2400.0,
+            mu12: 1830.0,
+            mu13: 230.0,
+        }
+    }
+}
+
+/// Longest start-up transient a design file may ask for (s of machine time).
+pub const MAX_TRANSIENT_S: f64 = 30.0;
+
+/// Fewest excitation periods the transient may cover: its steady values are read from the last
+/// ten.
+pub const MIN_TRANSIENT_PERIODS: f64 = 10.0;
+
+/// Most excitation periods the transient may cover ([`MAX_TRANSIENT_S`] at the paper's 100 Hz).
+pub const MAX_TRANSIENT_PERIODS: f64 = 3000.0;
+
+/// Highest excitation frequency (Hz): the machine model takes the leaves as massless springs,
+/// which holds well below their own first mode (about 1.7 kHz for the paper's leaves).
+pub const MAX_EXCITATION_HZ: f64 = 1000.0;
+
+/// Range of the target detuning z = Ω/ω0: a resonant machine works near resonance; z a decade
+/// away asks for leaves far outside their design (thinner than a foil, or blocks).
+pub const MIN_DETUNING: f64 = 0.1;
+/// Upper end of the target detuning's range.
+pub const MAX_DETUNING: f64 = 10.0;
+
+/// The range a design-file number must lie in (every value is also finite).
+#[derive(Clone, Copy, Debug)]
+enum Range {
+    /// > 0.
+    Positive,
+    /// ≥ 0.
+    NonNegative,
+    /// Above `lo` (or at it, when the flag is set) and at most `hi`.
+    Between(f64, f64, bool),
+}
+
+impl Range {
+    fn check(self, key: &str, v: f64) -> Result<()> {
+        let ok = v.is_finite()
+            && match self {
+                Range::Positive => v > 0.0,
+                Range::NonNegative => v >= 0.0,
+                Range::Between(lo, hi, closed) => (v > lo || (closed && v == lo)) && v <= hi,
+            };
+        if ok {
+            return Ok(());
+        }
+        let want = match self {
+            Range::Positive => "positive".to_string(),
+            Range::NonNegative => "zero or positive".to_string(),
+            Range::Between(lo, hi, true) => format!("between {lo} and {hi}"),
+            Range::Between(lo, hi, false) => format!("above {lo} and at most {hi}"),
+        };
+        Err(bad(key, format!("must be {want}, got {v}")))
+    }
+}
+
+/// A bad value of the design file at `key`: `design: 'key' msg` (the file and line are added by
+/// [`Design::from_toml`]).
+pub(crate) fn bad(key: &str, msg: String) -> Error {
+    Error::key(String::new(), None, key, format!("design: '{key}' {msg}"))
+}
+
+impl Design {
+    /// The paper's 100 Hz table (S3–S8 of docs/spec/scenes.md), with the S7 table reconstruction.
+    pub fn paper() -> Design {
+        Design {
+            version: 1,
+            name: "paper 100 Hz two-mass table".into(),
+            excitation_hz: 100.0,
+            target_amplitude: 0.2e-3,
+            target_detuning: 0.97,
+            tune: "leaf".into(),
+            steel: [2.1e11, 0.3, 7850.0],
+            table: TableDesign::default(),
+            masses: MassDesign::default(),
+            leaf: LeafDesign::default(),
+            coil: CoilDesign::default(),
+            drive: DriveDesign::default(),
+            damping: DampingDesign::default(),
+            machine: Default::default(),
+            spacers: "plates".into(),
+            search: Default::default(),
+        }
+    }
+
+    /// Read a design TOML file (fields as [`Design`]; missing ones take the paper's values).
+    pub fn from_toml(path: &std::path::Path) -> Result<Design> {
+        use crate::app::toml_file;
+        let text = toml_file::read(path)?;
+        let d: Design = toml_file::parse(path, &text)?;
+        toml_file::check_version(path, &text, "design", d.version as i64)?;
+        d.validate().map_err(|e| toml_file::locate(path, &text, e))?;
+        Ok(d)
+    }
+
+    /// Check the range of every value before any work; the error names the key of the first
+    /// bad one ([`Design::from_toml`] adds the file and the line). The FE parts, the two-mass
+    /// model and the transient then never meet a value they would refuse late.
+    pub fn validate(&self) -> Result<()> {
+        for (key, v, range) in self.ranges() {
+            range.check(key, v)?;
+        }
+        self.validate_counts()?;
+        self.validate_transient()?;
+        self.validate_choices()?;
+        self.validate_parts()?;
+        self.machine.validate(self)?;
+        self.search.validate()
+    }
+
+    /// Every number of the file with its range.
+    fn ranges(&self) -> Vec<(&'static str, f64, Range)> {
+        use Range::*;
+        let (m, l, c, dr, dp) = (&self.masses, &self.leaf, &self.coil, &self.drive, &self.damping);
+        vec![
+            (
+                "excitation_hz",
+                self.excitation_hz,
+                Between(0.0, MAX_EXCITATION_HZ, false),
+            ),
+            ("target_amplitude", self.target_amplitude, Positive),
+            (
+                "target_detuning",
+                self.target_detuning,
+                Between(MIN_DETUNING, MAX_DETUNING, true),
+            ),
+            ("masses.load", m.load, NonNegative),
+            ("masses.load_share", m.load_share, Between(0.0, 1.0, true)),
+            ("masses.active_extra", m.active_extra, NonNegative),
+            ("masses.reactive", m.reactive, Positive),
+            ("leaf.thickness", l.thickness, Positive),
+            ("leaf.length", l.length, Positive),
+            ("leaf.width", l.width, Positive),
+            ("leaf.clamping", l.clamping, Between(0.0, 1.0, false)),
+            ("leaf.allowable", l.allowable, Positive),
+            ("coil.wire", c.wire, Positive),
+            ("coil.mean_diameter", c.mean_diameter, Positive),
+            ("coil.turns", c.turns, Positive),
+            ("coil.pitch", c.pitch, Positive),
+            ("coil.shear_modulus", c.shear_modulus, Positive),
+            ("coil.allowable_shear", c.allowable_shear, Positive),
+            ("drive.pull", dr.pull, Positive),
+            ("drive.efficiency", dr.efficiency, Between(0.0, 1.0, false)),
+            ("drive.installed_power", dr.installed_power, Positive),
+            ("drive.transient_s", dr.transient_s, Positive),
+            ("drive.power_overload_g", dr.power_overload_g, Positive),
+            ("drive.power_load_share", dr.power_load_share, NonNegative),
+            ("damping.mu1", dp.mu1, NonNegative),
+            ("damping.mu12", dp.mu12, NonNegative),
+            ("damping.mu13", dp.mu13, NonNegative),
+        ]
+    }
+
+    /// Counts and mesh sizes: at least one of each part, meshes of bounded size.
+    fn validate_counts(&self) -> Result<()> {
+        for (key, n) in [
+            ("leaf.count", self.leaf.count),
+            ("coil.count", self.coil.count),
+            ("drive.magnets", self.drive.magnets),
+        ] {
+            if n == 0 {
+                return Err(bad(key, "must be at least 1, got 0".into()));
+            }
+        }
+        if self.coil.mean_diameter <= self.coil.wire {
+            return Err(bad(
+                "coil.mean_diameter",
+                format!(
+                    "must exceed the wire diameter 'coil.wire' = {} m (spring index D/d > 1), got {}",
+                    self.coil.wire, self.coil.mean_diameter
+                ),
+            ));
+        }
+        if self.leaf.divisions.contains(&0) || self.leaf.divisions.iter().product::<usize>() > 200_000 {
+            return Err(bad(
+                "leaf.divisions",
+                format!(
+                    "must be at least 1 each and at most 200 000 cells in all, got {:?}",
+                    self.leaf.divisions
+                ),
+            ));
+        }
+        if !(self.table.elem_size >= 0.002 && self.table.elem_size.is_finite()) {
+            return Err(bad(
+                "table.element_size",
+                format!("must be at least 0.002 m, got {}", self.table.elem_size),
+            ));
+        }
+        if self.coil.elements_per_turn < 3 || self.coil.elements_per_turn > 1000 {
+            return Err(bad(
+                "coil.elements_per_turn",
+                format!("must be between 3 and 1000, got {}", self.coil.elements_per_turn),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The start-up transient: long enough for its steady values (the last ten periods), short
+    /// enough for the integrator (issue 15 item 12: hours of machine time ran for minutes).
+    fn validate_transient(&self) -> Result<()> {
+        let (t, f) = (self.drive.transient_s, self.excitation_hz);
+        if t > MAX_TRANSIENT_S {
+            // The start-up settles within about 0.4 s; a run of hours of machine time takes the
+            // integrator millions of steps (it used to stop with "more than max_steps" after minutes).
+            return Err(bad(
+                "drive.transient_s",
+                format!(
+                    "= {t} s is longer than {MAX_TRANSIENT_S} s (the start-up settles within a second; \
+                     {MAX_TRANSIENT_S} s is {} periods of the excitation)",
+                    (MAX_TRANSIENT_S * f).round()
+                ),
+            ));
+        }
+        let periods = t * f;
+        if periods < MIN_TRANSIENT_PERIODS {
+            return Err(bad(
+                "drive.transient_s",
+                format!(
+                    "= {t} s is {periods:.3} periods of the {f} Hz excitation: the steady values are read from \
+                     the last {MIN_TRANSIENT_PERIODS} periods; give at least {} s",
+                    MIN_TRANSIENT_PERIODS / f
+                ),
+            ));
+        }
+        if periods > MAX_TRANSIENT_PERIODS {
+            return Err(bad(
+                "drive.transient_s",
+                format!(
+                    "= {t} s is {periods:.0} periods of the {f} Hz excitation, more than {MAX_TRANSIENT_PERIODS} \
+                     (the integrator resolves every period); give at most {} s",
+                    MAX_TRANSIENT_PERIODS / f
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Named choices: `tune`, `spacers`.
+    fn validate_choices(&self) -> Result<()> {
+        if !["none", "leaf", "mass"].contains(&self.tune.as_str()) {
+            return Err(bad("tune", format!("must be none, leaf or mass, got '{}'", self.tune)));
+        }
+        if !["plates", "channel10"].contains(&self.spacers.as_str()) {
+            return Err(bad(
+                "spacers",
+                format!("must be plates or channel10, got '{}'", self.spacers),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks of the parts' own builders, here so that the message names the design key.
+    fn validate_parts(&self) -> Result<()> {
+        for (key, [young, poisson, density]) in [("steel", self.steel), ("leaf.material", self.leaf.material)] {
+            Material {
+                young,
+                poisson,
+                density,
+            }
+            .validate(&format!("'{key}'"))
+            .map_err(|e| crate::app::toml_file::bad_value(key, e))?;
+        }
+        self.sandwich()
+            .validate()
+            .map_err(|e| crate::app::toml_file::bad_value("table", e))
+    }
+
+    /// The table generator's parameters (quad4 shells).
+    pub(crate) fn sandwich(&self) -> SandwichParams {
+        SandwichParams {
+            shell_kind: CellKind::Quad4,
+            ..self.table.clone()
+        }
+    }
+}
+
+/// The 3D machine's layout and limits (`[machine]` of a design file).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MachineDesign {
+    /// `"shells"` (the FE work table) or `"rigid"` (the table as one rigid body with the shell
+    /// model's mass and inertia).
+    pub table_model: String,
+    /// One per leaf: `[x, y, dx, dy]`, the table end (m, from the table centre) and the
+    /// horizontal direction from it to the clamp on the reactive mass.
+    pub leaves: Vec<[f64; 4]>,
+    /// Height of the leaves' mid-plane (m; the bottom plate's mid-surface is z = 0).
+    pub leaf_level: f64,
+    /// Length of a leaf's shoe on the bottom plate (m, along the leaf; across: the leaf width).
+    pub shoe_length: f64,
+    /// One per magnet: `[x, y]` (m) of its armature centre (on the bottom plate) and its core.
+    pub magnets: Vec<[f64; 2]>,
+    /// Armature patch on the bottom plate, `[along x, along y]` (m).
+    pub armature: [f64; 2],
+    /// One per isolator: `[x, y, z]` (m), where it holds the reactive mass.
+    pub isolators: Vec<[f64; 3]>,
+    /// Centre of the reactive mass (m).
+    pub reactive_centre: [f64; 3],
+    /// The reactive mass as a uniform block `[a, b, c]` (m) for its inertia.
+    pub reactive_box: [f64; 3],
+    /// Modes are reported up to this multiple of the excitation.
+    pub mode_range: f64,
+    /// Modes up to this multiple of the excitation carry the forced response.
+    pub response_range: f64,
+    /// No mode but the working one may lie within this fraction of the excitation.
+    pub mode_clearance: f64,
+    /// Limit on the work surface's amplitude non-uniformity (max − min)/mean.
+    pub max_nonuniformity: f64,
+}
+
+impl Default for MachineDesign {
+    fn default() -> Self {
+        let mut leaves = vec![];
+        for x in [0.55, 0.25] {
+            for sx in [1.0, -1.0] {
+                for y in [0.12, -0.12] {
+                    leaves.push([sx * x, y, -sx, 0.0]);
+                }
+            }
+        }
+        let mut magnets = vec![];
+        let mut isolators = vec![];
+        for x in [-0.4, -0.1, 0.1, 0.4] {
+            for y in [-0.1, 0.1] {
+                magnets.push([x, y]);
+            }
+        }
+        for x in [-0.45, -0.15, 0.15, 0.45] {
+            for y in [-0.15, 0.15] {
+                isolators.push([x, y, -0.2]);
+            }
+        }
+        MachineDesign {
+            table_model: "shells".into(),
+            leaves,
+            leaf_level: -0.06,
+            shoe_length: 0.05,
+            magnets,
+            armature: [0.1, 0.1],
+            isolators,
+            reactive_centre: [0.0, 0.0, -0.17],
+            reactive_box: [1.0, 0.35, 0.06],
+            mode_range: 3.0,
+            response_range: 6.0,
+            mode_clearance: 0.10,
+            max_nonuniformity: 0.10,
+        }
+    }
+}
+
+impl MachineDesign {
+    /// Check the layout against the rest of the design (counts, finite positions, limits).
+    pub fn validate(&self, d: &Design) -> Result<()> {
+        if !["shells", "rigid"].contains(&self.table_model.as_str()) {
+            return Err(bad(
+                "machine.table_model",
+                format!("must be shells or rigid, got '{}'", self.table_model),
+            ));
+        }
+        let counts = [
+            ("machine.leaves", self.leaves.len(), d.leaf.count, "leaf.count"),
+            ("machine.magnets", self.magnets.len(), d.drive.magnets, "drive.magnets"),
+            ("machine.isolators", self.isolators.len(), d.coil.count, "coil.count"),
+        ];
+        for (key, n, want, other) in counts {
+            if n != want {
+                return Err(bad(key, format!("lists {n} positions but '{other}' is {want}")));
+            }
+        }
+        let finite = |key: &str, v: &[f64]| -> Result<()> {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(())
+            } else {
+                Err(bad(key, format!("must be finite, got {v:?}")))
+            }
+        };
+        for l in &self.leaves {
+            finite("machine.leaves", l)?;
+            if (l[2] * l[2] + l[3] * l[3]).sqrt() < 1e-9 {
+                return Err(bad("machine.leaves", format!("{l:?}: the direction (dx, dy) is zero")));
+            }
+        }
+        for m in &self.magnets {
+            finite("machine.magnets", m)?;
+        }
+        for i in &self.isolators {
+            finite("machine.isolators", i)?;
+        }
+        finite("machine.reactive_centre", &self.reactive_centre)?;
+        finite("machine.leaf_level", &[self.leaf_level])?;
+        let pos = |key: &str, v: f64| -> Result<()> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(key, format!("must be positive, got {v}")))
+            }
+        };
+        pos("machine.shoe_length", self.shoe_length)?;
+        pos("machine.armature", self.armature[0].min(self.armature[1]))?;
+        pos(
+            "machine.reactive_box",
+            self.reactive_box.iter().copied().fold(f64::INFINITY, f64::min),
+        )?;
+        pos("machine.mode_range", self.mode_range)?;
+        pos("machine.mode_clearance", self.mode_clearance)?;
+        pos("machine.max_nonuniformity", self.max_nonuniformity)?;
+        if !(self.response_range >= self.mode_range) {
+            return Err(bad(
+                "machine.response_range",
+                format!(
+                    "must be at least machine.mode_range ({}), got {}",
+                    self.mode_range, self.response_range
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// What the search may vary (`[search]` of a design file).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SearchDesign {
+    /// Search when a check fails.
+    pub enabled: bool,
+    /// Top-plate thicknesses (m).
+    pub top_thickness: Vec<f64>,
+    /// Bottom-plate thicknesses (m).
+    pub bottom_thickness: Vec<f64>,
+    /// Bottom-plate widths (m).
+    pub bottom_width: Vec<f64>,
+    /// Numbers of longitudinal webs.
+    pub n_long_webs: Vec<usize>,
+    /// Distances between the outermost longitudinal webs (m; the webs evenly spaced, centred);
+    /// spans that would put a web within 10 mm of the bottom plate's edge are skipped.
+    pub long_web_span: Vec<f64>,
+    /// Numbers of transverse webs (evenly spaced over `trans_web_span`).
+    pub n_trans_webs: Vec<usize>,
+    /// Span of the transverse webs (m).
+    pub trans_web_span: f64,
+    /// Spacers: `"plates"`, `"channel10"`.
+    pub spacers: Vec<String>,
+    /// At most this many whole chains (each some seconds).
+    pub max_full_runs: usize,
+}
+
+impl Default for SearchDesign {
+    /// The family the built-in design's search covers: the bottom plate as wide as the top one
+    /// with the longitudinal webs spread over 500 mm, three transverse webs, top plates of 12 to
+    /// 20 mm, plate webs or channels. (A broader list, 288 variants with 400 mm bottom plates and
+    /// webs over 300 mm, found no passing variant in its six lightest whole chains: docs/design.md.)
+    fn default() -> Self {
+        SearchDesign {
+            enabled: true,
+            top_thickness: vec![0.012, 0.016, 0.02],
+            bottom_thickness: vec![0.008],
+            bottom_width: vec![0.6],
+            n_long_webs: vec![3, 5],
+            long_web_span: vec![0.5],
+            n_trans_webs: vec![3],
+            trans_web_span: 1.1,
+            spacers: vec!["plates".into(), "channel10".into()],
+            max_full_runs: 4,
+        }
+    }
+}
+
+impl SearchDesign {
+    /// Check the lists (non-empty, positive, known spacer names).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |k: &str, m: String| bad(&format!("search.{k}"), m);
+        for (k, v) in [
+            ("top_thickness", &self.top_thickness),
+            ("bottom_thickness", &self.bottom_thickness),
+            ("bottom_width", &self.bottom_width),
+            ("long_web_span", &self.long_web_span),
+        ] {
+            if v.is_empty() || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(bad(k, format!("must list positive values, got {v:?}")));
+            }
+        }
+        if self.n_long_webs.is_empty() || self.n_trans_webs.is_empty() || self.spacers.is_empty() {
+            return Err(bad("n_long_webs", "n_trans_webs and spacers must not be empty".into()));
+        }
+        if let Some(s) = self
+            .spacers
+            .iter()
+            .find(|s| !["plates", "channel10"].contains(&s.as_str()))
+        {
+            return Err(bad("spacers", format!("lists '{s}': plates or channel10")));
+        }
+        if self.n_long_webs.iter().chain(&self.n_trans_webs).any(|&n| n > 50) {
+            return Err(bad("n_long_webs", "and n_trans_webs must be at most 50".into()));
+        }
+        if !(self.trans_web_span.is_finite() && self.trans_web_span > 0.0) {
+            return Err(bad(
+                "trans_web_span",
+                format!("must be positive, got {}", self.trans_web_span),
+            ));
+        }
+        if self.max_full_runs == 0 || self.max_full_runs > 50 {
+            return Err(bad(
+                "max_full_runs",
+                format!("must be 1 to 50, got {}", self.max_full_runs),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,976 @@
+//! The vibratory table as one 3D machine: the work table (FE shells, or a rigid body for the
+//! consistency check), the reactive mass as a rigid body with its inertia, the leaf springs as
+//! 12×12 stiffness matrices condensed from the FE leaf, the coil isolators as 6-DOF springs to
+//! the floor (axial and lateral stiffness from the FE helix) and the electromagnets as force
+//! pairs between the two masses.
+//!
+//! Reports the machine's modes up to `mode_range` × the excitation, each named from where its
+//! strain energy sits (isolators, leaves, table shells) and from the rigid-body motion of the two
+//! bodies, and the steady forced response at the excitation over every work-surface node.
+//!
+//! # The reconstruction (defaults of `[machine]`)
+//! The paper gives the parts, not their layout; the defaults place them symmetrically about the
+//! table centre (x along the 1200 mm length, y across, z up, origin at the centre of the bottom
+//! plate's mid-surface):
+//! - 8 leaves along x at y = ±0.12 m, their table ends at x = ±0.55 and ±0.25 m, running
+//!   169 mm towards the centre to their clamps on the reactive mass, 60 mm below the bottom
+//!   plate; each table end is a rigid shoe over 50 mm × the leaf width of the bottom plate.
+//! - 8 magnets at x = ±0.1, ±0.4 m, y = ±0.1 m; each armature is a 100 × 100 mm patch of the
+//!   bottom plate (the force is shared by its nodes, the armature mass `masses.active_extra`
+//!   spread over the patches), each core a point of the reactive mass.
+//! - 8 isolators under the reactive mass at x = ±0.15, ±0.45 m, y = ±0.15 m, z = −0.2 m.
+//! - The reactive mass: a uniform steel block 1000 × 350 × 60 mm (the 161.8 kg of steel in a
+//!   plate of the table's footprint) centred at z = −0.17 m.
+//!
+//! # Damping
+//! The two-mass model's dashpots, placed where they act: μ12 proportional to each leaf's
+//! stiffness matrix (so that the leaves together give μ12 in relative vertical motion), μ13 to
+//! each isolator's, μ1 shared by the work-surface nodes vertically. The response is solved in the
+//! basis of the machine's modes up to `response_range` × the excitation with the full (not
+//! diagonal) modal damping matrix, plus the static correction for the modes left out (a static
+//! solve of the machine under the magnet forces less its part in the kept modes), by the shared
+//! [`crate::analysis::harmonic::superpose_coupled`]; with a rigid table the 12-DOF machine is
+//! solved exactly.
+
+use super::file::{Design, bad};
+use super::parts::{coil_stiffness, leaf_end_stiffness, leaf_matrix, table_parts};
+use crate::analysis::harmonic;
+use crate::analysis::modal::{ModalParams, ModalRun, ModalTarget};
+use crate::app::dynamics::electromagnet::RectifiedDrive;
+use crate::mesh::{CellBlock, CellKind, CellRef, Group, Mesh};
+use crate::model::{
+    CouplingSpec, Model, ModelSpec, PointMassSpec, ShellPart, SpringMatrixSpec, rigid_offset, transform_blocks,
+};
+use crate::section::ShellSection;
+use crate::system::{System, SystemOptions};
+use crate::{Error, Result};
+use faer::c64;
+use nalgebra::{Complex, DMatrix};
+use serde::Serialize;
+use std::f64::consts::TAU;
+
+/// One mode of the machine.
+#[derive(Clone, Debug, Serialize)]
+pub struct MachineMode {
+    /// Frequency, Hz.
+    pub frequency_hz: f64,
+    /// What it is.
+    pub name: String,
+    /// Share of the strain energy in the leaves, the isolators and the table shells.
+    pub energy_leaves: f64,
+    /// Isolators' share.
+    pub energy_isolators: f64,
+    /// Table shells' share.
+    pub energy_table: f64,
+    /// Share of the kinetic energy in the reactive mass.
+    pub kinetic_reactive: f64,
+    /// Part of the table's motion that is not a rigid-body motion (0: rigid).
+    pub table_deformation: f64,
+}
+
+/// What the 3D machine gave.
+#[derive(Clone, Debug, Serialize)]
+pub struct MachineResult {
+    /// Modes up to `mode_range` × the excitation.
+    pub modes: Vec<MachineMode>,
+    /// Index in `modes` of the working mode (leaves strained, the masses in vertical antiphase),
+    /// if one lies in the range.
+    pub working: Option<usize>,
+    /// The mode other than the working one nearest the excitation: (frequency Hz, |f − f_e|/f_e).
+    pub nearest_other: Option<(f64, f64)>,
+    /// Vertical amplitude over the work surface, m: mean, min, max.
+    pub mean: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+    /// (max − min)/mean.
+    pub nonuniformity: f64,
+    /// Vertical amplitude of the reactive mass's centre, m.
+    pub reactive_amplitude: f64,
+    /// Mass of the table shells, kg.
+    pub table_mass: f64,
+    /// The leaf's guided-end vertical stiffness (before the clamping coefficient), N/m.
+    pub leaf_kzz: f64,
+    /// Coil axial and lateral stiffness, N/m.
+    pub coil_axial: f64,
+    /// Lateral.
+    pub coil_lateral: f64,
+    /// Free DOFs of the machine model.
+    pub dofs: usize,
+    /// Modes carrying the forced response, and the highest one's frequency (Hz).
+    pub response_modes: (usize, f64),
+    /// Work-surface nodes (mesh indices) and their amplitude (m), for plots.
+    #[serde(skip)]
+    pub surface: Vec<(u32, f64)>,
+    /// The machine's mesh (table shells plus points), for output.
+    #[serde(skip)]
+    pub mesh: Mesh,
+    /// Complex displacement per mesh node `[ux, uy, uz]` (real and imaginary parts), for output.
+    #[serde(skip)]
+    pub response: Vec<[Complex<f64>; 3]>,
+}
+
+/// A dashpot on one or two nodes (model indices) with its 6n×6n matrix.
+struct Dashpot {
+    nodes: Vec<usize>,
+    c: Vec<f64>,
+}
+
+/// Bottom-plate nodes inside a rectangle centred at `c` with half-sizes `h` along the unit
+/// vector `e` and across it.
+fn patch(mesh: &Mesh, plate: &[u32], c: [f64; 2], e: [f64; 2], h: [f64; 2], exclude: &[bool]) -> Vec<u32> {
+    let tol = 1e-9;
+    plate
+        .iter()
+        .copied()
+        .filter(|&a| !exclude[a as usize])
+        .filter(|&a| {
+            let x = mesh.nodes[a as usize];
+            let (dx, dy) = (x[0] - c[0], x[1] - c[1]);
+            let along = dx * e[0] + dy * e[1];
+            let across = -dx * e[1] + dy * e[0];
+            along.abs() <= h[0] + tol && across.abs() <= h[1] + tol
+        })
+        .collect()
+}
+
+fn point_group(mesh: &mut Mesh, block: &mut CellBlock, bp: u32, name: &str, nodes: &[u32]) {
+    let mut tag = mesh
+        .blocks
+        .iter()
+        .chain(std::iter::once(&*block))
+        .flat_map(|b| b.tags.iter().copied())
+        .max()
+        .unwrap_or(0);
+    let mut cells = vec![];
+    for &n in nodes {
+        tag += 1;
+        cells.push(CellRef {
+            block: bp,
+            index: block.len() as u32,
+        });
+        block.push(&[n], tag);
+    }
+    let gtag = -100_000 - mesh.groups.len() as i32;
+    mesh.groups.push(Group {
+        name: name.into(),
+        dim: 0,
+        tag: gtag,
+        cells,
+    });
+}
+
+fn mat6_mul_vec(k: &[f64], n: usize, x: &[f64]) -> Vec<f64> {
+    (0..n).map(|i| (0..n).map(|j| k[i * n + j] * x[j]).sum()).collect()
+}
+
+/// The parts condensed from FE: the leaf's end stiffness (6×6) and its 12×12 matrix in its own
+/// axes, the coil's axial and lateral stiffness.
+struct Condensed {
+    kbb: [[f64; 6]; 6],
+    leaf_local: Vec<f64>,
+    k_ax: f64,
+    k_lat: f64,
+}
+
+/// The machine's mesh: the table (shells) with the points of the machine, and where things are.
+struct Layout {
+    mesh: Mesh,
+    /// Couplings: web links and leaf shoes (shells), or the whole table (rigid).
+    couplings: Vec<CouplingSpec>,
+    /// Shell groups and thicknesses.
+    thick: Vec<(String, f64)>,
+    /// Nodes of the table mesh (the machine's points follow them).
+    n_table: usize,
+    /// Centre of the table (the rigid table's reference point).
+    table_centre: [f64; 3],
+    /// Mesh node of the reactive mass's centre.
+    reactive: u32,
+    /// Work-surface nodes.
+    top: Vec<u32>,
+    /// Group of each leaf's table end (its shoe, or the rigid table).
+    leaf_ends: Vec<String>,
+    /// Nodes of each magnet's armature patch.
+    armatures: Vec<Vec<u32>>,
+}
+
+/// The spring matrices of the machine, in global axes on their nodes.
+struct Springs {
+    /// Per leaf: the group of its table end and its 12×12 matrix (clamping coefficient applied).
+    leaves: Vec<(String, Vec<f64>)>,
+    /// Per isolator: its 6×6 matrix at the reactive mass's centre.
+    isolators: Vec<Vec<f64>>,
+    /// All of them as model springs.
+    specs: Vec<SpringMatrixSpec>,
+}
+
+/// The reactive mass as a point mass with inertia, the armatures' and the load's masses.
+struct Masses {
+    specs: Vec<PointMassSpec>,
+    /// Principal moments of inertia of the reactive mass (kg m²).
+    inertia_r: [f64; 3],
+    /// Load moving with the table (kg).
+    load_mass: f64,
+}
+
+/// Build and analyse the 3D machine for design `d` with leaves of thickness `h` (m): assemble
+/// it, find its modes, solve the forced response at the excitation and name the modes.
+pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
+    d.machine.validate(d)?;
+    let rigid = d.machine.table_model == "rigid";
+    let parts = condensed_parts(d, h)?;
+    let layout = machine_layout(d, rigid)?;
+    let masses = machine_masses(d, layout.armatures.len());
+    let springs = machine_springs(d, &parts, &layout, rigid);
+    let (sys, run, leaf_nodes, table_ref) = machine_modes(d, &layout, &springs, &masses, rigid)?;
+    let dofs = sys.n_free();
+    let f_resp = d.machine.response_range * d.excitation_hz;
+    let n_use = run
+        .lambda
+        .iter()
+        .position(|&l| l.max(0.0).sqrt() / TAU > f_resp)
+        .map_or(run.lambda.len(), |k| k.max(1));
+    let dm = sys.dofs();
+    let shapes: Vec<Vec<f64>> = (0..n_use)
+        .map(|k| dm.expand(&crate::linalg::eigen::column(&run.vectors, k), 6))
+        .collect();
+    let cr = modal_damping(d, &parts, &layout, &springs, &leaf_nodes, &shapes);
+    let response = forced_response(d, &layout, &sys, &run, &cr)?;
+    let surface: Vec<(u32, f64)> = layout
+        .top
+        .iter()
+        .map(|&a| (a, response[a as usize][2].norm()))
+        .collect();
+    let amps: Vec<f64> = surface.iter().map(|x| x.1).collect();
+    let mean = amps.iter().sum::<f64>() / amps.len() as f64;
+    let min = amps.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = amps.iter().copied().fold(0.0, f64::max);
+    let modes = name_modes(d, &layout, &springs, &masses, &run, &shapes, &leaf_nodes, table_ref);
+    let (working, nearest_other) = working_mode(d, modes.as_slice());
+    let mut modes = modes;
+    for (i, m) in modes.iter_mut().enumerate() {
+        if m.name.starts_with("working") && Some(i) != working {
+            m.name = "vertical antiphase (second)".into();
+        }
+    }
+    let reactive_amplitude = response[layout.reactive as usize][2].norm();
+    let table_mass = run.report.mass_kg - d.masses.reactive - d.masses.active_extra - masses.load_mass;
+    Ok(MachineResult {
+        modes,
+        working,
+        nearest_other,
+        mean,
+        min,
+        max,
+        nonuniformity: (max - min) / mean,
+        reactive_amplitude,
+        table_mass,
+        leaf_kzz: parts.kbb[2][2],
+        coil_axial: parts.k_ax,
+        coil_lateral: parts.k_lat,
+        dofs,
+        response_modes: (n_use, run.lambda[n_use - 1].max(0.0).sqrt() / TAU),
+        surface,
+        mesh: layout.mesh,
+        response,
+    })
+}
+
+/// The leaf and the coil condensed from their FE models.
+fn condensed_parts(d: &Design, h: f64) -> Result<Condensed> {
+    let kbb = leaf_end_stiffness(d, h)?;
+    let leaf_local = leaf_matrix(&kbb, d.leaf.length);
+    let (k_ax, k_lat) = coil_stiffness(d)?;
+    Ok(Condensed {
+        kbb,
+        leaf_local,
+        k_ax,
+        k_lat,
+    })
+}
+
+/// The table mesh with the machine's points: the reactive mass's centre, the leaves' shoes (or
+/// the whole table as one rigid body) and the magnets' armature patches.
+fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
+    let md = &d.machine;
+    let (mut mesh, links, thick) = table_parts(d)?;
+    let n_table = mesh.n_nodes();
+    let hz = d.sandwich().mid_surface_spacing();
+    let table_centre = [0.0, 0.0, 0.5 * hz];
+    let bottom = mesh.group_nodes(mesh.group("bottom_plate")?);
+    let top = mesh.group_nodes(mesh.group("top_plate")?);
+    let bp = mesh.blocks.len() as u32;
+    let mut block = CellBlock::new(CellKind::Point1);
+    mesh.nodes.push(md.reactive_centre);
+    mesh.node_tags
+        .push(mesh.node_tags.iter().copied().max().unwrap_or(0) + 1);
+    let reactive = (mesh.nodes.len() - 1) as u32;
+    point_group(&mut mesh, &mut block, bp, "reactive", &[reactive]);
+    let mut couplings = vec![];
+    let leaf_ends = if rigid {
+        let all: Vec<u32> = (0..n_table as u32).collect();
+        point_group(&mut mesh, &mut block, bp, "table_body", &all);
+        couplings.push(CouplingSpec {
+            group: "table_body".into(),
+            guided: None,
+            reference: Some(table_centre),
+        });
+        vec!["table_body".to_string(); md.leaves.len()]
+    } else {
+        couplings.extend(links);
+        leaf_shoes(d, &mut mesh, &mut block, bp, &bottom, n_table, &mut couplings)?
+    };
+    let armatures = armature_patches(d, &mut mesh, &mut block, bp, &bottom, n_table)?;
+    mesh.blocks.push(block);
+    Ok(Layout {
+        mesh,
+        couplings,
+        thick,
+        n_table,
+        table_centre,
+        reactive,
+        top,
+        leaf_ends,
+        armatures,
+    })
+}
+
+/// Each leaf's shoe: the bottom-plate nodes under it (web-link nodes excepted), tied rigidly to
+/// the leaf's end point. Returns the shoes' group names.
+fn leaf_shoes(
+    d: &Design,
+    mesh: &mut Mesh,
+    block: &mut CellBlock,
+    bp: u32,
+    bottom: &[u32],
+    n_table: usize,
+    couplings: &mut Vec<CouplingSpec>,
+) -> Result<Vec<String>> {
+    let md = &d.machine;
+    let mut in_link = vec![false; n_table];
+    for g in mesh.groups.iter().filter(|g| g.name.starts_with("web_link_")) {
+        for a in mesh.group_nodes(g) {
+            in_link[a as usize] = true;
+        }
+    }
+    let mut used = vec![false; n_table];
+    let mut shoes = vec![];
+    for (i, l) in md.leaves.iter().enumerate() {
+        let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
+        let e = [l[2] / n, l[3] / n];
+        let nodes = patch(
+            mesh,
+            bottom,
+            [l[0], l[1]],
+            e,
+            [0.5 * md.shoe_length, 0.5 * d.leaf.width],
+            &in_link,
+        );
+        let at = format!("leaf {} at ({}, {}) m", i + 1, l[0], l[1]);
+        if nodes.is_empty() {
+            return Err(bad(
+                "machine.leaves",
+                format!("{at}: its shoe covers no node of the bottom plate"),
+            ));
+        }
+        if nodes.iter().any(|&a| used[a as usize]) {
+            return Err(bad("machine.leaves", format!("{at}: its shoe overlaps another leaf's")));
+        }
+        nodes.iter().for_each(|&a| used[a as usize] = true);
+        let name = format!("leaf_shoe_{}", i + 1);
+        point_group(mesh, block, bp, &name, &nodes);
+        couplings.push(CouplingSpec {
+            group: name.clone(),
+            guided: None,
+            reference: Some([l[0], l[1], md.leaf_level]),
+        });
+        shoes.push(name);
+    }
+    Ok(shoes)
+}
+
+/// Each magnet's armature: the bottom-plate nodes of its patch (group `armature_i`).
+fn armature_patches(
+    d: &Design,
+    mesh: &mut Mesh,
+    block: &mut CellBlock,
+    bp: u32,
+    bottom: &[u32],
+    n_table: usize,
+) -> Result<Vec<Vec<u32>>> {
+    let md = &d.machine;
+    let mut armatures = vec![];
+    for (i, m) in md.magnets.iter().enumerate() {
+        let nodes = patch(
+            mesh,
+            bottom,
+            *m,
+            [1.0, 0.0],
+            [0.5 * md.armature[0], 0.5 * md.armature[1]],
+            &vec![false; n_table],
+        );
+        if nodes.is_empty() {
+            return Err(bad(
+                "machine.magnets",
+                format!(
+                    "magnet {} at ({}, {}) m: its armature covers no node of the bottom plate",
+                    i + 1,
+                    m[0],
+                    m[1]
+                ),
+            ));
+        }
+        point_group(mesh, block, bp, &format!("armature_{}", i + 1), &nodes);
+        armatures.push(nodes);
+    }
+    Ok(armatures)
+}
+
+/// The reactive mass (a uniform block's inertia), the armatures (`masses.active_extra` shared)
+/// and the load share spread over the work surface.
+fn machine_masses(d: &Design, n_armatures: usize) -> Masses {
+    let m2 = d.masses.reactive;
+    let [a, b, c] = d.machine.reactive_box;
+    let inertia_r = [
+        m2 * (b * b + c * c) / 12.0,
+        m2 * (a * a + c * c) / 12.0,
+        m2 * (a * a + b * b) / 12.0,
+    ];
+    let mut specs = vec![PointMassSpec {
+        group: "reactive".into(),
+        mass: m2,
+        inertia: [inertia_r[0], inertia_r[1], inertia_r[2], 0.0, 0.0, 0.0],
+    }];
+    if d.masses.active_extra > 0.0 {
+        for i in 0..n_armatures {
+            specs.push(PointMassSpec {
+                group: format!("armature_{}", i + 1),
+                mass: d.masses.active_extra / n_armatures as f64,
+                inertia: [0.0; 6],
+            });
+        }
+    }
+    let load_mass = d.masses.load_share * d.masses.load;
+    if load_mass > 0.0 {
+        specs.push(PointMassSpec {
+            group: "top_plate".into(),
+            mass: load_mass,
+            inertia: [0.0; 6],
+        });
+    }
+    Masses {
+        specs,
+        inertia_r,
+        load_mass,
+    }
+}
+
+/// The leaves (local → global axes, table end first, moved to their nodes, times the clamping
+/// coefficient) and the isolators (axial and lateral springs to the floor, at the reactive
+/// mass's centre).
+fn machine_springs(d: &Design, parts: &Condensed, layout: &Layout, rigid: bool) -> Springs {
+    let md = &d.machine;
+    let rc = md.reactive_centre;
+    let mut specs = vec![];
+    let mut leaves = vec![];
+    for (i, l) in md.leaves.iter().enumerate() {
+        let kf = leaf_global(d, &parts.leaf_local, l, layout.table_centre, rigid);
+        let a_group = layout.leaf_ends[i].clone();
+        specs.push(SpringMatrixSpec {
+            a: a_group.clone(),
+            b: Some("reactive".into()),
+            k: kf.clone(),
+            label: format!("leaf {}", i + 1),
+        });
+        leaves.push((a_group, kf));
+    }
+    let mut isolators = vec![];
+    for (i, pt) in md.isolators.iter().enumerate() {
+        let mut kp = vec![0.0; 36];
+        kp[0] = parts.k_lat;
+        kp[7] = parts.k_lat;
+        kp[14] = parts.k_ax;
+        let t = rigid_offset([pt[0] - rc[0], pt[1] - rc[1], pt[2] - rc[2]]);
+        let k = transform_blocks(&kp, &[t]);
+        specs.push(SpringMatrixSpec {
+            a: "reactive".into(),
+            b: None,
+            k: k.clone(),
+            label: format!("isolator {}", i + 1),
+        });
+        isolators.push(k);
+    }
+    Springs {
+        leaves,
+        isolators,
+        specs,
+    }
+}
+
+/// One leaf's 12×12 matrix in global axes, its table end first, between its table-end node (the
+/// shoe's reference, or the rigid table's centre) and the reactive mass's centre.
+fn leaf_global(d: &Design, leaf_local: &[f64], l: &[f64; 4], table_centre: [f64; 3], rigid: bool) -> Vec<f64> {
+    let md = &d.machine;
+    let rc = md.reactive_centre;
+    let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
+    let dir = [l[2] / n, l[3] / n, 0.0];
+    let ex = [-dir[0], -dir[1], 0.0];
+    let ez = [0.0, 0.0, 1.0];
+    let ey = [
+        ez[1] * ex[2] - ez[2] * ex[1],
+        ez[2] * ex[0] - ez[0] * ex[2],
+        ez[0] * ex[1] - ez[1] * ex[0],
+    ];
+    // u_global = R u_local with R's columns the local axes; T = blockdiag(Rᵀ, Rᵀ) gives
+    // Tᵀ K T = Q K Qᵀ.
+    let mut t = [[0.0; 6]; 6];
+    for r in 0..3 {
+        for s in 0..3 {
+            let v = [ex, ey, ez][r][s]; // (Rᵀ)[r][s] = R[s][r] = e_r[s]
+            t[r][s] = v;
+            t[r + 3][s + 3] = v;
+        }
+    }
+    let kg = transform_blocks(leaf_local, &[t, t]);
+    // Reorder [clamp, table end] → [table end, clamp].
+    let mut kp = vec![0.0; 144];
+    let sw = |i: usize| if i < 6 { i + 6 } else { i - 6 };
+    for r in 0..12 {
+        for s in 0..12 {
+            kp[r * 12 + s] = kg[sw(r) * 12 + sw(s)];
+        }
+    }
+    let end = [l[0], l[1], md.leaf_level];
+    let clamp = [end[0] + d.leaf.length * dir[0], end[1] + d.leaf.length * dir[1], end[2]];
+    let t_table = if rigid {
+        rigid_offset([
+            end[0] - table_centre[0],
+            end[1] - table_centre[1],
+            end[2] - table_centre[2],
+        ])
+    } else {
+        rigid_offset([0.0; 3])
+    };
+    let t_react = rigid_offset([clamp[0] - rc[0], clamp[1] - rc[1], clamp[2] - rc[2]]);
+    let mut kf = transform_blocks(&kp, &[t_table, t_react]);
+    kf.iter_mut().for_each(|v| *v *= d.leaf.clamping);
+    kf
+}
+
+/// The machine's model, system and verified modes (24 with the shell table, 12 rigid); the model
+/// node of each leaf's table end and of the rigid table's centre.
+#[allow(clippy::type_complexity)]
+fn machine_modes(
+    d: &Design,
+    layout: &Layout,
+    springs: &Springs,
+    masses: &Masses,
+    rigid: bool,
+) -> Result<(System, ModalRun, Vec<usize>, Option<usize>)> {
+    let shells = layout
+        .thick
+        .iter()
+        .map(|(g, t)| ShellPart {
+            group: g.clone(),
+            section: ShellSection::new(*t),
+            material: None,
+        })
+        .collect();
+    let spec = ModelSpec {
+        material: crate::material::Material {
+            young: d.steel[0],
+            poisson: d.steel[1],
+            density: d.steel[2],
+        },
+        shells,
+        couplings: layout.couplings.clone(),
+        point_masses: masses.specs.clone(),
+        spring_matrices: springs.specs.clone(),
+        ..Default::default()
+    };
+    let model = Model::build(&layout.mesh, &spec, "machine")?;
+    let node_of = |g: &str| -> Result<usize> {
+        if g == "reactive" {
+            return Ok(layout.reactive as usize);
+        }
+        model
+            .references
+            .iter()
+            .find(|r| r.group == g)
+            .map(|r| r.node)
+            .ok_or_else(|| Error::Verification(format!("machine: no reference node for '{g}'")))
+    };
+    let leaf_nodes: Vec<usize> = springs.leaves.iter().map(|(g, _)| node_of(g)).collect::<Result<_>>()?;
+    let table_ref = if rigid { Some(node_of("table_body")?) } else { None };
+    let sys = System::build(model, &SystemOptions::default(), "machine")?;
+    let want = sys.n_free().min(if rigid { 12 } else { 24 });
+    let run = crate::analysis::modal::solve(
+        &sys,
+        &ModalParams {
+            target: ModalTarget::Modes(want),
+            ..Default::default()
+        },
+    )?;
+    if !run.report.complete {
+        return Err(Error::Verification("machine modal analysis: a mode was missed".into()));
+    }
+    Ok((sys, run, leaf_nodes, table_ref))
+}
+
+/// Node `a`'s six components of shape `s`.
+fn at(s: &[f64], a: usize) -> [f64; 6] {
+    let mut v = [0.0; 6];
+    v.copy_from_slice(&s[6 * a..6 * a + 6]);
+    v
+}
+
+/// The components of `nodes` in shape `s`, node after node.
+fn gather(s: &[f64], nodes: &[usize]) -> Vec<f64> {
+    nodes.iter().flat_map(|&a| at(s, a)).collect()
+}
+
+/// xᵀ C y for a dense n×n `c`.
+fn quad(x: &[f64], c: &[f64], y: &[f64]) -> f64 {
+    let n = x.len();
+    mat6_mul_vec(c, n, y).iter().zip(x).map(|(a, b)| a * b).sum()
+}
+
+/// The modal damping matrix Φᵀ C Φ over `shapes` of the two-mass model's dashpots placed where
+/// they act: μ12 proportional to each leaf's matrix, μ13 to each isolator's, μ1 shared by the
+/// work-surface nodes vertically.
+fn modal_damping(
+    d: &Design,
+    parts: &Condensed,
+    layout: &Layout,
+    springs: &Springs,
+    leaf_nodes: &[usize],
+    shapes: &[Vec<f64>],
+) -> DMatrix<f64> {
+    let reactive = layout.reactive as usize;
+    let c12 = d.leaf.count as f64 * d.leaf.clamping * parts.kbb[2][2];
+    let c13 = d.coil.count as f64 * parts.k_ax;
+    let mut dashpots = vec![];
+    for (i, (_, k)) in springs.leaves.iter().enumerate() {
+        dashpots.push(Dashpot {
+            nodes: vec![leaf_nodes[i], reactive],
+            c: k.iter().map(|v| v * d.damping.mu12 / c12).collect(),
+        });
+    }
+    for k in &springs.isolators {
+        dashpots.push(Dashpot {
+            nodes: vec![reactive],
+            c: k.iter().map(|v| v * d.damping.mu13 / c13).collect(),
+        });
+    }
+    for &a in &layout.top {
+        let mut c = vec![0.0; 36];
+        c[14] = d.damping.mu1 / layout.top.len() as f64;
+        dashpots.push(Dashpot {
+            nodes: vec![a as usize],
+            c,
+        });
+    }
+    let n_use = shapes.len();
+    let mut cr = DMatrix::<f64>::zeros(n_use, n_use);
+    for dp in &dashpots {
+        let loc: Vec<Vec<f64>> = shapes.iter().map(|s| gather(s, &dp.nodes)).collect();
+        for i in 0..n_use {
+            let ci = mat6_mul_vec(&dp.c, loc[i].len(), &loc[i]);
+            for j in 0..n_use {
+                cr[(i, j)] += ci.iter().zip(&loc[j]).map(|(a, b)| a * b).sum::<f64>();
+            }
+        }
+    }
+    cr
+}
+
+/// The magnets' forces: −F/n on each armature (shared by its nodes), +F/n at each core on the
+/// reactive mass (a force and a moment at its centre).
+fn magnet_forces(d: &Design, layout: &Layout) -> Result<Vec<(usize, [c64; 6])>> {
+    let md = &d.machine;
+    let rc = md.reactive_centre;
+    let omega = TAU * d.excitation_hz;
+    let drive = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?;
+    let f_mag = drive.harmonic_amplitude() / md.magnets.len() as f64;
+    let c0 = c64::new(0.0, 0.0);
+    let mut forces: Vec<(usize, [c64; 6])> = vec![];
+    for nodes in &layout.armatures {
+        for &a in nodes {
+            let mut f = [c0; 6];
+            f[2] = c64::new(-f_mag / nodes.len() as f64, 0.0);
+            forces.push((a as usize, f));
+        }
+    }
+    let mut f_r = [c0; 6];
+    for m in &md.magnets {
+        let r = [m[0] - rc[0], m[1] - rc[1]];
+        // f = (0, 0, F): moment r × f = (r_y F, −r_x F, 0).
+        f_r[2] += c64::new(f_mag, 0.0);
+        f_r[3] += c64::new(r[1] * f_mag, 0.0);
+        f_r[4] += c64::new(-r[0] * f_mag, 0.0);
+    }
+    forces.push((layout.reactive as usize, f_r));
+    Ok(forces)
+}
+
+/// The steady response at the excitation per mesh node `[ux, uy, uz]`: modal superposition
+/// over the modes with the full modal damping matrix `cr`, plus the static correction for the
+/// modes left out (it carries the local bending of the plates under the armatures), by the
+/// shared [`crate::analysis::harmonic::superpose_coupled`].
+fn forced_response(
+    d: &Design,
+    layout: &Layout,
+    sys: &System,
+    run: &ModalRun,
+    cr: &DMatrix<f64>,
+) -> Result<Vec<[Complex<f64>; 3]>> {
+    let omega = TAU * d.excitation_hz;
+    let load = harmonic::load_vector(sys, &magnet_forces(d, layout)?)?;
+    let u = harmonic::superpose_coupled(sys, run, &load, omega, cr, true)?;
+    let nodes = harmonic::expand(sys, &u);
+    Ok((0..layout.mesh.n_nodes())
+        .map(|a| std::array::from_fn(|c| Complex::new(nodes[a][c].re, nodes[a][c].im)))
+        .collect())
+}
+
+/// The modes up to `mode_range` × the excitation, each with its strain-energy split and a name
+/// from where that energy sits and how the two bodies move.
+#[allow(clippy::too_many_arguments)]
+fn name_modes(
+    d: &Design,
+    layout: &Layout,
+    springs: &Springs,
+    masses: &Masses,
+    run: &ModalRun,
+    shapes: &[Vec<f64>],
+    leaf_nodes: &[usize],
+    table_ref: Option<usize>,
+) -> Vec<MachineMode> {
+    let reactive = layout.reactive as usize;
+    let m2 = d.masses.reactive;
+    let ir = masses.inertia_r;
+    let mr = [m2, m2, m2, ir[0], ir[1], ir[2]];
+    let f_list = d.machine.mode_range * d.excitation_hz;
+    let table_nodes: Vec<usize> = (0..layout.n_table).collect();
+    let mut modes = vec![];
+    for (k, s) in shapes.iter().enumerate() {
+        let lam = run.lambda[k].max(0.0);
+        let f = lam.sqrt() / TAU;
+        if f > f_list {
+            break;
+        }
+        let mut u_leaf = 0.0;
+        for (i, (_, kk)) in springs.leaves.iter().enumerate() {
+            let x = gather(s, &[leaf_nodes[i], reactive]);
+            u_leaf += quad(&x, kk, &x);
+        }
+        let ur = at(s, reactive);
+        let u_iso: f64 = springs.isolators.iter().map(|kk| quad(&ur, kk, &ur)).sum();
+        let lam_s = lam.max(1e-300);
+        let (e_leaf, e_iso) = ((u_leaf / lam_s).clamp(0.0, 1.0), (u_iso / lam_s).clamp(0.0, 1.0));
+        let e_table = (1.0 - e_leaf - e_iso).max(0.0);
+        let kin_r: f64 = (0..6).map(|c| mr[c] * ur[c] * ur[c]).sum();
+        // The table's rigid-body motion at its centre: least squares over its nodes.
+        let (pt, deform) = match table_ref {
+            Some(a) => (at(s, a), 0.0),
+            None => rigid_fit(&layout.mesh, &table_nodes, s, layout.table_centre),
+        };
+        let name = mode_name(d, layout.table_centre, [e_leaf, e_iso, e_table], deform, &pt, &ur);
+        modes.push(MachineMode {
+            frequency_hz: f,
+            name,
+            energy_leaves: e_leaf,
+            energy_isolators: e_iso,
+            energy_table: e_table,
+            kinetic_reactive: kin_r,
+            table_deformation: deform,
+        });
+    }
+    modes
+}
+
+/// A mode's name: an isolation mode (by the reactive mass's dominant motion), a table elastic
+/// mode, or a motion of the table on the leaves (by the dominant relative motion at the table's
+/// centre). `energy` is the strain-energy share in leaves, isolators and table.
+fn mode_name(
+    d: &Design,
+    table_centre: [f64; 3],
+    energy: [f64; 3],
+    deform: f64,
+    pt: &[f64; 6],
+    ur: &[f64; 6],
+) -> String {
+    let [e_leaf, e_iso, e_table] = energy;
+    let rc = d.machine.reactive_centre;
+    let scale = 0.3; // m: rotations as the motion they give this far from the centre
+    let dominant = |v: &[f64; 6]| -> usize {
+        (0..6)
+            .max_by(|&i, &j| {
+                let w = |c: usize| if c < 3 { v[c].abs() } else { scale * v[c].abs() };
+                w(i).total_cmp(&w(j))
+            })
+            .unwrap_or(2)
+    };
+    if e_iso >= e_leaf && e_iso >= e_table {
+        [
+            "isolation: sway along x",
+            "isolation: sway along y",
+            "isolation: bounce",
+            "isolation: rocking about x",
+            "isolation: rocking about y",
+            "isolation: yaw",
+        ][dominant(ur)]
+        .to_string()
+    } else if e_table > e_leaf {
+        format!("table elastic mode ({:.0} % rigid-body motion)", 100.0 * (1.0 - deform))
+    } else {
+        // Relative motion of the table against the reactive mass, at the table centre.
+        let t = rigid_offset([
+            table_centre[0] - rc[0],
+            table_centre[1] - rc[1],
+            table_centre[2] - rc[2],
+        ]);
+        let mut rel = [0.0; 6];
+        for i in 0..6 {
+            rel[i] = pt[i] - (0..6).map(|j| t[i][j] * ur[j]).sum::<f64>();
+        }
+        [
+            "table surge along x on the leaves",
+            "table sway along y on the leaves",
+            "working mode (masses in vertical antiphase)",
+            "table roll on the leaves (about x)",
+            "table pitch on the leaves (about y)",
+            "table yaw on the leaves",
+        ][dominant(&rel)]
+        .to_string()
+    }
+}
+
+/// The working mode (the "working" one nearest the excitation) and the other mode nearest the
+/// excitation: (frequency Hz, |f − f_e|/f_e).
+fn working_mode(d: &Design, modes: &[MachineMode]) -> (Option<usize>, Option<(f64, f64)>) {
+    let fe = d.excitation_hz;
+    let working = modes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| m.name.starts_with("working"))
+        .min_by(|a, b| (a.1.frequency_hz - fe).abs().total_cmp(&(b.1.frequency_hz - fe).abs()))
+        .map(|(i, _)| i);
+    let nearest_other = modes
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| Some(*i) != working)
+        .map(|(_, m)| (m.frequency_hz, (m.frequency_hz - fe).abs() / fe))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    (working, nearest_other)
+}
+
+/// The rigid-body motion (at `c`) nearest the translations of `nodes` in shape `s` (6 per node),
+/// and the part of the motion it leaves, |u − u_rigid|² / |u|².
+fn rigid_fit(mesh: &Mesh, nodes: &[usize], s: &[f64], c: [f64; 3]) -> ([f64; 6], f64) {
+    let mut ata = nalgebra::Matrix6::<f64>::zeros();
+    let mut atb = nalgebra::Vector6::<f64>::zeros();
+    for &a in nodes {
+        let x = mesh.nodes[a];
+        let t = rigid_offset([x[0] - c[0], x[1] - c[1], x[2] - c[2]]);
+        for r in 0..3 {
+            for i in 0..6 {
+                atb[i] += t[r][i] * s[6 * a + r];
+                for j in 0..6 {
+                    ata[(i, j)] += t[r][i] * t[r][j];
+                }
+            }
+        }
+    }
+    let p = ata.lu().solve(&atb).unwrap_or_else(nalgebra::Vector6::zeros);
+    let (mut res, mut tot) = (0.0, 0.0);
+    for &a in nodes {
+        let x = mesh.nodes[a];
+        let t = rigid_offset([x[0] - c[0], x[1] - c[1], x[2] - c[2]]);
+        for r in 0..3 {
+            let fit: f64 = (0..6).map(|i| t[r][i] * p[i]).sum();
+            let u = s[6 * a + r];
+            res += (u - fit) * (u - fit);
+            tot += u * u;
+        }
+    }
+    let mut out = [0.0; 6];
+    out.copy_from_slice(p.as_slice());
+    (out, if tot > 0.0 { res / tot } else { 0.0 })
+}
+
+/// Plan view of the work surface coloured by the vertical amplitude (SVG).
+pub fn write_amplitude_svg(path: &std::path::Path, r: &MachineResult, excitation_hz: f64) -> Result<()> {
+    use plotters::prelude::*;
+    let mesh = &r.mesh;
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for &(a, _) in &r.surface {
+        let x = mesh.nodes[a as usize];
+        for d in 0..2 {
+            lo[d] = lo[d].min(x[d]);
+            hi[d] = hi[d].max(x[d]);
+        }
+    }
+    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    let err = |e: &dyn std::fmt::Display| Error::output(path.display(), format!("plotting failed: {e}"));
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!(
+                "work-surface amplitude at {excitation_hz} Hz: mean {:.4} mm, min {:.4}, max {:.4}, non-uniformity {:.1} %",
+                r.mean * 1e3,
+                r.min * 1e3,
+                r.max * 1e3,
+                100.0 * r.nonuniformity
+            ),
+            ("sans-serif", 16),
+        )
+        .margin(15)
+        .x_label_area_size(35)
+        .y_label_area_size(45)
+        .build_cartesian_2d(lo[0] - 0.02..hi[0] + 0.02, lo[1] - 0.02..hi[1] + 0.02)
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("x [m]")
+        .y_desc("y [m]  (colour: blue = min, red = max)")
+        .draw()
+        .map_err(|e| err(&e))?;
+    let span = (r.max - r.min).max(1e-300);
+    chart
+        .draw_series(r.surface.iter().map(|&(a, amp)| {
+            let x = mesh.nodes[a as usize];
+            let v = ((amp - r.min) / span).clamp(0.0, 1.0);
+            let c = RGBColor(
+                (255.0 * v) as u8,
+                (80.0 * (1.0 - (2.0 * v - 1.0).abs())) as u8,
+                (255.0 * (1.0 - v)) as u8,
+            );
+            Rectangle::new(
+                [(x[0] - 0.0115, x[1] - 0.0115), (x[0] + 0.0115, x[1] + 0.0115)],
+                c.filled(),
+            )
+        }))
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
+
+/// The response over the machine's mesh as VTU: the vertical amplitude (scalar, m) and the
+/// displacement's real and imaginary parts (vectors) at every node.
+pub fn write_amplitude_vtu(path: &std::path::Path, r: &MachineResult) -> Result<()> {
+    use crate::io::vtk::{PointField, write_vtu};
+    let amp: Vec<f64> = r.response.iter().map(|u| u[2].norm()).collect();
+    let re: Vec<f64> = r.response.iter().flat_map(|u| u.map(|c| c.re)).collect();
+    let im: Vec<f64> = r.response.iter().flat_map(|u| u.map(|c| c.im)).collect();
+    write_vtu(
+        path,
+        &r.mesh,
+        &[
+            PointField::new("amplitude_z", 1, &amp),
+            PointField::new("displacement_re", 3, &re),
+            PointField::new("displacement_im", 3, &im),
+        ],
+    )
+}

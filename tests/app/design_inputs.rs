@@ -1,0 +1,192 @@
+//! Design-file values checked before any work (issue 28 items 5 and 13): every value's range is
+//! validated when the file is read, and the error names the file, the line and the key — never
+//! a late failure of the FE parts, the two-mass model or the integrator, and never advice about
+//! a setting a design file cannot reach.
+
+use vibrofem::Error;
+use vibrofem::app::design::Design;
+
+/// Reads a design file holding `text` and expects it refused at `key` on `line`.
+fn refused(name: &str, text: &str, key: &str, line: usize) -> String {
+    let dir = std::env::temp_dir().join(format!("vibrofem-design-inputs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    let e = match Design::from_toml(&p) {
+        Ok(_) => panic!("{name}: accepted {text:?}"),
+        Err(e) => e,
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&format!("{name}, line {line}, key '{key}'")),
+        "{name}: the error should name the file, line {line} and key '{key}': {msg}"
+    );
+    assert!(
+        matches!(&e, Error::Input { line: Some(l), key: Some(k), .. } if *l == line && k == key),
+        "{e:?}"
+    );
+    for unreachable in ["max_steps", "rtol", "atol", "--"] {
+        assert!(
+            !msg.contains(unreachable),
+            "{name}: advice a design file cannot follow: {msg}"
+        );
+    }
+    msg
+}
+
+#[test]
+fn negative_limits_are_refused() {
+    // A negative limit turned its check into "ok" whatever the value.
+    refused(
+        "allow.toml",
+        "version = 1\n[leaf]\nallowable = -170e6\n",
+        "leaf.allowable",
+        3,
+    );
+    refused(
+        "shear.toml",
+        "version = 1\n[coil]\nallowable_shear = -5.6e8\n",
+        "coil.allowable_shear",
+        3,
+    );
+    refused(
+        "power.toml",
+        "version = 1\n[drive]\ninstalled_power = -2640.0\n",
+        "drive.installed_power",
+        3,
+    );
+}
+
+#[test]
+fn masses_must_be_finite_and_in_range() {
+    // NaN passed the "not negative" test and reached the FE work.
+    refused(
+        "nan.toml",
+        "version = 1\n[masses]\nactive_extra = nan\n",
+        "masses.active_extra",
+        3,
+    );
+    refused("inf.toml", "version = 1\n[masses]\nload = inf\n", "masses.load", 3);
+    // A load share is a fraction of the load.
+    let m = refused(
+        "share.toml",
+        "version = 1\n[masses]\nload_share = 5.0\n",
+        "masses.load_share",
+        3,
+    );
+    assert!(m.contains("between 0 and 1"), "{m}");
+    refused(
+        "share_neg.toml",
+        "version = 1\n[masses]\nload_share = -0.5\n",
+        "masses.load_share",
+        3,
+    );
+}
+
+#[test]
+fn detuning_far_from_resonance_is_refused() {
+    refused("z.toml", "version = 1\ntarget_detuning = 1e6\n", "target_detuning", 2);
+    refused(
+        "z_small.toml",
+        "version = 1\ntarget_detuning = 1e-4\n",
+        "target_detuning",
+        2,
+    );
+}
+
+#[test]
+fn excitation_beyond_the_model_is_refused_at_once() {
+    // 1e5 Hz used to fail after 8 s in the transient with "raise max_steps".
+    let t = std::time::Instant::now();
+    let m = refused("f.toml", "version = 1\nexcitation_hz = 1e5\n", "excitation_hz", 2);
+    assert!(t.elapsed().as_secs_f64() < 1.0, "{m}");
+    assert!(m.contains("1000"), "{m}");
+    // Too low for the start-up transient to reach its steady periods (it reads the last ten).
+    let m = refused(
+        "slow.toml",
+        "version = 1\nexcitation_hz = 1.0\n[drive]\ntransient_s = 0.6\n",
+        "drive.transient_s",
+        4,
+    );
+    assert!(m.contains("10 s"), "{m}");
+    // Too many periods for the integrator, though within 30 s.
+    refused(
+        "fast.toml",
+        "version = 1\nexcitation_hz = 900.0\n[drive]\ntransient_s = 20.0\n",
+        "drive.transient_s",
+        4,
+    );
+}
+
+#[test]
+fn damping_must_not_be_negative() {
+    refused("mu1.toml", "version = 1\n[damping]\nmu1 = -2400.0\n", "damping.mu1", 3);
+    refused("mu12.toml", "version = 1\n[damping]\nmu12 = nan\n", "damping.mu12", 3);
+}
+
+#[test]
+fn efficiency_is_a_fraction() {
+    // Both failed after the FE work, in eq. (6), without file or key.
+    refused(
+        "eta5.toml",
+        "version = 1\n[drive]\nefficiency = 5.0\n",
+        "drive.efficiency",
+        3,
+    );
+    let m = refused(
+        "eta.toml",
+        "version = 1\n[drive]\nefficiency = 1.5\n",
+        "drive.efficiency",
+        3,
+    );
+    assert!(m.contains("at most 1"), "{m}");
+    Design::from_toml(&{
+        let p = std::env::temp_dir().join(format!("vibrofem-eta1-{}.toml", std::process::id()));
+        std::fs::write(&p, "version = 1\n[drive]\nefficiency = 1.0\n").unwrap();
+        p
+    })
+    .unwrap();
+}
+
+#[test]
+fn clamping_coefficient_is_a_fraction() {
+    // 1e300 made the leaves rigid and the machine "under-constrained" (exit 2) after the FE work.
+    refused(
+        "clamp.toml",
+        "version = 1\n[leaf]\nclamping = 1e300\n",
+        "leaf.clamping",
+        3,
+    );
+    refused(
+        "clamp0.toml",
+        "version = 1\n[leaf]\nclamping = 0.0\n",
+        "leaf.clamping",
+        3,
+    );
+}
+
+#[test]
+fn counts_and_parts_name_their_key() {
+    // These were refused without a key (and so without a line).
+    refused("leaves.toml", "version = 1\n[leaf]\ncount = 0\n", "leaf.count", 3);
+    refused(
+        "magnets.toml",
+        "version = 1\n[drive]\nmagnets = 0\n",
+        "drive.magnets",
+        3,
+    );
+    // The spring index D/d must exceed 1 (Wahl's factor failed late).
+    refused(
+        "coil.toml",
+        "version = 1\n[coil]\nmean_diameter = 0.005\n",
+        "coil.mean_diameter",
+        3,
+    );
+    // The leaves' steel is checked like the table's.
+    refused(
+        "leafsteel.toml",
+        "version = 1\n[leaf]\nmaterial = [2.1e11, 0.7, 7850.0]\n",
+        "leaf.material",
+        3,
+    );
+}
