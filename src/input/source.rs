@@ -49,9 +49,10 @@ pub fn load(spec: &str, length_scale: f64) -> Result<Mesh> {
     if !path.exists() {
         if let Some((prefix, _)) = spec.split_once(':') {
             if !prefix.is_empty() && !prefix.contains(['/', '\\', '.']) {
-                return Err(Error::param("spec", format!(
-                    "unknown generator '{spec}' (known generators: {GENERATORS}); no file of that name either"
-                )));
+                return Err(Error::param(
+                    "spec",
+                    format!("unknown generator '{spec}' (known generators: {GENERATORS}); no file of that name either"),
+                ));
             }
         }
     }
@@ -73,9 +74,10 @@ fn parametric(spec: &str, length_scale: f64) -> Result<Option<Mesh>> {
     } else if let Some(rest) = spec.strip_prefix("ibeam-line:") {
         let v = nums(rest, 2, "ibeam-line:LENGTH,N_ELEMENTS")?;
         if v[1] < 1.0 || v[1].fract() != 0.0 {
-            return Err(Error::param("spec", format!(
-                "generator '{spec}': the element count must be a whole number ≥ 1"
-            )));
+            return Err(Error::param(
+                "spec",
+                format!("generator '{spec}': the element count must be a whole number ≥ 1"),
+            ));
         }
         pm::i_beam_line(v[0], v[1] as usize)?
     } else if let Some(rest) = spec.strip_prefix("ibeam-shell:") {
@@ -126,9 +128,12 @@ impl BoxSpec {
             return Ok(None);
         };
         let bad = |why: &str| {
-            Error::param("spec", format!(
-                "mesh '{spec}': {why}; expected box:LX,LY,LZ:NX,NY,NZ:KIND, e.g. box:0.3,0.3,0.02:20,20,4:hex20"
-            ))
+            Error::param(
+                "spec",
+                format!(
+                    "mesh '{spec}': {why}; expected box:LX,LY,LZ:NX,NY,NZ:KIND, e.g. box:0.3,0.3,0.02:20,20,4:hex20"
+                ),
+            )
         };
         let parts: Vec<&str> = rest.split(':').collect();
         if parts.len() != 3 {
@@ -198,9 +203,12 @@ impl HelixSpec {
         };
         let parts: Vec<&str> = rest.split(',').map(str::trim).collect();
         let bad = |why: &str| {
-            Error::param("spec", format!(
-                "mesh '{spec}': {why}; expected helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3], e.g. helix:0.032,0.01,6,24"
-            ))
+            Error::param(
+                "spec",
+                format!(
+                    "mesh '{spec}': {why}; expected helix:D,PITCH,TURNS,ELEMENTS_PER_TURN[,line3], e.g. helix:0.032,0.01,6,24"
+                ),
+            )
         };
         if parts.len() != 4 && parts.len() != 5 {
             return Err(bad("four or five fields needed"));
@@ -271,18 +279,20 @@ impl SandwichSpec {
         let mut it = rest.splitn(2, ',');
         let preset = it.next().unwrap_or("").trim();
         if preset != "paper" {
-            return Err(Error::param("spec", format!(
-                "generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"
-            )));
+            return Err(Error::param(
+                "spec",
+                format!("generator '{spec}': the sandwich preset is 'paper' (sandwich:paper[,ELEMENT_SIZE])"),
+            ));
         }
         let elem_size = match it.next() {
             None => None,
             Some(h) => match h.trim().parse::<f64>() {
                 Ok(x) if x.is_finite() => Some(x),
                 _ => {
-                    return Err(Error::param("spec", format!(
-                        "generator '{spec}': expected sandwich:paper[,ELEMENT_SIZE]"
-                    )));
+                    return Err(Error::param(
+                        "spec",
+                        format!("generator '{spec}': expected sandwich:paper[,ELEMENT_SIZE]"),
+                    ));
                 }
             },
         };

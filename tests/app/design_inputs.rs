@@ -190,3 +190,22 @@ fn counts_and_parts_name_their_key() {
         3,
     );
 }
+
+#[test]
+fn search_lists_are_counted_before_they_are_expanded() {
+    // Issue 28 item 8: lists of 300 × 300 × 300 values were expanded into designs (a clone and a
+    // validation each, minutes of work and gigabytes) before the 1000-variant cap refused them.
+    // Their product is counted when the file is read.
+    let list = |n: usize, x0: f64| {
+        let v: Vec<String> = (0..n).map(|i| format!("{}", x0 + 1e-4 * i as f64)).collect();
+        format!("[{}]", v.join(", "))
+    };
+    let text = format!(
+        "version = 1\n[search]\ntop_thickness = {}\nbottom_thickness = {}\nbottom_width = {}\n",
+        list(300, 0.012),
+        list(300, 0.008),
+        list(300, 0.5)
+    );
+    let msg = refused("search.toml", &text, "search.top_thickness", 3);
+    assert!(msg.contains("27000000 combinations"), "{msg}");
+}

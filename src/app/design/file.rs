@@ -679,8 +679,28 @@ impl Default for SearchDesign {
     }
 }
 
+/// At most this many valid variants in a search (each is screened, the lightest run whole).
+pub const MAX_SEARCH_VARIANTS: usize = 1000;
+/// At most this many combinations of the `[search]` lists (each screened without FE work).
+pub const MAX_SEARCH_COMBINATIONS: usize = 100_000;
+
 impl SearchDesign {
-    /// Check the lists (non-empty, positive, known spacer names).
+    /// The product of the lists' lengths: the combinations the search screens (saturating).
+    pub fn combinations(&self) -> usize {
+        [
+            self.top_thickness.len(),
+            self.bottom_thickness.len(),
+            self.bottom_width.len(),
+            self.n_long_webs.len(),
+            self.n_trans_webs.len(),
+            self.spacers.len(),
+            self.long_web_span.len(),
+        ]
+        .iter()
+        .fold(1usize, |a, &n| a.saturating_mul(n))
+    }
+
+    /// Check the lists (non-empty, positive, known spacer names, a bounded product).
     pub fn validate(&self) -> Result<()> {
         let bad = |k: &str, m: String| bad(&format!("search.{k}"), m);
         for (k, v) in [
@@ -710,6 +730,16 @@ impl SearchDesign {
             return Err(bad(
                 "trans_web_span",
                 format!("must be positive, got {}", self.trans_web_span),
+            ));
+        }
+        let n = self.combinations();
+        if n > MAX_SEARCH_COMBINATIONS {
+            return Err(bad(
+                "top_thickness",
+                format!(
+                    "and the other lists of [search] give {n} combinations (at most {MAX_SEARCH_COMBINATIONS}, of \
+                     which at most {MAX_SEARCH_VARIANTS} valid variants): shorten them"
+                ),
             ));
         }
         if self.max_full_runs == 0 || self.max_full_runs > 50 {

@@ -11,7 +11,7 @@
 //! that pass it, the whole chain with the 3D machine. The first candidate whose chain passes
 //! every check is the lightest passing one.
 use super::chain::run_design;
-use super::file::{Design, bad};
+use super::file::{Design, MAX_SEARCH_VARIANTS, bad};
 use super::parts::{coil_fe, table_fe, table_mass};
 use super::results::DesignReport;
 use crate::Result;
@@ -112,6 +112,8 @@ fn variants(d: &Design) -> Result<Vec<Design>> {
         elem_size: d.table.elem_size,
     };
     base.trans_web_span = s.trans_web_span;
+    // `validate` has bounded the combinations (counted before anything is expanded).
+    let combinations = s.combinations();
     let mut designs = vec![];
     for &tt in &s.top_thickness {
         for &tb in &s.bottom_thickness {
@@ -144,17 +146,20 @@ fn variants(d: &Design) -> Result<Vec<Design>> {
                                 continue;
                             }
                             designs.push(v);
+                            if designs.len() > MAX_SEARCH_VARIANTS {
+                                return Err(bad(
+                                    "search",
+                                    format!(
+                                        "gives more than {MAX_SEARCH_VARIANTS} variants (of {combinations} combinations): \
+                                         shorten its lists"
+                                    ),
+                                ));
+                            }
                         }
                     }
                 }
             }
         }
-    }
-    if designs.len() > 1000 {
-        return Err(bad(
-            "search",
-            format!("gives {} variants (more than 1000): shorten its lists", designs.len()),
-        ));
     }
     Ok(designs)
 }
