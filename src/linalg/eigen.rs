@@ -610,44 +610,12 @@ fn solve_inner(
             // is what the count includes.
             found.retain(|(l, _)| (*l >= lo || (lo <= 0.0 && *l > sigma)) && *l <= hi);
         }
-        let lam_min = found.first().map_or(sigma, |f| f.0);
-        let lam_max = found.last().map_or(sigma, |f| f.0);
-        let upper_pt = match band {
-            Some((_, hi)) => hi,
-            None => {
-                let scale = lam_max.abs().max(sigma.abs());
-                // The lowest modes: the check need only cover the wanted ones. When converged
-                // pairs beyond them were found too, the point halfway from the last wanted one
-                // to the next one found cannot pass an eigenvalue that is simply the next one.
-                // Otherwise: just above the highest mode found, a small relative step, or half
-                // the way to the next Ritz estimate if that is closer. (Ritz estimates of
-                // unconverged values lie above the true ones, so a far point could pass an
-                // eigenvalue that is simply the next one, costing an extra round of iteration.)
-                let nm = match p.target {
-                    Target::Nearest(nm) if p.shift.is_none() => nm,
-                    _ => usize::MAX,
-                };
-                if nm > 0 && nm < found.len() && found[nm].0 - found[nm - 1].0 > 2e-9 * scale {
-                    0.5 * (found[nm - 1].0 + found[nm].0)
-                } else {
-                    let mut step = 1e-4 * scale;
-                    if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
-                        step = step.min(0.5 * (nx - lam_max));
-                    }
-                    lam_max + step.max(1e-9 * scale)
-                }
-            }
-        };
+        let (upper_pt, lower_pt) = check_points(&found, p, band, sigma, &lz);
         // The basis is not needed for the check: free it before the Sturm factorisations
         // (the rare second round, when a mode was missed, starts a new iteration).
         if !dense {
             lz.release();
         }
-        let lower_pt = if lam_min >= sigma {
-            sigma
-        } else {
-            lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6)
-        };
         let lower_count = if lower_pt == sigma || !check {
             lower_count_at_shift
         } else {
@@ -744,6 +712,83 @@ fn select(lambda: &[f64], x: &Mat<f64>, keep: &[usize]) -> (Vec<f64>, Mat<f64>) 
         vectors.col_mut(c).copy_from(x.col(i));
     }
     (keep.iter().map(|&i| lambda[i]).collect(), vectors)
+}
+
+/// Two eigenvalues found closer than this, relative to the spectrum's scale, are taken for
+/// copies of one repeated root: a Sturm point is never placed between them.
+const SAME_ROOT: f64 = 2e-9;
+
+/// Positions in `found` (ascending) of the lowest and the highest pair kept for the request:
+/// the `nm` nearest the shift (ties in the order found), or all of a band's.
+fn kept_span(found: &[(f64, usize)], target: Target, sigma: f64) -> (usize, usize) {
+    let last = found.len().saturating_sub(1);
+    match target {
+        Target::Band(..) => (0, last),
+        Target::Nearest(nm) => {
+            let mut by_dist: Vec<(f64, usize)> = found
+                .iter()
+                .enumerate()
+                .map(|(i, f)| ((f.0 - sigma).abs(), i))
+                .collect();
+            by_dist.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let kept = by_dist.iter().take(nm.max(1)).map(|x| x.1);
+            (kept.clone().min().unwrap_or(0), kept.max().unwrap_or(last))
+        }
+    }
+}
+
+/// The Sturm check points (upper, lower) around the pairs `found` (ascending). A request that
+/// ends inside a multiplet is extended to the whole multiplet: the upper point lies in the first
+/// clear gap of `found` above the highest kept pair (halfway across it: it cannot pass an
+/// eigenvalue that is simply the next one, nor split a repeated root), and for a user shift the
+/// lower point in the first clear gap below the lowest kept pair. When `found` has no such gap
+/// above, the upper point is just above the highest mode found, a small relative step, or half
+/// the way to the next Ritz estimate if that is closer (Ritz estimates of unconverged values lie
+/// above the true ones, so a far point could pass an eigenvalue that is simply the next one,
+/// costing an extra round of iteration); below, the shift itself when nothing kept lies under
+/// it (its count is known), else just below the lowest mode found. A band's upper point is its
+/// upper end.
+fn check_points(
+    found: &[(f64, usize)],
+    p: &EigenParams,
+    band: Option<(f64, f64)>,
+    sigma: f64,
+    lz: &Lanczos,
+) -> (f64, f64) {
+    let lam_min = found.first().map_or(sigma, |f| f.0);
+    let lam_max = found.last().map_or(sigma, |f| f.0);
+    let scale = lam_max.abs().max(sigma.abs());
+    let gap_below = |e: usize| found[e].0 - found[e - 1].0 > SAME_ROOT * scale;
+    let (lo, hi) = kept_span(found, p.target, sigma);
+    let upper_pt = match band {
+        Some((_, b_hi)) => b_hi,
+        None => match (hi + 1..found.len()).find(|&e| gap_below(e)) {
+            Some(e) => 0.5 * (found[e - 1].0 + found[e].0),
+            None => {
+                let mut step = 1e-4 * scale;
+                if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
+                    step = step.min(0.5 * (nx - lam_max));
+                }
+                lam_max + step.max(1e-9 * scale)
+            }
+        },
+    };
+    // The first pair of the lowest kept multiplet (the default shift keeps the lowest: 0).
+    let first = if band.is_none() && p.shift.is_some() {
+        (1..=lo.min(found.len().saturating_sub(1)))
+            .rev()
+            .find(|&s| gap_below(s))
+            .unwrap_or(0)
+    } else {
+        0
+    };
+    let lower_pt = match found.get(first) {
+        Some(f) if f.0 >= sigma && (first == 0 || found[first - 1].0 < sigma) => sigma,
+        Some(f) if first > 0 => 0.5 * (found[first - 1].0 + f.0),
+        _ if lam_min >= sigma => sigma,
+        _ => lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6),
+    };
+    (upper_pt, lower_pt)
 }
 
 /// Largest relative residual the one-factorisation solve returns; above it (singular mass
