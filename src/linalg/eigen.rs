@@ -336,6 +336,14 @@ pub fn solve_with(
 /// skipped (the coarse estimate of [`solve_with`] needs eigenvalue estimates and start vectors,
 /// not their proof): its `sturm` is then not a check, and its residuals, backward errors and
 /// M-orthonormality are NaN (not computed).
+///
+/// The steps: the request checked and the block size fitted to it ([`adjusted_params`]); the
+/// shift placed ([`first_shift`]); for the lowest modes with a coarse space, the
+/// one-factorisation solve ([`solve_below_bound`]); otherwise the factorisation at the shift,
+/// moved nearer the wanted modes when the default shift is far below them
+/// ([`factor_at_shift`]); a band's upper Sturm count ([`wanted_count`]); then rounds of Lanczos
+/// (or a dense solve), refinement, Sturm check and, when a mode was missed, more iteration
+/// ([`Rounds::run`]).
 fn solve_inner(
     k: &SymMatrix,
     m: &SymMatrix,
@@ -356,9 +364,78 @@ fn solve_inner(
         )));
     }
     let t0 = Instant::now();
+    let (pl, mut notes) = adjusted_params(k, p);
+    let p = &pl;
+    let (sigma, band) = first_shift(k, m, p)?;
+    let pb = Problem { k, m, sym, p, check };
+    let mut tally = Tally::default();
+    if let (Some(pr), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
+        if n > p.dense_below && nm < n && !big_request(n, nm) {
+            let est = Estimate {
+                t0,
+                factorizations: &mut tally.factorizations,
+                memory: &mut tally.memory,
+            };
+            if let Some(sol) = solve_below_bound(k, m, sym, p, pr, nm, est, &notes)? {
+                return Ok(sol);
+            }
+        }
+    }
+    let shift = factor_at_shift(&pb, sigma, &mut tally)?;
+    let sigma = shift.sigma;
+    let mut rounds = Rounds {
+        pb: &pb,
+        sigma,
+        band,
+        dense: false,
+        tally,
+        backward: shift.backward,
+        notes: vec![],
+        time_factor: t0.elapsed().as_secs_f64() - shift.time_probe,
+        time_iterate: shift.time_probe,
+        time_verify: 0.0,
+        lower_count_at_shift: shift.fa.negative_pivots,
+        upper_known: None,
+    };
+    let want = rounds.wanted_count()?;
+    if want == 0 {
+        rounds.notes = notes;
+        return Ok(rounds.nothing_wanted());
+    }
+    let ti = Instant::now();
+    let dense = n <= p.dense_below || big_request(n, want);
+    if dense && n > p.dense_below {
+        notes.push(format!(
+            "{want} modes of {n} degrees of freedom: solved densely (all eigenpairs) rather than by Lanczos"
+        ));
+    }
+    rounds.dense = dense;
+    rounds.notes = notes;
+    let lz = match shift.lz {
+        Some(lz) if !dense => lz,
+        _ => Lanczos::new(
+            n,
+            if dense { 1 } else { want },
+            p,
+            if band.is_some() { Side::Above } else { Side::Both },
+        ),
+    };
+    rounds.run(lz, shift.fa, want, shift.early, ti)
+}
+
+/// Requests for a large share of the spectrum are solved densely when that is affordable
+/// (Lanczos would build a basis of about the model's size anyway, much more slowly).
+fn big_request(n: usize, want: usize) -> bool {
+    4 * want >= n && n <= DENSE_MAX
+}
+
+/// The parameters fitted to the model of `n = k.n()` equations, with notes: a request above
+/// `n` computes all `n` modes; the block is capped to the wanted count plus a six-fold cluster
+/// (a wider one buys nothing) and raised to cover the rigid-body modes of unconnected parts.
+fn adjusted_params(k: &SymMatrix, p: &EigenParams) -> (EigenParams, Vec<String>) {
+    let n = k.n();
     let mut notes = Vec::new();
-    let mut pl = p.clone();
-    let p = &mut pl;
+    let mut p = p.clone();
     if let Target::Nearest(nm) = p.target {
         if nm > n {
             notes.push(format!(
@@ -389,11 +466,13 @@ fn solve_inner(
             p.block = b;
         }
     }
-    let p = &*p;
-    // Requests for a large share of the spectrum are solved densely when that is affordable
-    // (Lanczos would build a basis of about the model's size anyway, much more slowly).
-    let big_request = |want: usize| 4 * want >= n && n <= DENSE_MAX;
-    let (sigma, band) = match p.target {
+    (p, notes)
+}
+
+/// The first shift σ, and the band asked for: the user's shift, or for a band just below its
+/// lower end (the factor's inertia is then the lower Sturm count), or the default shift.
+fn first_shift(k: &SymMatrix, m: &SymMatrix, p: &EigenParams) -> Result<(f64, Option<(f64, f64)>)> {
+    Ok(match p.target {
         Target::Band(lo, hi) => {
             if !(lo < hi) || !lo.is_finite() || !hi.is_finite() {
                 return Err(Error::InvalidInput(format!("empty band [{lo}, {hi}]")));
@@ -407,257 +486,351 @@ fn solve_inner(
             (s, Some((lo, hi)))
         }
         Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
-    };
-    let mut factorizations = 0;
-    let mut memory = EigenMemory::default();
-    if let (Some(pr), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
-        if n > p.dense_below && nm < n && !big_request(nm) {
-            let est = Estimate {
-                t0,
-                factorizations: &mut factorizations,
-                memory: &mut memory,
-            };
-            if let Some(sol) = solve_below_bound(k, m, sym, p, pr, nm, est, &notes)? {
-                return Ok(sol);
-            }
-        }
-    }
-    let (mut fa, mut sigma) = factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?;
-    memory.add_factor(&fa);
-    let mut backward = fa.probe_residual;
-    let mut applications = 0usize;
-    // Lanczos started while probing the spectrum (kept when the shift stays), and its result if
-    // it already converged.
-    let mut probe_lz: Option<Lanczos> = None;
-    let mut early: Option<(Vec<f64>, Mat<f64>)> = None;
-    // Seconds of those Lanczos steps (iteration, not factorisation).
-    let mut time_probe = 0.0;
+    })
+}
+
+/// The matrices and the (fitted) parameters of a solve: what every step reads.
+struct Problem<'a> {
+    k: &'a SymMatrix,
+    m: &'a SymMatrix,
+    sym: &'a Arc<SymbolicFactor>,
+    p: &'a EigenParams,
+    /// Prove the result (Sturm counts, refinement, verification): see [`solve_inner`].
+    check: bool,
+}
+
+/// What a solve counts as it goes.
+#[derive(Default)]
+struct Tally {
+    /// Factorisations done.
+    factorizations: usize,
+    /// Large allocations.
+    memory: EigenMemory,
+    /// Operator applications.
+    applications: usize,
+}
+
+/// The factorisation at the shift, with what probing the spectrum from it left.
+struct ShiftFactor {
+    fa: Factor,
+    /// The shift, as moved off an eigenvalue or nearer the wanted modes.
+    sigma: f64,
+    /// Probe backward error of `fa`.
+    backward: f64,
+    /// Lanczos started while probing the spectrum (kept when the shift stays).
+    lz: Option<Lanczos>,
+    /// Its result, if it already converged.
+    early: Option<(Vec<f64>, Mat<f64>)>,
+    /// Seconds of those Lanczos steps (iteration, not factorisation).
+    time_probe: f64,
+}
+
+/// Factorise K − σM at the shift; for the default shift and a Lanczos solve, probe the low
+/// spectrum and move the shift nearer the wanted modes while it is far below them
+/// ([`probe_spectrum`]).
+fn factor_at_shift(pb: &Problem<'_>, sigma: f64, tally: &mut Tally) -> Result<ShiftFactor> {
+    let (k, m, sym, p) = (pb.k, pb.m, pb.sym, pb.p);
+    let n = k.n();
+    let (fa, sigma) = factor_at_checked(k, m, sym, sigma, &mut tally.factorizations, p.shift.is_some())?;
+    tally.memory.add_factor(&fa);
     if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
-        if n > p.dense_below && !big_request(nm.min(n)) {
-            // The diagonal heuristic can put the default shift far below the wanted modes
-            // (thin shells: rotational stiffness ∝ 1/t²; huge stiffness contrasts). Then every
-            // θ = 1/(λ − σ) is nearly the same and Lanczos crawls. Estimate the low spectrum
-            // from the Ritz values of the first few Lanczos steps and move the shift closer
-            // while it is too far; when it stays, the iteration simply continues (no solve is
-            // spent on the estimate alone).
-            for _ in 0..6 {
-                // Estimates past the block: several free parts put more than six rigid-body
-                // modes first, and the first elastic scale must be among the estimates.
-                let nb = (nm + 6).min(12.max(p.block + 6)).min(n);
-                let mut lz = Lanczos::new(n, nm.min(n), p, Side::Both);
-                lz.pause_after = Some(nb.div_ceil(lz.b).max(3));
-                let tp = Instant::now();
-                early = lz.run(p, &fa, m, sigma, &mut applications)?;
-                time_probe += tp.elapsed().as_secs_f64();
-                let mut est: Vec<f64> = lz
-                    .last_theta
-                    .iter()
-                    .filter(|t| **t > 0.0)
-                    .map(|t| sigma + 1.0 / t)
-                    .collect();
-                est.sort_by(f64::total_cmp);
-                est.truncate(nb);
-                probe_lz = Some(lz);
-                if early.is_some() {
-                    break;
-                }
-                let Some(&last) = est.last() else { break };
-                let mut lam_est = est[nm.min(est.len()) - 1];
-                if lam_est < 1e-6 * last {
-                    lam_est = last; // the wanted ones are rigid-body modes: use the first elastic scale
-                }
-                if !(lam_est > 0.0) || sigma.abs() <= 10.0 * lam_est {
-                    break;
-                }
-                // Near the wanted modes but not closer than their scale: the θ spread is then
-                // about 2, and K − σM stays as well conditioned as the problem allows.
-                let s_new = -lam_est;
-                log::info!(
-                    "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e} (another factorisation)"
-                );
-                probe_lz = None;
-                drop(fa);
-                (fa, sigma) = factor_at(k, m, sym, s_new, &mut factorizations)?;
-                memory.add_factor(&fa);
-                backward = fa.probe_residual;
+        if n > p.dense_below && !big_request(n, nm.min(n)) {
+            return probe_spectrum(pb, nm, fa, sigma, tally);
+        }
+    }
+    Ok(ShiftFactor {
+        backward: fa.probe_residual,
+        fa,
+        sigma,
+        lz: None,
+        early: None,
+        time_probe: 0.0,
+    })
+}
+
+/// The diagonal heuristic can put the default shift far below the wanted modes (thin shells:
+/// rotational stiffness ∝ 1/t²; huge stiffness contrasts). Then every θ = 1/(λ − σ) is nearly
+/// the same and Lanczos crawls. Estimate the low spectrum from the Ritz values of the first few
+/// Lanczos steps and move the shift closer while it is too far; when it stays, the iteration
+/// simply continues (no solve is spent on the estimate alone).
+fn probe_spectrum(pb: &Problem<'_>, nm: usize, fa: Factor, sigma: f64, tally: &mut Tally) -> Result<ShiftFactor> {
+    let (k, m, sym, p) = (pb.k, pb.m, pb.sym, pb.p);
+    let n = k.n();
+    let (mut fa, mut sigma) = (fa, sigma);
+    let mut backward = fa.probe_residual;
+    let mut probe_lz = None;
+    let mut early = None;
+    let mut time_probe = 0.0;
+    for _ in 0..6 {
+        // Estimates past the block: several free parts put more than six rigid-body modes
+        // first, and the first elastic scale must be among the estimates.
+        let nb = (nm + 6).min(12.max(p.block + 6)).min(n);
+        let mut lz = Lanczos::new(n, nm.min(n), p, Side::Both);
+        lz.pause_after = Some(nb.div_ceil(lz.b).max(3));
+        let tp = Instant::now();
+        early = lz.run(p, &fa, m, sigma, &mut tally.applications)?;
+        time_probe += tp.elapsed().as_secs_f64();
+        let mut est: Vec<f64> = lz
+            .last_theta
+            .iter()
+            .filter(|t| **t > 0.0)
+            .map(|t| sigma + 1.0 / t)
+            .collect();
+        est.sort_by(f64::total_cmp);
+        est.truncate(nb);
+        probe_lz = Some(lz);
+        if early.is_some() {
+            break;
+        }
+        let Some(&last) = est.last() else { break };
+        let mut lam_est = est[nm.min(est.len()) - 1];
+        if lam_est < 1e-6 * last {
+            lam_est = last; // the wanted ones are rigid-body modes: use the first elastic scale
+        }
+        if !(lam_est > 0.0) || sigma.abs() <= 10.0 * lam_est {
+            break;
+        }
+        // Near the wanted modes but not closer than their scale: the θ spread is then about
+        // 2, and K − σM stays as well conditioned as the problem allows.
+        let s_new = -lam_est;
+        log::info!(
+            "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e} (another factorisation)"
+        );
+        probe_lz = None;
+        drop(fa);
+        (fa, sigma) = factor_at(k, m, sym, s_new, &mut tally.factorizations)?;
+        tally.memory.add_factor(&fa);
+        backward = fa.probe_residual;
+    }
+    Ok(ShiftFactor {
+        fa,
+        sigma,
+        backward,
+        lz: probe_lz,
+        early,
+        time_probe,
+    })
+}
+
+/// The two-factorisation solve from a shift: rounds of iteration and Sturm check.
+struct Rounds<'a> {
+    pb: &'a Problem<'a>,
+    sigma: f64,
+    band: Option<(f64, f64)>,
+    /// All eigenpairs by a dense solve rather than Lanczos.
+    dense: bool,
+    tally: Tally,
+    /// Worst probe backward error of the factorisations used.
+    backward: f64,
+    notes: Vec<String>,
+    time_factor: f64,
+    time_iterate: f64,
+    time_verify: f64,
+    /// Eigenvalues below the shift (the shift factor's inertia).
+    lower_count_at_shift: usize,
+    /// The Sturm count at the band's upper end, kept for the final check: (point asked for,
+    /// point used, count).
+    upper_known: Option<(f64, f64, usize)>,
+}
+
+impl Rounds<'_> {
+    /// How many modes to iterate for: the request, or for a band the Sturm count of its upper
+    /// end (a factorisation) less the eigenvalues below the shift.
+    fn wanted_count(&mut self) -> Result<usize> {
+        let Problem { k, m, sym, p, .. } = *self.pb;
+        Ok(match p.target {
+            Target::Nearest(nm) => nm.min(k.n()),
+            Target::Band(_, hi) => {
+                let tv = Instant::now();
+                log::info!("factorisation at the band's upper end {hi:.6e} for its Sturm count");
+                let (fh, s_hi) = factor_at(k, m, sym, hi, &mut self.tally.factorizations)?;
+                self.tally.memory.add_factor(&fh);
+                self.backward = self.backward.max(fh.probe_residual);
+                self.time_verify += tv.elapsed().as_secs_f64();
+                self.upper_known = Some((hi, s_hi, fh.negative_pivots));
+                fh.negative_pivots.saturating_sub(self.lower_count_at_shift)
             }
+        })
+    }
+
+    /// The solution when no mode is wanted (an empty band).
+    fn nothing_wanted(self) -> EigenSolution {
+        let count = self.lower_count_at_shift;
+        let sturm = SturmCheck {
+            lower: (self.sigma, count),
+            upper: (self.sigma, count),
+            expected: 0,
+            found: 0,
+            complete: true,
+        };
+        let vectors = Mat::zeros(self.pb.k.n(), 0);
+        self.solution(vec![], vectors, (vec![], 0.0, vec![]), sturm)
+    }
+
+    /// The solution with its pairs, their verification (relative residuals, M-orthonormality,
+    /// backward errors) and the Sturm check.
+    fn solution(
+        self,
+        lambda: Vec<f64>,
+        vectors: Mat<f64>,
+        verified: (Vec<f64>, f64, Vec<f64>),
+        sturm: SturmCheck,
+    ) -> EigenSolution {
+        let (rel_residual, m_orthonormality, backward_error) = verified;
+        EigenSolution {
+            lambda,
+            vectors,
+            rel_residual,
+            backward_error,
+            notes: self.notes,
+            m_orthonormality,
+            sturm,
+            shift: self.sigma,
+            applications: self.tally.applications,
+            factorizations: self.tally.factorizations,
+            time_factor: self.time_factor,
+            time_iterate: self.time_iterate,
+            time_verify: self.time_verify,
+            factor_backward_error: self.backward,
+            memory: self.tally.memory,
         }
     }
-    let time_factor_main = t0.elapsed().as_secs_f64() - time_probe;
-    let mut time_verify = 0.0;
 
-    // How many modes we need.
-    // The Sturm count at the band's upper end, kept for the final check: (point asked for,
-    // point used, count).
-    let mut upper_known: Option<(f64, f64, usize)> = None;
-    let mut want = match p.target {
-        Target::Nearest(nm) => nm.min(n),
-        Target::Band(_, hi) => {
+    /// Iterate, refine, check; when the Sturm check shows a mode missed, iterate again for
+    /// more modes with the pairs found locked (at most four rounds). `early` is a result the
+    /// shift's probe already converged to; `ti` started the iteration.
+    fn run(
+        mut self,
+        mut lz: Lanczos,
+        fa: Factor,
+        mut want: usize,
+        mut early: Option<(Vec<f64>, Mat<f64>)>,
+        ti: Instant,
+    ) -> Result<EigenSolution> {
+        let Problem { k, m, sym, p, .. } = *self.pb;
+        let n = k.n();
+        let mut attempt = 0;
+        // The shift factor is dropped before each Sturm factorisation, so that two factors
+        // never coexist in memory; it is rebuilt only if the check asks for more iteration.
+        let mut fa = Some(fa);
+        loop {
+            attempt += 1;
+            let ti_round = Instant::now();
+            if fa.is_none() {
+                log::info!("factorising K − σM at the shift again to iterate for more modes");
+                fa = Some(
+                    factor_at_checked(k, m, sym, self.sigma, &mut self.tally.factorizations, p.shift.is_some())?.0,
+                );
+            }
+            let f = fa
+                .as_ref()
+                .ok_or_else(|| Error::Factorization("lost the shift factor".into()))?;
+            if !self.dense {
+                lz.set_want(want);
+            }
+            let (lambda, x) = self.iterate_once(&mut lz, f, early.take())?;
+            self.time_iterate += if attempt == 1 {
+                ti.elapsed().as_secs_f64()
+            } else {
+                ti_round.elapsed().as_secs_f64()
+            };
+            // Verify: Sturm counts around the modes found.
             let tv = Instant::now();
-            log::info!("factorisation at the band's upper end {hi:.6e} for its Sturm count");
-            let (fh, s_hi) = factor_at(k, m, sym, hi, &mut factorizations)?;
-            memory.add_factor(&fh);
-            backward = backward.max(fh.probe_residual);
-            time_verify += tv.elapsed().as_secs_f64();
-            upper_known = Some((hi, s_hi, fh.negative_pivots));
-            fh.negative_pivots.saturating_sub(fa.negative_pivots)
+            fa = None;
+            let found = self.found(&lambda);
+            let (upper_pt, lower_pt) = check_points(&found, p, self.band, self.sigma, &lz);
+            // The basis is not needed for the check: free it before the Sturm factorisations
+            // (the rare second round, when a mode was missed, starts a new iteration).
+            if !self.dense {
+                lz.release();
+            }
+            let sturm = self.sturm_counts(&found, lower_pt, upper_pt)?;
+            self.time_verify += tv.elapsed().as_secs_f64();
+            if sturm.expected > sturm.found && attempt < 4 && self.band.is_none() && !self.dense {
+                // A mode was missed (or sits just above the last one found): iterate for more
+                // modes, with the pairs found locked at the start of a new basis (the old one
+                // was freed for the Sturm factorisation).
+                want = (want + (sturm.expected - sturm.found) + p.block.min(4)).min(n);
+                log::info!("iterating again for {want} modes, the {} found locked", lambda.len());
+                lz.set_want(want.max(lambda.len()));
+                lz.restart_from(&lambda, x.as_ref(), m, self.sigma);
+                continue;
+            }
+            return Ok(self.finish(&lambda, &x, &found, sturm));
         }
-    };
-    if want == 0 {
-        return Ok(EigenSolution {
-            lambda: vec![],
-            vectors: Mat::zeros(n, 0),
-            rel_residual: vec![],
-            backward_error: vec![],
-            notes,
-            m_orthonormality: 0.0,
-            sturm: SturmCheck {
-                lower: (sigma, fa.negative_pivots),
-                upper: (sigma, fa.negative_pivots),
-                expected: 0,
-                found: 0,
-                complete: true,
-            },
-            shift: sigma,
-            applications: 0,
-            factorizations,
-            time_factor: time_factor_main,
-            time_iterate: time_probe,
-            time_verify,
-            factor_backward_error: backward,
-            memory,
-        });
     }
 
-    let ti = Instant::now();
-    let mut attempt = 0;
-    let mut time_iterate = time_probe;
-    let lower_count_at_shift = fa.negative_pivots;
-    let dense = n <= p.dense_below || big_request(want);
-    if dense && n > p.dense_below {
-        notes.push(format!(
-            "{want} modes of {n} degrees of freedom: solved densely (all eigenpairs) rather than by Lanczos"
-        ));
-    }
-    let mut lz = match probe_lz.take() {
-        Some(lz) if !dense => lz,
-        _ => Lanczos::new(
-            n,
-            if dense { 1 } else { want },
-            p,
-            if band.is_some() { Side::Above } else { Side::Both },
-        ),
-    };
-    // The shift factor is dropped before each Sturm factorisation, so that two factors never
-    // coexist in memory; it is rebuilt only if the check asks for more iteration.
-    let mut fa = Some(fa);
-    loop {
-        attempt += 1;
-        let ti_round = Instant::now();
-        if fa.is_none() {
-            log::info!("factorising K − σM at the shift again to iterate for more modes");
-            fa = Some(factor_at_checked(k, m, sym, sigma, &mut factorizations, p.shift.is_some())?.0);
-        }
-        let f = fa
-            .as_ref()
-            .ok_or_else(|| Error::Factorization("lost the shift factor".into()))?;
-        if !dense {
-            lz.set_want(want);
-        }
-        let (lambda, x) = if dense {
+    /// One round's pairs: a dense solve, or Lanczos (from `early` if the probe converged)
+    /// followed by one refinement step when the result is to be proved.
+    fn iterate_once(
+        &mut self,
+        lz: &mut Lanczos,
+        f: &Factor,
+        early: Option<(Vec<f64>, Mat<f64>)>,
+    ) -> Result<(Vec<f64>, Mat<f64>)> {
+        let Problem { k, m, p, check, .. } = *self.pb;
+        let sigma = self.sigma;
+        if self.dense {
             // Most of the spectrum: reduce through M, which keeps the upper modes accurate.
             let (l, x) = super::dense::eigen_all(k, m, sigma, true)?;
             lz.last_theta = l.iter().map(|l| 1.0 / (l - sigma)).collect();
-            (l, x)
-        } else {
-            let res = match early.take() {
-                Some(r) => Some(r),
-                None => lz.run(p, f, m, sigma, &mut applications)?,
-            };
-            let (l, x) = res.ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
-            memory.lanczos_basis = memory.lanczos_basis.max(lz.peak_bytes());
-            memory.solve_workspace = memory.solve_workspace.max(f.workspace_bytes() as u64);
-            // The basis is not needed past this point (a second round starts a new one from
-            // the pairs found): free it before the refinement's blocks are allocated.
-            lz.release();
-            log::info!(
-                "Lanczos: {} pairs converged after {applications} operator applications",
-                l.len()
-            );
-            // One step of inverse iteration and a Rayleigh–Ritz on the result: damps the
-            // high-frequency rounding the Krylov vectors carry (which K amplifies in the
-            // residual) at the cost of one block solve.
-            if check {
-                applications += x.ncols();
-                refine(k, m, f, &x)?
-            } else {
-                (l, x)
-            }
+            return Ok((l, x));
+        }
+        let res = match early {
+            Some(r) => Some(r),
+            None => lz.run(p, f, m, sigma, &mut self.tally.applications)?,
         };
-        time_iterate += if attempt == 1 {
-            ti.elapsed().as_secs_f64()
+        let (l, x) = res.ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
+        let memory = &mut self.tally.memory;
+        memory.lanczos_basis = memory.lanczos_basis.max(lz.peak_bytes());
+        memory.solve_workspace = memory.solve_workspace.max(f.workspace_bytes() as u64);
+        // The basis is not needed past this point (a second round starts a new one from the
+        // pairs found): free it before the refinement's blocks are allocated.
+        lz.release();
+        log::info!(
+            "Lanczos: {} pairs converged after {} operator applications",
+            l.len(),
+            self.tally.applications
+        );
+        // One step of inverse iteration and a Rayleigh–Ritz on the result: damps the
+        // high-frequency rounding the Krylov vectors carry (which K amplifies in the residual)
+        // at the cost of one block solve.
+        if check {
+            self.tally.applications += x.ncols();
+            refine(k, m, f, &x)
         } else {
-            ti_round.elapsed().as_secs_f64()
-        };
-        // Verify: Sturm counts around the modes found.
-        let tv = Instant::now();
-        fa = None;
+            Ok((l, x))
+        }
+    }
+
+    /// The pairs found as (λ, index), ascending; for a band, those in it.
+    fn found(&self, lambda: &[f64]) -> Vec<(f64, usize)> {
         let mut found: Vec<(f64, usize)> = lambda.iter().copied().enumerate().map(|(i, l)| (l, i)).collect();
         found.sort_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some((lo, hi)) = band {
-            // A band from 0 (or below) includes the rigid-body modes, whose computed λ rounds to
-            // either side of 0: keep everything above the lower Sturm point (the shift), which
-            // is what the count includes.
+        if let Some((lo, hi)) = self.band {
+            // A band from 0 (or below) includes the rigid-body modes, whose computed λ rounds
+            // to either side of 0: keep everything above the lower Sturm point (the shift),
+            // which is what the count includes.
+            let sigma = self.sigma;
             found.retain(|(l, _)| (*l >= lo || (lo <= 0.0 && *l > sigma)) && *l <= hi);
         }
-        let lam_min = found.first().map_or(sigma, |f| f.0);
-        let lam_max = found.last().map_or(sigma, |f| f.0);
-        let upper_pt = match band {
-            Some((_, hi)) => hi,
-            None => {
-                let scale = lam_max.abs().max(sigma.abs());
-                // The lowest modes: the check need only cover the wanted ones. When converged
-                // pairs beyond them were found too, the point halfway from the last wanted one
-                // to the next one found cannot pass an eigenvalue that is simply the next one.
-                // Otherwise: just above the highest mode found, a small relative step, or half
-                // the way to the next Ritz estimate if that is closer. (Ritz estimates of
-                // unconverged values lie above the true ones, so a far point could pass an
-                // eigenvalue that is simply the next one, costing an extra round of iteration.)
-                let nm = match p.target {
-                    Target::Nearest(nm) if p.shift.is_none() => nm,
-                    _ => usize::MAX,
-                };
-                if nm > 0 && nm < found.len() && found[nm].0 - found[nm - 1].0 > 2e-9 * scale {
-                    0.5 * (found[nm - 1].0 + found[nm].0)
-                } else {
-                    let mut step = 1e-4 * scale;
-                    if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
-                        step = step.min(0.5 * (nx - lam_max));
-                    }
-                    lam_max + step.max(1e-9 * scale)
-                }
-            }
-        };
-        // The basis is not needed for the check: free it before the Sturm factorisations
-        // (the rare second round, when a mode was missed, starts a new iteration).
-        if !dense {
-            lz.release();
-        }
-        let lower_pt = if lam_min >= sigma {
-            sigma
-        } else {
-            lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6)
-        };
-        let lower_count = if lower_pt == sigma || !check {
-            lower_count_at_shift
+        found
+    }
+
+    /// The Sturm counts at the check points (a factorisation at each, unless the count is
+    /// known: the shift's, a band's upper end's, or none asked for) and the pairs found between.
+    fn sturm_counts(&mut self, found: &[(f64, usize)], lower_pt: f64, upper_pt: f64) -> Result<SturmCheck> {
+        let Problem { k, m, sym, check, .. } = *self.pb;
+        let lower_count = if lower_pt == self.sigma || !check {
+            self.lower_count_at_shift
         } else {
             log::info!("factorisation at {lower_pt:.6e} for the lower Sturm count");
-            let (fl, _) = factor_at(k, m, sym, lower_pt, &mut factorizations)?;
-            memory.add_factor(&fl);
-            backward = backward.max(fl.probe_residual);
+            let (fl, _) = factor_at(k, m, sym, lower_pt, &mut self.tally.factorizations)?;
+            self.tally.memory.add_factor(&fl);
+            self.backward = self.backward.max(fl.probe_residual);
             fl.negative_pivots
         };
-        let (upper_pt, upper_count) = match upper_known {
+        let (upper_pt, upper_count) = match self.upper_known {
             Some((asked, used, count)) if asked == upper_pt => (used, count),
             // No proof asked for: the count is taken as what was found.
             _ if !check => (
@@ -666,9 +839,9 @@ fn solve_inner(
             ),
             _ => {
                 log::info!("factorisation at {upper_pt:.6e} for the upper Sturm count");
-                let (fu, used) = factor_at(k, m, sym, upper_pt, &mut factorizations)?;
-                memory.add_factor(&fu);
-                backward = backward.max(fu.probe_residual);
+                let (fu, used) = factor_at(k, m, sym, upper_pt, &mut self.tally.factorizations)?;
+                self.tally.memory.add_factor(&fu);
+                self.backward = self.backward.max(fu.probe_residual);
                 (used, fu.negative_pivots)
             }
         };
@@ -679,24 +852,19 @@ fn solve_inner(
                 "Sturm check: {expected} eigenvalues in ({lower_pt:.6e}, {upper_pt:.6e}) rad²/s², {n_between} found"
             );
         }
-        time_verify += tv.elapsed().as_secs_f64();
-        if expected > n_between && attempt < 4 && band.is_none() && !dense {
-            // A mode was missed (or sits just above the last one found): iterate for more
-            // modes, with the pairs found locked at the start of a new basis (the old one was
-            // freed for the Sturm factorisation).
-            want = (want + (expected - n_between) + p.block.min(4)).min(n);
-            log::info!("iterating again for {want} modes, the {} found locked", lambda.len());
-            lz.set_want(want.max(lambda.len()));
-            lz.restart_from(&lambda, x.as_ref(), m, sigma);
-            continue;
-        }
-        let sturm = SturmCheck {
+        Ok(SturmCheck {
             lower: (lower_pt, lower_count),
             upper: (upper_pt, upper_count),
             expected,
             found: n_between,
             complete: expected == n_between,
-        };
+        })
+    }
+
+    /// The requested pairs (the nearest the shift, or a band's) in ascending order, verified.
+    fn finish(mut self, lambda: &[f64], x: &Mat<f64>, found: &[(f64, usize)], sturm: SturmCheck) -> EigenSolution {
+        let Problem { k, m, p, check, .. } = *self.pb;
+        let sigma = self.sigma;
         // Keep the requested count (lowest / nearest) in ascending order.
         let keep: Vec<usize> = match p.target {
             Target::Nearest(nm) => {
@@ -709,31 +877,14 @@ fn solve_inner(
             Target::Band(..) => found.iter().map(|x| x.1).collect(),
         };
         let tv = Instant::now();
-        let (lam, vectors) = select(&lambda, &x, &keep);
-        let (rel_residual, m_orth, backward_error) = if check {
+        let (lam, vectors) = select(lambda, x, &keep);
+        let verified = if check {
             verify_with_backward_errors(k, m, &lam, vectors.as_ref(), sigma)
         } else {
             (vec![f64::NAN; lam.len()], f64::NAN, vec![f64::NAN; lam.len()])
         };
-        time_verify += tv.elapsed().as_secs_f64();
-        let sol = EigenSolution {
-            lambda: lam,
-            vectors,
-            rel_residual,
-            backward_error,
-            notes,
-            m_orthonormality: m_orth,
-            sturm,
-            shift: sigma,
-            applications,
-            factorizations,
-            time_factor: time_factor_main,
-            time_iterate,
-            time_verify,
-            factor_backward_error: backward,
-            memory,
-        };
-        return Ok(sol);
+        self.time_verify += tv.elapsed().as_secs_f64();
+        self.solution(lam, vectors, verified, sturm)
     }
 }
 
@@ -744,6 +895,83 @@ fn select(lambda: &[f64], x: &Mat<f64>, keep: &[usize]) -> (Vec<f64>, Mat<f64>) 
         vectors.col_mut(c).copy_from(x.col(i));
     }
     (keep.iter().map(|&i| lambda[i]).collect(), vectors)
+}
+
+/// Two eigenvalues found closer than this, relative to the spectrum's scale, are taken for
+/// copies of one repeated root: a Sturm point is never placed between them.
+const SAME_ROOT: f64 = 2e-9;
+
+/// Positions in `found` (ascending) of the lowest and the highest pair kept for the request:
+/// the `nm` nearest the shift (ties in the order found), or all of a band's.
+fn kept_span(found: &[(f64, usize)], target: Target, sigma: f64) -> (usize, usize) {
+    let last = found.len().saturating_sub(1);
+    match target {
+        Target::Band(..) => (0, last),
+        Target::Nearest(nm) => {
+            let mut by_dist: Vec<(f64, usize)> = found
+                .iter()
+                .enumerate()
+                .map(|(i, f)| ((f.0 - sigma).abs(), i))
+                .collect();
+            by_dist.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let kept = by_dist.iter().take(nm.max(1)).map(|x| x.1);
+            (kept.clone().min().unwrap_or(0), kept.max().unwrap_or(last))
+        }
+    }
+}
+
+/// The Sturm check points (upper, lower) around the pairs `found` (ascending). A request that
+/// ends inside a multiplet is extended to the whole multiplet: the upper point lies in the first
+/// clear gap of `found` above the highest kept pair (halfway across it: it cannot pass an
+/// eigenvalue that is simply the next one, nor split a repeated root), and for a user shift the
+/// lower point in the first clear gap below the lowest kept pair. When `found` has no such gap
+/// above, the upper point is just above the highest mode found, a small relative step, or half
+/// the way to the next Ritz estimate if that is closer (Ritz estimates of unconverged values lie
+/// above the true ones, so a far point could pass an eigenvalue that is simply the next one,
+/// costing an extra round of iteration); below, the shift itself when nothing kept lies under
+/// it (its count is known), else just below the lowest mode found. A band's upper point is its
+/// upper end.
+fn check_points(
+    found: &[(f64, usize)],
+    p: &EigenParams,
+    band: Option<(f64, f64)>,
+    sigma: f64,
+    lz: &Lanczos,
+) -> (f64, f64) {
+    let lam_min = found.first().map_or(sigma, |f| f.0);
+    let lam_max = found.last().map_or(sigma, |f| f.0);
+    let scale = lam_max.abs().max(sigma.abs());
+    let gap_below = |e: usize| found[e].0 - found[e - 1].0 > SAME_ROOT * scale;
+    let (lo, hi) = kept_span(found, p.target, sigma);
+    let upper_pt = match band {
+        Some((_, b_hi)) => b_hi,
+        None => match (hi + 1..found.len()).find(|&e| gap_below(e)) {
+            Some(e) => 0.5 * (found[e - 1].0 + found[e].0),
+            None => {
+                let mut step = 1e-4 * scale;
+                if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
+                    step = step.min(0.5 * (nx - lam_max));
+                }
+                lam_max + step.max(1e-9 * scale)
+            }
+        },
+    };
+    // The first pair of the lowest kept multiplet (the default shift keeps the lowest: 0).
+    let first = if band.is_none() && p.shift.is_some() {
+        (1..=lo.min(found.len().saturating_sub(1)))
+            .rev()
+            .find(|&s| gap_below(s))
+            .unwrap_or(0)
+    } else {
+        0
+    };
+    let lower_pt = match found.get(first) {
+        Some(f) if f.0 >= sigma && (first == 0 || found[first - 1].0 < sigma) => sigma,
+        Some(f) if first > 0 => 0.5 * (found[first - 1].0 + f.0),
+        _ if lam_min >= sigma => sigma,
+        _ => lam_min - (lam_min.abs().max(sigma.abs()) * 1e-6),
+    };
+    (upper_pt, lower_pt)
 }
 
 /// Largest relative residual the one-factorisation solve returns; above it (singular mass
@@ -769,6 +997,12 @@ struct Estimate<'a> {
 /// `pr`, its eigenvalues λ̃ᵢ ≥ λᵢ, one shift U just above λ̃_nm, Lanczos on K − UM for every
 /// eigenvalue below U (θ = 1/(λ − U) < 0), whose number is the factor's inertia. `Ok(None)`
 /// when the estimate cannot be used (the caller then solves from its default shift).
+///
+/// The steps: the coarse estimate ([`coarse_estimate`]); U placed from its bounds
+/// ([`bound_shift`]); the factorisation at U and its count; Lanczos below U from the
+/// prolongated coarse modes with a first refinement step ([`BelowBound::lanczos`]); further
+/// refinement and verification ([`BelowBound::purify`]); more iteration while pairs below U are
+/// missing.
 #[allow(clippy::too_many_arguments)]
 fn solve_below_bound(
     k: &SymMatrix,
@@ -785,40 +1019,8 @@ fn solve_below_bound(
         return Ok(None);
     }
     let tc = Instant::now();
-    // The coarse model lives only here: its matrices and factor are freed before the model's
-    // factorisation (at 1M DOFs they would be ~0.5 GB at the peak).
-    let (lc, start) = {
-        let (kc, mc) = pr.galerkin(k, m);
-        let t_galerkin = tc.elapsed().as_secs_f64();
-        let symc = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
-        log::debug!(
-            "coarse model: PᵀKP and PᵀMP {t_galerkin:.3} s, ordering {:.3} s, {} entries in L",
-            tc.elapsed().as_secs_f64() - t_galerkin,
-            symc.nnz_l
-        );
-        // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error
-        // of a Ritz value is of the order of its residual squared): ample for placing a shift.
-        let pc = EigenParams {
-            target: Target::Nearest(nm + 1),
-            tol: 1e-6,
-            ..p.clone()
-        };
-        let coarse = match solve_inner(&kc, &mc, &symc, &pc, None, false) {
-            Ok(c) => c,
-            Err(e) => {
-                log::info!("coarse estimate failed ({e}): solving from the default shift");
-                return Ok(None);
-            }
-        };
-        log::debug!(
-            "coarse solve: factor {:.3} s, iterate {:.3} s, verify {:.3} s, {} applications",
-            coarse.time_factor,
-            coarse.time_iterate,
-            coarse.time_verify,
-            coarse.applications
-        );
-        // Ascending, as every solve returns them, with the vectors in the same order.
-        (coarse.lambda, coarse.vectors)
+    let Some((lc, start)) = coarse_estimate(k, m, p, pr, nm, tc)? else {
+        return Ok(None);
     };
     // The coarse model's matrices and factor are freed: give the memory back before the
     // model's factor is allocated.
@@ -826,27 +1028,16 @@ fn solve_below_bound(
     if lc.len() <= nm || !(lc[nm] > 0.0) {
         return Ok(None);
     }
-    let (a, b) = (lc[nm - 1], lc[nm]);
-    // Just above the bound of the last wanted eigenvalue: every wanted one lies below, and
-    // few others (the coarse gap to the next is no promise for the model's). When the wanted
-    // ones are rigid-body modes (a at the rounding level of λ = 0, far below the default
-    // shift's magnitude), halfway to the first elastic bound; when the next is one too, the
-    // estimate places nothing (rigid-body modes only: the default solve).
     let zero = default_shift(k, m).abs();
-    let u = if a <= zero {
-        if b <= zero {
-            return Ok(None);
-        }
-        0.5 * b
-    } else {
-        a + (0.5 * (b - a)).min(0.02 * a).max(1e-4 * a)
+    let Some(u) = bound_shift(&lc, nm, zero) else {
+        return Ok(None);
     };
     log::info!(
         "coarse estimate ({} DOFs, {:.2} s): mode {nm} at most {:.6e} rad²/s², the next at most {:.6e}; one factorisation at U = {u:.6e}",
         pr.n_coarse,
         tc.elapsed().as_secs_f64(),
-        a,
-        b
+        lc[nm - 1],
+        lc[nm]
     );
     let (fa, u) = factor_at(k, m, sym, u, est.factorizations)?;
     est.memory.add_factor(&fa);
@@ -861,32 +1052,214 @@ fn solve_below_bound(
     let ti = Instant::now();
     let mut lz = Lanczos::new(n, count, p, Side::Below);
     lz.keep_image = true;
-    // Start from the coarse modes, prolongated: the start block then has large components
-    // in the wanted modes (66 instead of 90 operator applications for 12 modes of a 119k-DOF
-    // tet10 plate); its random part keeps every other mode reachable, and the count at U
-    // proves that none was missed.
-    {
-        let cv = &start;
-        let mut st = Mat::zeros(n, cv.ncols());
-        for j in 0..cv.ncols() {
-            let xc: Vec<f64> = (0..cv.nrows()).map(|i| cv[(i, j)]).collect();
-            for (i, v) in pr.apply(&xc).into_iter().enumerate() {
-                st[(i, j)] = v;
-            }
-        }
-        lz.start = Some(st);
-    }
-    let mut applications = 0usize;
+    lz.start = Some(prolongated(pr, &start));
+    let mut bb = BelowBound {
+        k,
+        m,
+        p,
+        fa: &fa,
+        u,
+        zero,
+        count,
+        nm,
+        applications: 0,
+        memory: est.memory,
+    };
     let mut want = count;
     let mut attempt = 0;
-    'lanczos: loop {
+    let done = loop {
         attempt += 1;
         lz.set_want(want);
+        let (lambda, x) = bb.lanczos(&mut lz)?;
+        match bb.purify(lambda, x, attempt)? {
+            Purified::Short { lambda, x, below } => {
+                // A cluster wider than the block, or a pair that had not converged: iterate
+                // on, with the pairs found locked at the start of a new basis.
+                want = (want + (count - below) + p.block.min(4)).min(n);
+                log::info!(
+                    "{below} of the {count} eigenvalues below U found: iterating for more, the pairs found locked"
+                );
+                lz.set_want(want.max(lambda.len()));
+                lz.restart_from(&lambda, x.as_ref(), m, u);
+            }
+            Purified::Done(d) => break d,
+        }
+    };
+    let time_iterate = ti.elapsed().as_secs_f64() - done.tv.elapsed().as_secs_f64();
+    log::info!(
+        "Sturm check: {count} eigenvalues below {u:.6e} rad²/s², {} found ({} refinement step{})",
+        done.found,
+        done.steps,
+        if done.steps == 1 { "" } else { "s" }
+    );
+    if done.worst > RESIDUAL_FALLBACK {
+        log::info!(
+            "one-factorisation solve: largest relative residual {:.1e} (above {RESIDUAL_FALLBACK:.0e}): solving again from the default shift",
+            done.worst
+        );
+        return Ok(None);
+    }
+    let (rel_residual, m_orthonormality, backward_error) = done.verified;
+    Ok(Some(EigenSolution {
+        lambda: done.lambda,
+        vectors: done.vectors,
+        rel_residual,
+        backward_error,
+        notes: notes.to_vec(),
+        m_orthonormality,
+        // Below −∞ there is nothing: the count at U alone is the whole check.
+        sturm: SturmCheck {
+            lower: (f64::NEG_INFINITY, 0),
+            upper: (u, count),
+            expected: count,
+            found: done.found,
+            complete: done.found == count,
+        },
+        shift: u,
+        applications: bb.applications,
+        factorizations: *est.factorizations,
+        time_factor,
+        time_iterate,
+        time_verify: done.tv.elapsed().as_secs_f64(),
+        factor_backward_error: fa.probe_residual,
+        memory: *bb.memory,
+    }))
+}
+
+/// The coarse model on `pr` (PᵀKP, PᵀMP) and its `nm + 1` lowest eigenpairs, unproved:
+/// (λ̃ ascending, vectors in the same order); `None` when its solve failed. The coarse model
+/// lives only here: its matrices and factor are freed before the model's factorisation (at 1M
+/// DOFs they would be ~0.5 GB at the peak). `tc` started the estimate.
+fn coarse_estimate(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    p: &EigenParams,
+    pr: &Prolongation,
+    nm: usize,
+    tc: Instant,
+) -> Result<Option<(Vec<f64>, Mat<f64>)>> {
+    let (kc, mc) = pr.galerkin(k, m);
+    let t_galerkin = tc.elapsed().as_secs_f64();
+    let symc = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
+    log::debug!(
+        "coarse model: PᵀKP and PᵀMP {t_galerkin:.3} s, ordering {:.3} s, {} entries in L",
+        tc.elapsed().as_secs_f64() - t_galerkin,
+        symc.nnz_l
+    );
+    // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error of
+    // a Ritz value is of the order of its residual squared): ample for placing a shift.
+    let pc = EigenParams {
+        target: Target::Nearest(nm + 1),
+        tol: 1e-6,
+        ..p.clone()
+    };
+    let coarse = match solve_inner(&kc, &mc, &symc, &pc, None, false) {
+        Ok(c) => c,
+        Err(e) => {
+            log::info!("coarse estimate failed ({e}): solving from the default shift");
+            return Ok(None);
+        }
+    };
+    log::debug!(
+        "coarse solve: factor {:.3} s, iterate {:.3} s, verify {:.3} s, {} applications",
+        coarse.time_factor,
+        coarse.time_iterate,
+        coarse.time_verify,
+        coarse.applications
+    );
+    // Ascending, as every solve returns them, with the vectors in the same order.
+    Ok(Some((coarse.lambda, coarse.vectors)))
+}
+
+/// The shift U from the coarse bounds `lc` (ascending, more than `nm`): just above the bound of
+/// the last wanted eigenvalue, so that every wanted one lies below, and few others (the coarse
+/// gap to the next is no promise for the model's). When the wanted ones are rigid-body modes
+/// (the bound at the rounding level of λ = 0, at most `zero`, the default shift's magnitude),
+/// halfway to the first elastic bound; when the next is one too, `None`: the estimate places
+/// nothing (rigid-body modes only: the default solve).
+fn bound_shift(lc: &[f64], nm: usize, zero: f64) -> Option<f64> {
+    let (a, b) = (lc[nm - 1], lc[nm]);
+    if a <= zero {
+        if b <= zero {
+            return None;
+        }
+        Some(0.5 * b)
+    } else {
+        Some(a + (0.5 * (b - a)).min(0.02 * a).max(1e-4 * a))
+    }
+}
+
+/// The coarse modes `cv`, prolongated: a start block with large components in the wanted modes
+/// (66 instead of 90 operator applications for 12 modes of a 119k-DOF tet10 plate); its random
+/// part keeps every other mode reachable, and the count at U proves that none was missed.
+fn prolongated(pr: &Prolongation, cv: &Mat<f64>) -> Mat<f64> {
+    let mut st = Mat::zeros(pr.n_fine, cv.ncols());
+    for j in 0..cv.ncols() {
+        let xc: Vec<f64> = (0..cv.nrows()).map(|i| cv[(i, j)]).collect();
+        for (i, v) in pr.apply(&xc).into_iter().enumerate() {
+            st[(i, j)] = v;
+        }
+    }
+    st
+}
+
+/// The iteration of [`solve_below_bound`] on the factorisation at U.
+struct BelowBound<'a> {
+    k: &'a SymMatrix,
+    m: &'a SymMatrix,
+    p: &'a EigenParams,
+    /// The factorisation of K − UM.
+    fa: &'a Factor,
+    u: f64,
+    /// The rounding level of λ = 0 (the default shift's magnitude).
+    zero: f64,
+    /// Eigenvalues below U (the factor's inertia).
+    count: usize,
+    /// Modes wanted.
+    nm: usize,
+    applications: usize,
+    memory: &'a mut EigenMemory,
+}
+
+/// A verified result of [`BelowBound::purify`].
+struct Purification {
+    /// The `nm` lowest pairs.
+    lambda: Vec<f64>,
+    vectors: Mat<f64>,
+    /// Their relative residuals, M-orthonormality and backward errors.
+    verified: (Vec<f64>, f64, Vec<f64>),
+    /// Pairs found below U.
+    found: usize,
+    /// Refinement steps taken.
+    steps: usize,
+    /// Largest relative residual.
+    worst: f64,
+    /// Start of the last verification.
+    tv: Instant,
+}
+
+/// What [`BelowBound::purify`] made of the pairs of one Lanczos run.
+enum Purified {
+    /// Fewer pairs below U than its count (`below` of them): iterate on from these.
+    Short {
+        lambda: Vec<f64>,
+        x: Mat<f64>,
+        below: usize,
+    },
+    /// Every pair below U found (or no round left), verified.
+    Done(Purification),
+}
+
+impl BelowBound<'_> {
+    /// A Lanczos run for the pairs below U, then a first refinement step: inverse iteration
+    /// with Rayleigh–Ritz at U.
+    fn lanczos(&mut self, lz: &mut Lanczos) -> Result<(Vec<f64>, Mat<f64>)> {
+        let (k, m, p, fa) = (self.k, self.m, self.p, self.fa);
         let (l, x) = lz
-            .run(p, &fa, m, u, &mut applications)?
+            .run(p, fa, m, self.u, &mut self.applications)?
             .ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
-        est.memory.lanczos_basis = est.memory.lanczos_basis.max(lz.peak_bytes());
-        est.memory.solve_workspace = est.memory.solve_workspace.max(fa.workspace_bytes() as u64);
+        self.memory.lanczos_basis = self.memory.lanczos_basis.max(lz.peak_bytes());
+        self.memory.solve_workspace = self.memory.solve_workspace.max(fa.workspace_bytes() as u64);
         log::debug!(
             "Lanczos done: resident {} MiB, peak so far {} MiB",
             crate::system::resident_memory().unwrap_or(0) >> 20,
@@ -897,8 +1270,9 @@ fn solve_below_bound(
         // give them back before the refinement allocates its own.
         crate::system::release_free_memory();
         log::info!(
-            "Lanczos: {} pairs below U converged after {applications} operator applications",
-            l.len()
+            "Lanczos: {} pairs below U converged after {} operator applications",
+            l.len(),
+            self.applications
         );
         // Inverse iteration with Rayleigh–Ritz at U purifies the modes. With the shift above
         // them, one step damps a high-frequency error component at λ_h only by
@@ -911,80 +1285,56 @@ fn solve_below_bound(
         // the further steps, when needed, solve for every column.
         let y = match lz.image.take() {
             Some(y) if y.ncols() == x.ncols() && y.ncols() == l.len() => {
-                let solved = lowest_elastic(&l, zero, p.block.max(1));
-                applications += solved.len();
-                image_with_solves(m, &fa, &x, y, &solved)
+                let solved = lowest_elastic(&l, self.zero, p.block.max(1));
+                self.applications += solved.len();
+                image_with_solves(m, fa, &x, y, &solved)
             }
             _ => {
-                applications += x.ncols();
-                inverse_images(m, &fa, x.as_ref())
+                self.applications += x.ncols();
+                inverse_images(m, fa, x.as_ref())
             }
         };
         // The Lanczos vectors are spent: free them before the Rayleigh–Ritz step allocates.
         drop(x);
-        let (mut lambda, mut x) = rayleigh_ritz(k, m, y)?;
+        rayleigh_ritz(k, m, y)
+    }
+
+    /// The pairs below U, verified, refined again (up to three steps in all) while their
+    /// largest relative residual is above [`RESIDUAL_FALLBACK`]; `Short` when fewer than the
+    /// count are below U and `attempt` (the Lanczos round) leaves room for another round.
+    fn purify(&mut self, lambda: Vec<f64>, x: Mat<f64>, attempt: usize) -> Result<Purified> {
+        let (k, m, u) = (self.k, self.m, self.u);
+        let (mut lambda, mut x) = (lambda, x);
         let mut steps = 1;
         loop {
             let mut below: Vec<usize> = (0..lambda.len()).filter(|&i| lambda[i] < u).collect();
             below.sort_by(|&i, &j| lambda[i].total_cmp(&lambda[j]));
-            if below.len() < count && attempt < 4 {
-                // A cluster wider than the block, or a pair that had not converged: iterate on,
-                // with the pairs found locked at the start of a new basis.
-                want = (want + (count - below.len()) + p.block.min(4)).min(n);
-                log::info!(
-                    "{} of the {count} eigenvalues below U found: iterating for more, the pairs found locked",
-                    below.len()
-                );
-                lz.set_want(want.max(lambda.len()));
-                lz.restart_from(&lambda, x.as_ref(), m, u);
-                continue 'lanczos;
+            if below.len() < self.count && attempt < 4 {
+                return Ok(Purified::Short {
+                    lambda,
+                    x,
+                    below: below.len(),
+                });
             }
             let tv = Instant::now();
-            let (lam, vectors) = select(&lambda, &x, &below[..nm.min(below.len())]);
-            let (rel_residual, m_orth, backward_error) = verify_with_backward_errors(k, m, &lam, vectors.as_ref(), u);
-            let worst = rel_residual.iter().fold(0.0f64, |a, &r| a.max(r));
+            let (lam, vectors) = select(&lambda, &x, &below[..self.nm.min(below.len())]);
+            let verified = verify_with_backward_errors(k, m, &lam, vectors.as_ref(), u);
+            let worst = verified.0.iter().fold(0.0f64, |a, &r| a.max(r));
             if worst > RESIDUAL_FALLBACK && steps < 3 {
                 log::debug!("after {steps} refinement step(s): largest relative residual {worst:.1e}, refining again");
-                applications += x.ncols();
-                (lambda, x) = refine(k, m, &fa, &x)?;
+                self.applications += x.ncols();
+                (lambda, x) = refine(k, m, self.fa, &x)?;
                 steps += 1;
                 continue;
             }
-            let time_iterate = ti.elapsed().as_secs_f64() - tv.elapsed().as_secs_f64();
-            log::info!(
-                "Sturm check: {count} eigenvalues below {u:.6e} rad²/s², {} found ({steps} refinement step{})",
-                below.len(),
-                if steps == 1 { "" } else { "s" }
-            );
-            if worst > RESIDUAL_FALLBACK {
-                log::info!(
-                    "one-factorisation solve: largest relative residual {worst:.1e} (above {RESIDUAL_FALLBACK:.0e}): solving again from the default shift"
-                );
-                return Ok(None);
-            }
-            return Ok(Some(EigenSolution {
+            return Ok(Purified::Done(Purification {
                 lambda: lam,
                 vectors,
-                rel_residual,
-                backward_error,
-                notes: notes.to_vec(),
-                m_orthonormality: m_orth,
-                // Below −∞ there is nothing: the count at U alone is the whole check.
-                sturm: SturmCheck {
-                    lower: (f64::NEG_INFINITY, 0),
-                    upper: (u, count),
-                    expected: count,
-                    found: below.len(),
-                    complete: below.len() == count,
-                },
-                shift: u,
-                applications,
-                factorizations: *est.factorizations,
-                time_factor,
-                time_iterate,
-                time_verify: tv.elapsed().as_secs_f64(),
-                factor_backward_error: fa.probe_residual,
-                memory: *est.memory,
+                verified,
+                found: below.len(),
+                steps,
+                worst,
+                tv,
             }));
         }
     }
@@ -1523,7 +1873,9 @@ impl Lanczos {
         }
     }
 
-    /// The iteration proper, from the current state.
+    /// The iteration proper, from the current state: block steps, each followed by a
+    /// Rayleigh–Ritz step and its residual estimates, until the wanted pairs converge
+    /// ([`Lanczos::converged_pairs`]), with a thick restart whenever the basis is full.
     fn iterate(
         &mut self,
         p: &EigenParams,
@@ -1533,114 +1885,34 @@ impl Lanczos {
         apps: &mut usize,
     ) -> Result<Option<(Vec<f64>, Mat<f64>)>> {
         let n = self.n;
-        let b = self.b;
         loop {
             let blk = self.cur;
-            let mut tick = Instant::now();
-            let mut lap = |times: &mut [f64; 5], k: usize| {
-                let now = Instant::now();
-                times[k] += (now - tick).as_secs_f64();
-                tick = now;
-            };
-            // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
-            let mut w = std::mem::replace(&mut self.m_next, Mat::zeros(0, 0));
-            fa.solve_in_place(w.as_mut());
-            *apps += b;
-            lap(&mut self.times, 0);
-            let mut mw = std::mem::replace(&mut self.spare, Mat::zeros(0, 0));
-            if mw.nrows() != n || mw.ncols() != b {
-                mw = Mat::zeros(n, b);
-            }
-            m.mul_block(w.as_ref(), mw.as_mut());
-            lap(&mut self.times, 1);
-            let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
-            let coef = self.orthogonalise(&mut w, &mut mw, m, blk + b);
-            // Column block `blk` of T: rows 0..blk+b.
-            self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
-            lap(&mut self.times, 2);
-            let r = self.normalise(&mut w, &mut mw, m, blk + b, scale2);
-            lap(&mut self.times, 3);
-            self.cur = blk + b;
-            // The new block goes after the basis; R is T's subdiagonal block.
+            let mut lap = Lap(Instant::now());
+            let r = self.block_step(fa, m, apps, &mut lap)?;
             let nb = self.cur;
-            if nb + b > self.v.ncols() {
-                return Err(Error::EigenNotConverged("internal basis overflow".into()));
-            }
-            self.v.get_mut(.., nb..nb + b).copy_from(&w);
-            self.m_next = mw;
-            self.spare = w;
-            self.t.get_mut(nb..nb + b, blk..blk + b).copy_from(&r);
-            self.t.get_mut(blk..blk + b, nb..nb + b).copy_from(r.transpose());
-
             // Rayleigh–Ritz and residual estimates ‖R·E_lastᵀ·y‖.
             let (theta, y) = self.ritz();
             self.last_theta = theta.clone();
             let c = self.cur;
             let nw = self.want.min(c);
-            let mut resid = vec![0.0; c];
-            for k in 0..c {
-                let mut s2 = 0.0;
-                for i in 0..b {
-                    let mut s = 0.0;
-                    for j in 0..b {
-                        s += r[(i, j)] * y[(blk + j, k)];
-                    }
-                    s2 += s * s;
-                }
-                resid[k] = s2.sqrt();
-            }
+            let resid = residual_estimates(&r, &y, blk, c);
             let converged = |k: usize| resid[k] <= p.tol * theta[k].abs().max(f64::MIN_POSITIVE);
             let all_wanted = c >= self.want && (0..nw).all(|k| converged(k) && self.side.wants(theta[k]));
             // Everything there is to find has been found (tiny problems).
             let exhausted = c >= n;
+            let ritz = RitzStep {
+                theta: &theta,
+                y: &y,
+                r: &r,
+                blk,
+                nb,
+            };
             if all_wanted || exhausted {
                 // Take every converged pair (wanted ones first) so that clusters straddling
                 // the cut are complete.
                 let mut take: Vec<usize> = (0..c).filter(|&k| converged(k) || (exhausted && k < nw)).collect();
                 take.retain(|&k| self.side.wants(theta[k]));
-                let mut lam = Vec::with_capacity(take.len());
-                let yk = Mat::from_fn(c, take.len(), |i, j| y[(i, take[j])]);
-                // The Ritz vectors in place of the basis: it is spent (every caller releases
-                // it next).
-                tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
-                self.peak_bytes.set(self.peak_bytes());
-                let x = self.v.get(.., 0..take.len()).to_owned();
-                // Op·X = X·Θ + W·R·Y_last, with the next block W still after the basis columns
-                // (the in-place combination wrote only the first ones). W is copied out and the
-                // basis freed before the image is formed: it is not at the memory peak.
-                let next = self.keep_image.then(|| self.v.get(.., nb..nb + b).to_owned());
-                self.release();
-                let image = next.map(|next| {
-                    let mut rs = Mat::zeros(b, take.len());
-                    matmul(
-                        rs.as_mut(),
-                        Accum::Replace,
-                        r.as_ref(),
-                        yk.get(blk..blk + b, ..),
-                        1.0,
-                        Par::Seq,
-                    );
-                    let mut image = Mat::zeros(n, take.len());
-                    tall::mul(image.as_mut(), Accum::Replace, next.as_ref(), rs.as_ref(), 1.0);
-                    let th: Vec<f64> = take.iter().map(|&k| theta[k]).collect();
-                    tall::add_scaled_columns(image.as_mut(), x.as_ref(), &th);
-                    image
-                });
-                self.image = image;
-                for &k in &take {
-                    lam.push(sigma + 1.0 / theta[k]);
-                }
-                lap(&mut self.times, 4);
-                let t = self.times;
-                log::debug!(
-                    "Lanczos: solves {:.3} s, M products {:.3} s, orthogonalisation {:.3} s, normalisation {:.3} s, Rayleigh–Ritz and restarts {:.3} s",
-                    t[0],
-                    t[1],
-                    t[2],
-                    t[3],
-                    t[4]
-                );
-                return Ok(Some((lam, x)));
+                return Ok(Some(self.converged_pairs(&ritz, &take, sigma, &mut lap)));
             }
             if *apps > p.max_applications {
                 let nconv = (0..nw).filter(|&k| converged(k)).count();
@@ -1649,35 +1921,10 @@ impl Lanczos {
                     self.want, *apps, p.tol
                 )));
             }
-            if self.cur + b > self.m_max {
-                // Thick restart: keep the best Ritz vectors, continue from the last block.
-                let keep = (self.want + b).min(c.saturating_sub(b)).max(1);
-                let yk = y.get(.., 0..keep).to_owned();
-                // R·E_lastᵀ·Y: coupling of the kept Ritz vectors to the next block.
-                let mut coup = Mat::zeros(b, keep);
-                matmul(
-                    coup.as_mut(),
-                    Accum::Replace,
-                    r.as_ref(),
-                    yk.get(blk..blk + b, ..),
-                    1.0,
-                    Par::Seq,
-                );
-                // In place (no copies of the basis at the memory peak): the Ritz vectors into
-                // the first columns, then the next block after them (keep + b ≤ c = nb).
-                // The next block's M-image moves along with it.
-                tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
-                let (head, tail) = self.v.as_mut().split_at_col_mut(nb);
-                head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
-                self.t.fill(0.0);
-                for k in 0..keep {
-                    self.t[(k, k)] = theta[k];
-                }
-                self.t.get_mut(keep..keep + b, 0..keep).copy_from(&coup);
-                self.t.get_mut(0..keep, keep..keep + b).copy_from(coup.transpose());
-                self.cur = keep;
+            if self.cur + self.b > self.m_max {
+                self.thick_restart(&ritz);
             }
-            lap(&mut self.times, 4);
+            lap.lap(&mut self.times, 4);
             if let Some(left) = self.pause_after {
                 if left <= 1 {
                     self.pause_after = None;
@@ -1686,6 +1933,129 @@ impl Lanczos {
                 self.pause_after = Some(left - 1);
             }
         }
+    }
+
+    /// One block step: Op applied to the next block, M-orthogonalised against the basis (its
+    /// coefficients are the block's column of T) and M-orthonormalised; the new block goes
+    /// after the basis. Returns R, T's subdiagonal block (W_old = W_new·R).
+    fn block_step(&mut self, fa: &Factor, m: &SymMatrix, apps: &mut usize, lap: &mut Lap) -> Result<Mat<f64>> {
+        let (n, b, blk) = (self.n, self.b, self.cur);
+        // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
+        let mut w = std::mem::replace(&mut self.m_next, Mat::zeros(0, 0));
+        fa.solve_in_place(w.as_mut());
+        *apps += b;
+        lap.lap(&mut self.times, 0);
+        let mut mw = std::mem::replace(&mut self.spare, Mat::zeros(0, 0));
+        if mw.nrows() != n || mw.ncols() != b {
+            mw = Mat::zeros(n, b);
+        }
+        m.mul_block(w.as_ref(), mw.as_mut());
+        lap.lap(&mut self.times, 1);
+        let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
+        let coef = self.orthogonalise(&mut w, &mut mw, m, blk + b);
+        // Column block `blk` of T: rows 0..blk+b.
+        self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
+        lap.lap(&mut self.times, 2);
+        let r = self.normalise(&mut w, &mut mw, m, blk + b, scale2);
+        lap.lap(&mut self.times, 3);
+        self.cur = blk + b;
+        // The new block goes after the basis; R is T's subdiagonal block.
+        let nb = self.cur;
+        if nb + b > self.v.ncols() {
+            return Err(Error::EigenNotConverged("internal basis overflow".into()));
+        }
+        self.v.get_mut(.., nb..nb + b).copy_from(&w);
+        self.m_next = mw;
+        self.spare = w;
+        self.t.get_mut(nb..nb + b, blk..blk + b).copy_from(&r);
+        self.t.get_mut(blk..blk + b, nb..nb + b).copy_from(r.transpose());
+        Ok(r)
+    }
+
+    /// The converged pairs `take` of a Ritz step, (λ, X), with the Ritz vectors formed in place
+    /// of the basis (it is spent: every caller releases it next), and their image
+    /// [`Lanczos::image`] when it is kept.
+    fn converged_pairs(
+        &mut self,
+        ritz: &RitzStep<'_>,
+        take: &[usize],
+        sigma: f64,
+        lap: &mut Lap,
+    ) -> (Vec<f64>, Mat<f64>) {
+        let (n, b) = (self.n, self.b);
+        let (c, blk, nb) = (self.cur, ritz.blk, ritz.nb);
+        let mut lam = Vec::with_capacity(take.len());
+        let yk = Mat::from_fn(c, take.len(), |i, j| ritz.y[(i, take[j])]);
+        // The Ritz vectors in place of the basis: it is spent (every caller releases it next).
+        tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
+        self.peak_bytes.set(self.peak_bytes());
+        let x = self.v.get(.., 0..take.len()).to_owned();
+        // Op·X = X·Θ + W·R·Y_last, with the next block W still after the basis columns (the
+        // in-place combination wrote only the first ones). W is copied out and the basis freed
+        // before the image is formed: it is not at the memory peak.
+        let next = self.keep_image.then(|| self.v.get(.., nb..nb + b).to_owned());
+        self.release();
+        let image = next.map(|next| {
+            let mut rs = Mat::zeros(b, take.len());
+            matmul(
+                rs.as_mut(),
+                Accum::Replace,
+                ritz.r.as_ref(),
+                yk.get(blk..blk + b, ..),
+                1.0,
+                Par::Seq,
+            );
+            let mut image = Mat::zeros(n, take.len());
+            tall::mul(image.as_mut(), Accum::Replace, next.as_ref(), rs.as_ref(), 1.0);
+            let th: Vec<f64> = take.iter().map(|&k| ritz.theta[k]).collect();
+            tall::add_scaled_columns(image.as_mut(), x.as_ref(), &th);
+            image
+        });
+        self.image = image;
+        for &k in take {
+            lam.push(sigma + 1.0 / ritz.theta[k]);
+        }
+        lap.lap(&mut self.times, 4);
+        let t = self.times;
+        log::debug!(
+            "Lanczos: solves {:.3} s, M products {:.3} s, orthogonalisation {:.3} s, normalisation {:.3} s, Rayleigh–Ritz and restarts {:.3} s",
+            t[0],
+            t[1],
+            t[2],
+            t[3],
+            t[4]
+        );
+        (lam, x)
+    }
+
+    /// Thick restart: keep the best Ritz vectors, continue from the last block.
+    fn thick_restart(&mut self, ritz: &RitzStep<'_>) {
+        let (b, c, blk, nb) = (self.b, self.cur, ritz.blk, ritz.nb);
+        let keep = (self.want + b).min(c.saturating_sub(b)).max(1);
+        let yk = ritz.y.get(.., 0..keep).to_owned();
+        // R·E_lastᵀ·Y: coupling of the kept Ritz vectors to the next block.
+        let mut coup = Mat::zeros(b, keep);
+        matmul(
+            coup.as_mut(),
+            Accum::Replace,
+            ritz.r.as_ref(),
+            yk.get(blk..blk + b, ..),
+            1.0,
+            Par::Seq,
+        );
+        // In place (no copies of the basis at the memory peak): the Ritz vectors into the first
+        // columns, then the next block after them (keep + b ≤ c = nb). The next block's
+        // M-image moves along with it.
+        tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
+        let (head, tail) = self.v.as_mut().split_at_col_mut(nb);
+        head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
+        self.t.fill(0.0);
+        for k in 0..keep {
+            self.t[(k, k)] = ritz.theta[k];
+        }
+        self.t.get_mut(keep..keep + b, 0..keep).copy_from(&coup);
+        self.t.get_mut(0..keep, keep..keep + b).copy_from(coup.transpose());
+        self.cur = keep;
     }
 
     /// Smallest eigenvalue estimate above `lam` among the last Ritz values.
@@ -1697,6 +2067,47 @@ impl Lanczos {
             .filter(|&l| l > lam * (1.0 + 1e-9) + 1e-300)
             .min_by(f64::total_cmp)
     }
+}
+
+/// One Rayleigh–Ritz step of [`Lanczos::iterate`]: Ritz values θ and vectors Y of T (wanted
+/// first), R (T's last subdiagonal block), and where the last block (`blk`) and the next one
+/// (`nb`) start in the basis.
+struct RitzStep<'a> {
+    theta: &'a [f64],
+    y: &'a Mat<f64>,
+    r: &'a Mat<f64>,
+    blk: usize,
+    nb: usize,
+}
+
+/// Times the phases of the iteration: each lap adds the time since the last one to a phase.
+struct Lap(Instant);
+
+impl Lap {
+    fn lap(&mut self, times: &mut [f64; 5], k: usize) {
+        let now = Instant::now();
+        times[k] += (now - self.0).as_secs_f64();
+        self.0 = now;
+    }
+}
+
+/// Residual estimates ‖R·E_lastᵀ·y_k‖ of the Ritz vectors y_k, k < `c`, whose last block of
+/// rows starts at `blk`.
+fn residual_estimates(r: &Mat<f64>, y: &Mat<f64>, blk: usize, c: usize) -> Vec<f64> {
+    let b = r.nrows();
+    let mut resid = vec![0.0; c];
+    for k in 0..c {
+        let mut s2 = 0.0;
+        for i in 0..b {
+            let mut s = 0.0;
+            for j in 0..b {
+                s += r[(i, j)] * y[(blk + j, k)];
+            }
+            s2 += s * s;
+        }
+        resid[k] = s2.sqrt();
+    }
+    resid
 }
 
 /// Convenience for tests: a view of column `j` as a slice-backed vector.

@@ -28,3 +28,4 @@ mod solver;
 mod statics;
 mod stress;
 mod structural_elements;
+mod sturm_clusters;
