@@ -1024,7 +1024,7 @@ fn solve_below_bound(
     };
     // The coarse model's matrices and factor are freed: give the memory back before the
     // model's factor is allocated.
-    crate::system::release_free_memory();
+    crate::util::memory::release_free_memory();
     if lc.len() <= nm || !(lc[nm] > 0.0) {
         return Ok(None);
     }
@@ -1262,13 +1262,13 @@ impl BelowBound<'_> {
         self.memory.solve_workspace = self.memory.solve_workspace.max(fa.workspace_bytes() as u64);
         log::debug!(
             "Lanczos done: resident {} MiB, peak so far {} MiB",
-            crate::system::resident_memory().unwrap_or(0) >> 20,
-            crate::system::peak_memory().unwrap_or(0) >> 20
+            crate::util::memory::resident_memory().unwrap_or(0) >> 20,
+            crate::util::memory::peak_memory().unwrap_or(0) >> 20
         );
         lz.release();
         // The iteration's freed blocks stay in the allocator's heaps (~40 MiB at 119k DOFs):
         // give them back before the refinement allocates its own.
-        crate::system::release_free_memory();
+        crate::util::memory::release_free_memory();
         log::info!(
             "Lanczos: {} pairs below U converged after {} operator applications",
             l.len(),
