@@ -12,7 +12,7 @@ pub mod dynamics;
 pub mod export;
 pub mod harmonic;
 pub mod machine3d;
-pub mod machines_cli;
+pub mod machines;
 pub mod report;
 pub mod scene;
 pub mod slepc;

@@ -30,7 +30,10 @@ const F_PAPER: f64 = 1256.0; // harmonic force amplitude, N (paper §18)
 
 fn assert_invalid<T: std::fmt::Debug>(r: vibrofem::Result<T>, needle: &str) {
     match r {
-        Err(Error::InvalidInput(msg)) => assert!(msg.contains(needle), "message {msg:?} should mention {needle:?}"),
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(msg.contains(needle), "message {msg:?} should mention {needle:?}")
+        }
         other => panic!("expected InvalidInput mentioning {needle:?}, got {other:?}"),
     }
 }

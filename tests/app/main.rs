@@ -13,6 +13,7 @@ mod dynamics;
 mod export_engine;
 mod harmonic;
 mod machine3d;
+mod machine_inputs;
 mod machines;
 mod numerics_15;
 mod scenes;
