@@ -2,6 +2,8 @@
 //!
 //! - [`dynamics`]: the lumped two-mass machine (paper §5–§8), electromagnet, transient, plots.
 //! - [`design`]: the design chain built on the core.
+//! - [`machines`]: the seed machines (crank drive, autobalancer, balancer data), one shape each, and
+//!   their registry.
 //! - [`studies`]: scene files and their runs, batch runs and merges, sweeps, convergence studies.
 //! - [`report`], [`cli`]: the report model and its renderers, clap options.
 //! - [`toml_file`]: the one reader of vibrofem's TOML input files (lines, keys, typed errors).
@@ -11,7 +13,7 @@ pub mod design;
 pub mod dynamics;
 pub mod export;
 pub mod harmonic;
-pub mod machines_cli;
+pub mod machines;
 pub mod report;
 pub mod slepc;
 pub mod studies;

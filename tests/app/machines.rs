@@ -8,19 +8,20 @@
 use std::f64::consts::{PI, TAU};
 
 use crate::common::{bin, rel};
-use vibrofem::Error;
-use vibrofem::app::dynamics::autobalancer::{
-    self, BALANCED_RESIDUAL, Cutting, Grinder, SimOptions, SpeedProfile, mean_projection, mean_projection_numeric,
+use vibrofem::app::machines::autobalancer::model::{
+    self as autobalancer, BALANCED_RESIDUAL, Cutting, Grinder, SimOptions, SpeedProfile, mean_projection,
+    mean_projection_numeric,
 };
-use vibrofem::app::dynamics::balancer_data::{self, correction_cut, efficiency, parse_csv, reduce, sensitivity};
-use vibrofem::app::dynamics::crank::{
-    self, CrankDrive, Mechanism, Metrics, MotorLaw, PAPER_TABLE1, RunUpOptions, Startup, SteadyOptions,
+use vibrofem::app::machines::balancer_data::{self, correction_cut, efficiency, parse_csv, reduce, sensitivity};
+use vibrofem::app::machines::crank::model::{
+    self as crank, CrankDrive, Mechanism, Metrics, MotorLaw, PAPER_TABLE1, RunUpOptions, Startup, SteadyOptions,
 };
-use vibrofem::app::dynamics::machine_files::{AutobalancerCase, CrankCase};
+use vibrofem::app::machines::{autobalancer::AutobalancerCase, crank::CrankCase};
 
 fn assert_invalid<T: std::fmt::Debug>(r: vibrofem::Result<T>, needles: &[&str]) {
     match r {
-        Err(Error::InvalidInput(msg)) => {
+        Err(e) => {
+            let msg = e.to_string();
             for n in needles {
                 assert!(msg.contains(n), "message {msg:?} should mention {n:?}");
             }
@@ -277,7 +278,7 @@ fn builtin_crank_file_is_the_paper_drive() {
 /// Bad crank files: each error names the file, the line and the key.
 #[test]
 fn crank_file_errors_name_file_line_and_key() {
-    let good = vibrofem::app::dynamics::machine_files::CRANK_DEFAULT_TOML;
+    let good = vibrofem::app::machines::crank::CRANK_DEFAULT_TOML;
     let line_of = |text: &str, needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
     // Unknown key.
     let t = good.replace("gravity = 9.81", "gravity = 9.81\ncrank_mass = 3.0");
@@ -530,7 +531,7 @@ fn builtin_autobalancer_file_is_the_plausible_grinder() {
 /// Bad autobalancer files name the file, line and key.
 #[test]
 fn autobalancer_file_errors_name_file_line_and_key() {
-    let good = vibrofem::app::dynamics::machine_files::AUTOBALANCER_DEFAULT_TOML;
+    let good = vibrofem::app::machines::autobalancer::AUTOBALANCER_DEFAULT_TOML;
     let line_of = |text: &str, needle: &str| text.lines().position(|l| l.contains(needle)).unwrap() + 1;
     let t = good.replacen("drag = 0.1 ", "drag = -0.1 ", 1);
     let l = line_of(&t, "drag = -0.1");
@@ -564,8 +565,8 @@ fn paper_efficiency_and_sensitivity() {
     assert!((efficiency(7.0, 4.41) - 0.37).abs() < 1e-15);
     assert!((sensitivity(1.0, 6.0) - 1.0 / 6.0).abs() < 1e-16);
     assert_eq!(format!("{:.1}", 100.0 * sensitivity(1.0, 6.0)), "16.7");
-    let text = vibrofem::app::machines_cli::BALANCER_DATA_DEFAULT_CSV;
-    let r = vibrofem::app::machines_cli::balancer_data_analysis("builtin", text, None).unwrap();
+    let text = vibrofem::app::machines::balancer_data::BALANCER_DATA_DEFAULT_CSV;
+    let r = vibrofem::app::machines::balancer_data::balancer_data_analysis("builtin", text, None).unwrap();
     let e = &r.reduction.efficiency[0];
     assert_eq!((e.a_max, e.a), (7.0, 4.41));
     assert!((e.efficiency - 0.37).abs() < 1e-15);
@@ -714,7 +715,7 @@ fn command_exit_codes() {
     let dir = tmpdir("codes");
     std::fs::create_dir_all(&dir).unwrap();
     let bad = dir.join("bad.toml");
-    let good = vibrofem::app::dynamics::machine_files::CRANK_DEFAULT_TOML;
+    let good = vibrofem::app::machines::crank::CRANK_DEFAULT_TOML;
     std::fs::write(&bad, good.replace("rod_length = 0.8 ", "rod_length = 0.1 ")).unwrap();
     let o = bin()
         .args([

@@ -14,6 +14,7 @@ mod dynamics;
 mod export_engine;
 mod harmonic;
 mod machine3d;
+mod machine_inputs;
 mod machines;
 mod mesh_files;
 mod model_options;

@@ -97,15 +97,10 @@ pub enum Cmd {
     Converge(ConvergeArgs),
     /// Join the summaries of batch shard folders into one.
     Merge(MergeArgs),
-    /// Crank–slider drives (roller-forming machine): reduced inertia, Kloss motor, motion
-    /// non-uniformity; built-in paper drive when no file is given.
-    CrankDrive(crate::app::machines_cli::CrankDriveArgs),
-    /// Ball autobalancer of a grinder on a rocker: criterion, speed sweep, run-up; built-in grinder
-    /// when no file is given.
-    Autobalancer(crate::app::machines_cli::AutobalancerArgs),
-    /// Autobalancer test-stand data reduction (correction cut, imbalance scatter, sensitivity,
-    /// efficiency) from a CSV file; built-in example when no file is given.
-    BalancerData(crate::app::machines_cli::BalancerDataArgs),
+    /// The machines of the registry (`crank-drive`, `autobalancer`, `balancer-data`), one
+    /// subcommand each.
+    #[command(flatten)]
+    Machine(crate::app::machines::MachineCommand),
 }
 
 /// Refuse, before any work, output files and folders that cannot be written (named, exit 1).
@@ -191,9 +186,7 @@ pub fn main() -> ExitCode {
         Cmd::Sweep(a) => studies::sweep_cmd(a),
         Cmd::Converge(a) => studies::converge_cmd(a),
         Cmd::Merge(a) => studies::merge_cmd(a),
-        Cmd::CrankDrive(a) => crate::app::machines_cli::run_crank_drive(a),
-        Cmd::Autobalancer(a) => crate::app::machines_cli::run_autobalancer(a),
-        Cmd::BalancerData(a) => crate::app::machines_cli::run_balancer_data(a),
+        Cmd::Machine(m) => m.run(),
     };
     match r {
         Ok(code) => ExitCode::from(code as u8),

@@ -12,6 +12,7 @@
 //!   with the Dormand–Prince 5(4) integrator of [`ode`]; steady amplitude, offset and settling time.
 //! - [`isolation`]: isolator stiffness from the isolation frequency, transmissibility, coil springs.
 //! - [`plot`]: SVG figures.
+//! - [`ode`]: the Dormand–Prince 5(4) integrator shared with the machines ([`crate::app::machines`]).
 //!
 //! Units are SI throughout: kg, m, s, N, N/m, N·s/m, rad/s (angular frequencies) and Hz (where
 //! named `_hz`). Bad input gives [`crate::Error::param`] naming the parameter; nothing panics.
@@ -19,13 +20,8 @@
 //! Which mass carries the isolators is in doubt in the paper (printed k-terms against eq. (1)):
 //! see [`KTerms`].
 
-pub mod autobalancer;
-pub mod balancer_data;
-pub mod crank;
 pub mod electromagnet;
 pub mod isolation;
-pub mod machine_files;
-pub mod machine_plot;
 pub mod ode;
 pub mod plot;
 pub mod transient;

@@ -126,36 +126,65 @@ const FAC_MAX: f64 = 10.0;
 const BETA: f64 = 0.04;
 
 fn check_options(o: &Dopri5Options) -> Result<()> {
+    let bad = |name: &str, msg: String| Err(Error::param(name, format!("ode: {msg}")));
     if !(o.rtol.is_finite() && o.rtol > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "ode: rtol must be finite and > 0, got {}",
-            o.rtol
-        )));
+        return bad("rtol", format!("rtol must be finite and > 0, got {}", o.rtol));
     }
     if !(o.atol.is_finite() && o.atol > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "ode: atol must be finite and > 0, got {}",
-            o.atol
-        )));
+        return bad("atol", format!("atol must be finite and > 0, got {}", o.atol));
     }
     if o.rtol < 1e-14 {
-        return Err(Error::InvalidInput(format!(
-            "ode: rtol = {:e} is below what double precision can deliver (use ≥ 1e-14)",
-            o.rtol
-        )));
+        return bad(
+            "rtol",
+            format!(
+                "rtol = {:e} is below what double precision can deliver (use ≥ 1e-14)",
+                o.rtol
+            ),
+        );
     }
     if o.h_max.is_nan() || o.h_max <= 0.0 {
-        return Err(Error::InvalidInput(format!("ode: h_max must be > 0, got {}", o.h_max)));
+        return bad("h_max", format!("h_max must be > 0, got {}", o.h_max));
     }
     if let Some(h) = o.h_init
         && !(h.is_finite() && h > 0.0)
     {
-        return Err(Error::InvalidInput(format!(
-            "ode: h_init must be finite and > 0, got {h}"
-        )));
+        return bad("h_init", format!("h_init must be finite and > 0, got {h}"));
     }
     if o.max_steps == 0 {
-        return Err(Error::InvalidInput("ode: max_steps must be > 0".into()));
+        return bad("max_steps", "max_steps must be > 0".into());
+    }
+    Ok(())
+}
+
+/// The start, the initial state and the output times: finite, output times ascending from t0.
+fn check_inputs(t0: f64, y0: &[f64], t_out: &[f64]) -> Result<()> {
+    let bad = |name: &str, msg: String| Err(Error::param(name, format!("ode: {msg}")));
+    if y0.is_empty() {
+        return bad("y0", "empty state vector".into());
+    }
+    if !t0.is_finite() {
+        return bad("t0", format!("t0 must be finite, got {t0}"));
+    }
+    if y0.iter().any(|v| !v.is_finite()) {
+        return bad("y0", "initial state has a non-finite component".into());
+    }
+    if t_out.is_empty() {
+        return bad("t_out", "no output times".into());
+    }
+    for w in t_out.windows(2) {
+        if w[0].is_nan() || w[1].is_nan() || w[1] < w[0] {
+            return bad("t_out", "output times must be ascending".into());
+        }
+    }
+    if t_out[0].is_nan() || t_out[0] < t0 || !t_out[t_out.len() - 1].is_finite() {
+        return bad(
+            "t_out",
+            format!(
+                "output times must be finite and ≥ t0 = {t0} (first {}, last {})",
+                t_out[0],
+                t_out[t_out.len() - 1]
+            ),
+        );
     }
     Ok(())
 }
@@ -173,14 +202,122 @@ fn err_norm(err: &[f64], y0: &[f64], y1: &[f64], o: &Dopri5Options) -> f64 {
     (s / n).sqrt()
 }
 
+/// The work arrays of one Dormand–Prince step: the seven stages, the new state, the error
+/// estimate and the dense-output coefficients of the last accepted step.
+struct Stages {
+    k: Vec<Vec<f64>>,
+    ytmp: Vec<f64>,
+    ynew: Vec<f64>,
+    err: Vec<f64>,
+    rcont: Vec<Vec<f64>>,
+}
+
+impl Stages {
+    fn new(n: usize) -> Self {
+        Stages {
+            k: vec![vec![0.0; n]; 7],
+            ytmp: vec![0.0; n],
+            ynew: vec![0.0; n],
+            err: vec![0.0; n],
+            rcont: vec![vec![0.0; n]; 5],
+        }
+    }
+
+    /// One step of size `h` from (t, y) (`k[0]` = y'(t)): the stages, `ynew` at `t_new` (its
+    /// derivative in `k[6]`) and the local error estimate in `err`.
+    fn step<F>(&mut self, rhs: &mut F, t: f64, y: &[f64], h: f64, t_new: f64)
+    where
+        F: FnMut(f64, &[f64], &mut [f64]),
+    {
+        let n = y.len();
+        let Stages { k, ytmp, ynew, err, .. } = self;
+        for i in 0..n {
+            ytmp[i] = y[i] + h * A21 * k[0][i];
+        }
+        rhs(t + C2 * h, ytmp, &mut k[1]);
+        for i in 0..n {
+            ytmp[i] = y[i] + h * (A31 * k[0][i] + A32 * k[1][i]);
+        }
+        rhs(t + C3 * h, ytmp, &mut k[2]);
+        for i in 0..n {
+            ytmp[i] = y[i] + h * (A41 * k[0][i] + A42 * k[1][i] + A43 * k[2][i]);
+        }
+        rhs(t + C4 * h, ytmp, &mut k[3]);
+        for i in 0..n {
+            ytmp[i] = y[i] + h * (A51 * k[0][i] + A52 * k[1][i] + A53 * k[2][i] + A54 * k[3][i]);
+        }
+        rhs(t + C5 * h, ytmp, &mut k[4]);
+        for i in 0..n {
+            ytmp[i] = y[i] + h * (A61 * k[0][i] + A62 * k[1][i] + A63 * k[2][i] + A64 * k[3][i] + A65 * k[4][i]);
+        }
+        rhs(t + h, ytmp, &mut k[5]);
+        for i in 0..n {
+            ynew[i] = y[i] + h * (A71 * k[0][i] + A73 * k[2][i] + A74 * k[3][i] + A75 * k[4][i] + A76 * k[5][i]);
+        }
+        rhs(t_new, ynew, &mut k[6]);
+        for i in 0..n {
+            err[i] = h * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i]);
+        }
+    }
+
+    /// The dense-output coefficients of the accepted step of size `h` from `y` to `ynew`.
+    fn dense(&mut self, y: &[f64], h: f64) {
+        let Stages { k, ynew, rcont, .. } = self;
+        for i in 0..y.len() {
+            let ydiff = ynew[i] - y[i];
+            let bspl = h * k[0][i] - ydiff;
+            rcont[0][i] = y[i];
+            rcont[1][i] = ydiff;
+            rcont[2][i] = bspl;
+            rcont[3][i] = ydiff - h * k[6][i] - bspl;
+            rcont[4][i] = h * (D1 * k[0][i] + D3 * k[2][i] + D4 * k[3][i] + D5 * k[4][i] + D6 * k[5][i] + D7 * k[6][i]);
+        }
+    }
+
+    /// The state at fraction `th` ∈ [0, 1] of the last accepted step.
+    fn at(&self, th: f64) -> Vec<f64> {
+        let r = &self.rcont;
+        let th1 = 1.0 - th;
+        (0..r[0].len())
+            .map(|i| r[0][i] + th * (r[1][i] + th1 * (r[2][i] + th * (r[3][i] + th1 * r[4][i]))))
+            .collect()
+    }
+}
+
+/// The segment ends: the breakpoints strictly inside (t0, t_end), sorted, then t_end.
+fn segment_ends(breakpoints: &[f64], t0: f64, t_end: f64) -> Vec<f64> {
+    let mut segs: Vec<f64> = breakpoints
+        .iter()
+        .copied()
+        .filter(|b| b.is_finite() && *b > t0 && *b < t_end)
+        .collect();
+    segs.sort_by(f64::total_cmp);
+    segs.dedup();
+    segs.push(t_end);
+    segs
+}
+
+/// The integration state carried across segments.
+struct Run<'a> {
+    t: f64,
+    y: Vec<f64>,
+    h_prev: Option<f64>,
+    stats: OdeStats,
+    t_out: &'a [f64],
+    out_y: Vec<Vec<f64>>,
+    next_out: usize,
+    s: Stages,
+}
+
 /// Integrates `y' = f(t, y)` from `t0` with `y(t0) = y0` to the last output time, and returns the
 /// solution at the output times `t_out` (ascending, all ≥ `t0`).
 ///
 /// `rhs(t, y, dy)` writes the derivative into `dy`. `breakpoints` are times where the right-hand
 /// side is not smooth; no step crosses one (those outside `(t0, t_end)` are ignored; any order).
 ///
-/// Errors: invalid options or times, a non-finite derivative, the step size underflowing, or
-/// `max_steps` exceeded.
+/// Errors: invalid options or times ([`Error::param`] naming the option), a non-finite
+/// derivative, the step size underflowing, or `max_steps` exceeded (an error at the parameter
+/// `max_steps`).
 pub fn integrate<F>(
     mut rhs: F,
     t0: f64,
@@ -193,74 +330,56 @@ where
     F: FnMut(f64, &[f64], &mut [f64]),
 {
     check_options(opts)?;
-    let n = y0.len();
-    if n == 0 {
-        return Err(Error::InvalidInput("ode: empty state vector".into()));
-    }
-    if !t0.is_finite() {
-        return Err(Error::InvalidInput(format!("ode: t0 must be finite, got {t0}")));
-    }
-    if y0.iter().any(|v| !v.is_finite()) {
-        return Err(Error::InvalidInput(
-            "ode: initial state has a non-finite component".into(),
-        ));
-    }
-    if t_out.is_empty() {
-        return Err(Error::InvalidInput("ode: no output times".into()));
-    }
-    for w in t_out.windows(2) {
-        if w[0].is_nan() || w[1].is_nan() || w[1] < w[0] {
-            return Err(Error::InvalidInput("ode: output times must be ascending".into()));
-        }
-    }
-    if t_out[0].is_nan() || t_out[0] < t0 || !t_out[t_out.len() - 1].is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "ode: output times must be finite and ≥ t0 = {t0} (first {}, last {})",
-            t_out[0],
-            t_out[t_out.len() - 1]
-        )));
-    }
+    check_inputs(t0, y0, t_out)?;
     let t_end = t_out[t_out.len() - 1];
-    let mut segs: Vec<f64> = breakpoints
-        .iter()
-        .copied()
-        .filter(|b| b.is_finite() && *b > t0 && *b < t_end)
-        .collect();
-    segs.sort_by(f64::total_cmp);
-    segs.dedup();
-    segs.push(t_end);
-
-    let mut stats = OdeStats::default();
-    let mut out_y: Vec<Vec<f64>> = Vec::with_capacity(t_out.len());
-    let mut next_out = 0usize;
-    while next_out < t_out.len() && t_out[next_out] == t0 {
-        out_y.push(y0.to_vec());
-        next_out += 1;
+    let mut run = Run {
+        t: t0,
+        y: y0.to_vec(),
+        h_prev: None,
+        stats: OdeStats::default(),
+        t_out,
+        out_y: Vec::with_capacity(t_out.len()),
+        next_out: 0,
+        s: Stages::new(y0.len()),
+    };
+    while run.next_out < t_out.len() && t_out[run.next_out] == t0 {
+        run.out_y.push(y0.to_vec());
+        run.next_out += 1;
     }
-
-    let mut t = t0;
-    let mut y = y0.to_vec();
-    let mut k = vec![vec![0.0; n]; 7];
-    let mut ytmp = vec![0.0; n];
-    let mut ynew = vec![0.0; n];
-    let mut err = vec![0.0; n];
-    let mut rcont = vec![vec![0.0; n]; 5];
-    let mut h_prev: Option<f64> = None;
-
-    for &seg_end in &segs {
-        if seg_end <= t {
-            continue;
+    for seg_end in segment_ends(breakpoints, t0, t_end) {
+        if seg_end > run.t {
+            run.segment(&mut rhs, seg_end, opts)?;
         }
+    }
+    // Output times equal to t_end that were not yet produced (only possible by rounding).
+    while run.next_out < t_out.len() {
+        run.out_y.push(run.y.clone());
+        run.next_out += 1;
+    }
+    Ok(OdeSolution {
+        t: t_out.to_vec(),
+        y: run.out_y,
+        stats: run.stats,
+    })
+}
+
+impl Run<'_> {
+    /// Integrates from the current time to `seg_end` (no step crosses it), writing the output
+    /// times it passes.
+    fn segment<F>(&mut self, rhs: &mut F, seg_end: f64, opts: &Dopri5Options) -> Result<()>
+    where
+        F: FnMut(f64, &[f64], &mut [f64]),
+    {
         // Fresh derivative at the segment start (the RHS may jump at a breakpoint).
-        rhs(t, &y, &mut k[0]);
-        stats.rhs_evals += 1;
-        check_finite(&k[0], t)?;
-        let span = seg_end - t;
-        let mut h = match (opts.h_init, h_prev) {
+        rhs(self.t, &self.y, &mut self.s.k[0]);
+        self.stats.rhs_evals += 1;
+        check_finite(&self.s.k[0], self.t)?;
+        let span = seg_end - self.t;
+        let mut h = match (opts.h_init, self.h_prev) {
             (Some(h0), None) => h0,
             (_, Some(hp)) => hp,
             (None, None) => {
-                let h = initial_step(&mut rhs, t, &y, &k[0], opts, &mut stats);
+                let h = initial_step(rhs, self.t, &self.y, &self.s.k[0], opts, &mut self.stats);
                 h.min(span)
             }
         };
@@ -268,12 +387,16 @@ where
         let mut facold: f64 = 1e-4;
         let mut last_rejected = false;
         loop {
-            if stats.accepted + stats.rejected >= opts.max_steps {
-                return Err(Error::InvalidInput(format!(
-                    "ode: more than max_steps = {} steps before t = {seg_end} (stopped at t = {t}); \
-                     loosen rtol/atol or raise max_steps",
-                    opts.max_steps
-                )));
+            let t = self.t;
+            if self.stats.accepted + self.stats.rejected >= opts.max_steps {
+                return Err(Error::param(
+                    "max_steps",
+                    format!(
+                        "ode: more than max_steps = {} steps before t = {seg_end} (stopped at t = {t}); \
+                         loosen rtol/atol or raise max_steps",
+                        opts.max_steps
+                    ),
+                ));
             }
             let last = t + h >= seg_end || (seg_end - (t + h)) <= 1e-12 * seg_end.abs().max(1.0);
             let h_step = if last { seg_end - t } else { h };
@@ -282,111 +405,57 @@ where
                     "ode: step size underflow at t = {t} (h = {h_step:e}); the problem may be stiff or singular"
                 )));
             }
-            // Stages.
-            for i in 0..n {
-                ytmp[i] = y[i] + h_step * A21 * k[0][i];
-            }
-            rhs(t + C2 * h_step, &ytmp, &mut k[1]);
-            for i in 0..n {
-                ytmp[i] = y[i] + h_step * (A31 * k[0][i] + A32 * k[1][i]);
-            }
-            rhs(t + C3 * h_step, &ytmp, &mut k[2]);
-            for i in 0..n {
-                ytmp[i] = y[i] + h_step * (A41 * k[0][i] + A42 * k[1][i] + A43 * k[2][i]);
-            }
-            rhs(t + C4 * h_step, &ytmp, &mut k[3]);
-            for i in 0..n {
-                ytmp[i] = y[i] + h_step * (A51 * k[0][i] + A52 * k[1][i] + A53 * k[2][i] + A54 * k[3][i]);
-            }
-            rhs(t + C5 * h_step, &ytmp, &mut k[4]);
-            for i in 0..n {
-                ytmp[i] =
-                    y[i] + h_step * (A61 * k[0][i] + A62 * k[1][i] + A63 * k[2][i] + A64 * k[3][i] + A65 * k[4][i]);
-            }
-            rhs(t + h_step, &ytmp, &mut k[5]);
-            for i in 0..n {
-                ynew[i] =
-                    y[i] + h_step * (A71 * k[0][i] + A73 * k[2][i] + A74 * k[3][i] + A75 * k[4][i] + A76 * k[5][i]);
-            }
             let t_new = if last { seg_end } else { t + h_step };
-            rhs(t_new, &ynew, &mut k[6]);
-            stats.rhs_evals += 6;
-            for i in 0..n {
-                err[i] =
-                    h_step * (E1 * k[0][i] + E3 * k[2][i] + E4 * k[3][i] + E5 * k[4][i] + E6 * k[5][i] + E7 * k[6][i]);
-            }
-            let en = err_norm(&err, &y, &ynew, opts);
+            self.s.step(rhs, t, &self.y, h_step, t_new);
+            self.stats.rhs_evals += 6;
+            let en = err_norm(&self.s.err, &self.y, &self.s.ynew, opts);
             if !en.is_finite() {
                 // A non-finite stage: shrink hard and retry (the underflow check above ends this).
-                stats.rejected += 1;
+                self.stats.rejected += 1;
                 h = h_step * FAC_MIN;
                 last_rejected = true;
                 continue;
             }
             let fac11 = en.powf(0.2 - 0.75 * BETA);
-            if en <= 1.0 {
-                stats.accepted += 1;
-                // Dense output on [t, t_new].
-                for i in 0..n {
-                    let ydiff = ynew[i] - y[i];
-                    let bspl = h_step * k[0][i] - ydiff;
-                    rcont[0][i] = y[i];
-                    rcont[1][i] = ydiff;
-                    rcont[2][i] = bspl;
-                    rcont[3][i] = ydiff - h_step * k[6][i] - bspl;
-                    rcont[4][i] = h_step
-                        * (D1 * k[0][i] + D3 * k[2][i] + D4 * k[3][i] + D5 * k[4][i] + D6 * k[5][i] + D7 * k[6][i]);
-                }
-                while next_out < t_out.len() && t_out[next_out] <= t_new {
-                    let th = ((t_out[next_out] - t) / h_step).clamp(0.0, 1.0);
-                    let th1 = 1.0 - th;
-                    let v: Vec<f64> = (0..n)
-                        .map(|i| {
-                            rcont[0][i]
-                                + th * (rcont[1][i] + th1 * (rcont[2][i] + th * (rcont[3][i] + th1 * rcont[4][i])))
-                        })
-                        .collect();
-                    out_y.push(v);
-                    next_out += 1;
-                }
-                // PI controller: h_new = h·SAFE/(err^(0.2−0.75β)·err_prev^(−β)), ratio bounded.
-                let mut fac = fac11 / facold.powf(BETA);
-                facold = en.max(1e-4);
-                fac = (fac / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                let mut h_next = h_step / fac;
-                if last_rejected {
-                    h_next = h_next.min(h_step);
-                }
-                last_rejected = false;
-                y.copy_from_slice(&ynew);
-                k.swap(0, 6); // FSAL: the last stage is the next step's first.
-                check_finite(&k[0], t_new)?;
-                t = t_new;
-                h = h_next.min(opts.h_max);
-                if !last {
-                    h_prev = Some(h);
-                }
-                if last {
-                    break;
-                }
-                h = h.min(seg_end - t);
-            } else {
-                stats.rejected += 1;
+            if en > 1.0 {
+                self.stats.rejected += 1;
                 h = h_step / (fac11 / SAFE).min(1.0 / FAC_MIN);
                 last_rejected = true;
+                continue;
             }
+            self.stats.accepted += 1;
+            self.s.dense(&self.y, h_step);
+            self.write_outputs(t, t_new, h_step);
+            // PI controller: h_new = h·SAFE/(err^(0.2−0.75β)·err_prev^(−β)), ratio bounded.
+            let mut fac = fac11 / facold.powf(BETA);
+            facold = en.max(1e-4);
+            fac = (fac / SAFE).clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+            let mut h_next = h_step / fac;
+            if last_rejected {
+                h_next = h_next.min(h_step);
+            }
+            last_rejected = false;
+            self.y.copy_from_slice(&self.s.ynew);
+            self.s.k.swap(0, 6); // FSAL: the last stage is the next step's first.
+            check_finite(&self.s.k[0], t_new)?;
+            self.t = t_new;
+            h = h_next.min(opts.h_max);
+            if last {
+                return Ok(());
+            }
+            self.h_prev = Some(h);
+            h = h.min(seg_end - self.t);
         }
     }
-    // Output times equal to t_end that were not yet produced (only possible by rounding).
-    while next_out < t_out.len() {
-        out_y.push(y.clone());
-        next_out += 1;
+
+    /// The output times in (t, t_new] from the dense output of the accepted step.
+    fn write_outputs(&mut self, t: f64, t_new: f64, h_step: f64) {
+        while self.next_out < self.t_out.len() && self.t_out[self.next_out] <= t_new {
+            let th = ((self.t_out[self.next_out] - t) / h_step).clamp(0.0, 1.0);
+            self.out_y.push(self.s.at(th));
+            self.next_out += 1;
+        }
     }
-    Ok(OdeSolution {
-        t: t_out.to_vec(),
-        y: out_y,
-        stats,
-    })
 }
 
 fn check_finite(dy: &[f64], t: f64) -> Result<()> {

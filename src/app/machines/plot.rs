@@ -1,5 +1,5 @@
 //! SVG figures of the crank drive, the autobalancer and the test-stand data: stacked panels of
-//! labelled curves and points (plotters, SVG backend, the colours and sizes of [`super::plot`]).
+//! labelled curves and points (plotters, SVG backend, the colours and sizes of [`crate::app::dynamics::plot`]).
 
 use std::path::Path;
 
@@ -250,7 +250,10 @@ pub fn write_panels_svg(path: impl AsRef<Path>, panels: &[Panel], width: u32, pa
         ));
     }
     if panels.is_empty() || panels.len() > 12 {
-        return Err(Error::InvalidInput(format!("plot: 1–12 panels, got {}", panels.len())));
+        return Err(Error::param(
+            "panels",
+            format!("plot: 1–12 panels, got {}", panels.len()),
+        ));
     }
     let root = SVGBackend::new(path, (width, panel_height * panels.len() as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(perr(path))?;

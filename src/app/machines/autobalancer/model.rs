@@ -37,16 +37,17 @@ use std::f64::consts::{PI, TAU};
 
 use serde::Serialize;
 
-use super::ode::{Dopri5Options, integrate};
+use crate::app::dynamics::ode::{Dopri5Options, integrate};
 use crate::{Error, Result};
 
 fn check(name: &str, v: f64, ok: bool, want: &str) -> Result<()> {
     if v.is_finite() && ok {
         Ok(())
     } else {
-        Err(Error::InvalidInput(format!(
-            "autobalancer: {name} must be {want}, got {v}"
-        )))
+        Err(Error::param(
+            name,
+            format!("autobalancer: {name} must be {want}, got {v}"),
+        ))
     }
 }
 
@@ -212,10 +213,10 @@ impl Grinder {
         check("imbalance_angle", self.imbalance_angle, true, "finite")?;
         check("speed", self.speed, self.speed > 0.0, "> 0 rad/s")?;
         if self.balls.len() > 16 {
-            return Err(Error::InvalidInput(format!(
-                "autobalancer: at most 16 balls, got {}",
-                self.balls.len()
-            )));
+            return Err(Error::param(
+                "balls",
+                format!("autobalancer: at most 16 balls, got {}", self.balls.len()),
+            ));
         }
         for (k, b) in self.balls.iter().enumerate() {
             let n = |s: &str| format!("ball {} {s}", k + 1);
@@ -225,7 +226,10 @@ impl Grinder {
             check(&n("initial angle"), b.initial_angle, true, "finite")?;
         }
         if !(self.inertia() > 0.0) {
-            return Err(Error::InvalidInput("autobalancer: the rocker inertia J is zero".into()));
+            return Err(Error::param(
+                "rocker_inertia",
+                "autobalancer: the rocker inertia J is zero",
+            ));
         }
         Ok(())
     }
@@ -434,11 +438,8 @@ pub struct Simulation {
     pub rhs_evals: usize,
 }
 
-/// Simulates the nonlinear model (seed's equations; see the module documentation).
-///
-/// Starts with the rocker at rest (φ = φ̇ = 0) and the balls at their initial angles, moving with
-/// the disc (α̇ = 0). Errors: invalid data or options, integrator failure.
-pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
+/// Checks the options of [`simulate`]; returns the length of the final window, s.
+fn check_options(g: &Grinder, o: &SimOptions) -> Result<f64> {
     g.validate()?;
     check(
         "duration",
@@ -469,24 +470,30 @@ pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
         check("cutting contact_angle", c.contact_angle, true, "finite")?;
         check("cutting moment", c.moment, true, "finite")?;
         if !(g.effective_stiffness(Some(c)) > 0.0) {
-            return Err(Error::InvalidInput(
-                "autobalancer: the hinge stiffness while cutting c' is not positive".into(),
+            return Err(Error::param(
+                "cutting",
+                "autobalancer: the hinge stiffness while cutting c' is not positive",
             ));
         }
     }
     if o.window_revolutions == 0 || o.window_revolutions > 10_000 {
-        return Err(Error::InvalidInput(format!(
-            "autobalancer: window_revolutions must be 1–10000, got {}",
-            o.window_revolutions
-        )));
+        return Err(Error::param(
+            "window_revolutions",
+            format!(
+                "autobalancer: window_revolutions must be 1–10000, got {}",
+                o.window_revolutions
+            ),
+        ));
     }
-    let w_end = o.profile.final_speed();
-    let window = o.window_revolutions as f64 * TAU / w_end;
+    let window = o.window_revolutions as f64 * TAU / o.profile.final_speed();
     if window >= o.duration {
-        return Err(Error::InvalidInput(format!(
-            "autobalancer: the duration {} s is shorter than the final {} revolutions ({window:.3} s)",
-            o.duration, o.window_revolutions
-        )));
+        return Err(Error::param(
+            "duration",
+            format!(
+                "autobalancer: the duration {} s is shorter than the final {} revolutions ({window:.3} s)",
+                o.duration, o.window_revolutions
+            ),
+        ));
     }
     if let Some(dt) = o.record_dt {
         check(
@@ -496,7 +503,32 @@ pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
             "> 0 and at most 2e6 samples",
         )?;
     }
+    Ok(window)
+}
 
+/// The output times: the recorded history (every `record_dt` before the final window) and the
+/// final window (64 samples per revolution), with the index where the window starts.
+fn output_times(o: &SimOptions, window: f64) -> (Vec<f64>, usize) {
+    let t_win = o.duration - window;
+    let n_win = 64 * o.window_revolutions;
+    let mut outs: Vec<f64> = match o.record_dt {
+        Some(dt) => {
+            let m = (o.duration / dt).floor() as usize;
+            (0..=m).map(|i| i as f64 * dt).filter(|t| *t < t_win).collect()
+        }
+        None => Vec::new(),
+    };
+    let first_win = outs.len();
+    outs.extend((0..=n_win).map(|i| t_win + window * i as f64 / n_win as f64));
+    (outs, first_win)
+}
+
+/// Simulates the nonlinear model (seed's equations; see the module documentation).
+///
+/// Starts with the rocker at rest (φ = φ̇ = 0) and the balls at their initial angles, moving with
+/// the disc (α̇ = 0). Errors: invalid data or options, integrator failure.
+pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
+    let window = check_options(g, o)?;
     let balls: Vec<Ball> = if o.with_balls { g.balls.clone() } else { Vec::new() };
     let n = balls.len();
     let l = g.arm;
@@ -553,26 +585,12 @@ pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
     for (i, b) in balls.iter().enumerate() {
         y0[2 + i] = b.initial_angle;
     }
-    // Output: the recorded history and the final window (64 samples per revolution).
-    let t_win = o.duration - window;
-    let n_win = 64 * o.window_revolutions;
-    let mut outs: Vec<f64> = match o.record_dt {
-        Some(dt) => {
-            let m = (o.duration / dt).floor() as usize;
-            (0..=m).map(|i| i as f64 * dt).filter(|t| *t < t_win).collect()
-        }
-        None => Vec::new(),
-    };
-    let first_win = outs.len();
-    outs.extend((0..=n_win).map(|i| t_win + window * i as f64 / n_win as f64));
+    let (outs, first_win) = output_times(o, window);
     let bps: Vec<f64> = match o.profile {
         SpeedProfile::Ramp { ramp_time, .. } => vec![ramp_time],
         _ => vec![],
     };
-    let sol = integrate(rhs, 0.0, &y0, &outs, &bps, &o.ode).map_err(|e| match e {
-        Error::InvalidInput(m) => Error::InvalidInput(format!("autobalancer simulation: {m}")),
-        other => other,
-    })?;
+    let sol = integrate(rhs, 0.0, &y0, &outs, &bps, &o.ode).map_err(|e| simulation_error(e, o))?;
     let rec = if o.record_dt.is_some() { 0 } else { first_win };
     let t: Vec<f64> = outs[rec..].to_vec();
     let x: Vec<f64> = sol.y[rec..].iter().map(|y| l * y[0]).collect();
@@ -580,8 +598,44 @@ pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
         .map(|i| sol.y[rec..].iter().map(|y| y[2 + i] - a0).collect())
         .collect();
     let speed: Vec<f64> = t.iter().map(|tt| o.profile.at(*tt).1).collect();
-    // Steady values over the final window.
-    let win = &sol.y[first_win..];
+    Ok(Simulation {
+        t,
+        x,
+        ball_angles,
+        speed,
+        end: steady_end(g, &balls, &sol.y[first_win..], window),
+        rhs_evals: sol.stats.rhs_evals,
+    })
+}
+
+/// An integrator failure in the terms of the simulation: a step limit is the work the speeds
+/// and durations ask for (or a stiff model), not a setting to change.
+fn simulation_error(e: Error, o: &SimOptions) -> Error {
+    match e {
+        Error::Invalid {
+            at: crate::error::At::Param { name },
+            ..
+        } if name == "max_steps" => Error::InvalidInput(format!(
+            "autobalancer simulation: more than {} integrator steps over {} s at up to {:.4e} rpm: the speed \
+             and duration ask for too many revolutions, or the model is stiff (a light ball against a large \
+             drag or hinge stiffness)",
+            o.ode.max_steps,
+            o.duration,
+            o.profile.final_speed() * 60.0 / TAU
+        )),
+        Error::InvalidInput(m) => Error::InvalidInput(format!("autobalancer simulation: {m}")),
+        Error::Invalid { at, msg } => Error::Invalid {
+            at,
+            msg: format!("autobalancer simulation: {msg}"),
+        },
+        other => other,
+    }
+}
+
+/// Steady values over the final window (`win`: the states there, `window` s long).
+fn steady_end(g: &Grinder, balls: &[Ball], win: &[Vec<f64>], window: f64) -> SteadyEnd {
+    let (l, a0) = (g.arm, g.imbalance_angle);
+    let m0r0 = g.imbalance_mass * g.imbalance_radius;
     let (lo, hi) = win.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
         (a.min(y[0]), b.max(y[0]))
     });
@@ -590,7 +644,7 @@ pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
     let first = &win[0];
     let (mut sx, mut sy) = (m0r0 * a0.cos(), m0r0 * a0.sin());
     let mut drift = 0.0f64;
-    let mut angles = Vec::with_capacity(n);
+    let mut angles = Vec::with_capacity(balls.len());
     for (i, b) in balls.iter().enumerate() {
         let a = last[2 + i];
         sx += b.mass * b.radius * a.cos();
@@ -598,20 +652,13 @@ pub fn simulate(g: &Grinder, o: &SimOptions) -> Result<Simulation> {
         drift = drift.max(((last[2 + i] - first[2 + i]) / window).abs().to_degrees());
         angles.push(wrap_deg((a - a0).to_degrees()));
     }
-    Ok(Simulation {
-        t,
-        x,
-        ball_angles,
-        speed,
-        end: SteadyEnd {
-            amplitude: 0.5 * l * (hi - lo),
-            mean_displacement: l * mean,
-            ball_angles_deg: angles,
-            drift_deg_s: drift,
-            residual: (sx * sx + sy * sy).sqrt() / m0r0,
-        },
-        rhs_evals: sol.stats.rhs_evals,
-    })
+    SteadyEnd {
+        amplitude: 0.5 * l * (hi - lo),
+        mean_displacement: l * mean,
+        ball_angles_deg: angles,
+        drift_deg_s: drift,
+        residual: (sx * sx + sy * sy).sqrt() / m0r0,
+    }
 }
 
 /// One speed of a sweep.
@@ -649,10 +696,10 @@ pub fn sweep(g: &Grinder, speeds: &[f64], duration: f64, cutting: Option<Cutting
     use rayon::prelude::*;
     g.validate()?;
     if speeds.is_empty() || speeds.len() > 2000 {
-        return Err(Error::InvalidInput(format!(
-            "autobalancer sweep: 1–2000 speeds, got {}",
-            speeds.len()
-        )));
+        return Err(Error::param(
+            "speeds",
+            format!("autobalancer sweep: 1–2000 speeds, got {}", speeds.len()),
+        ));
     }
     let w0 = g.omega0(cutting.as_ref());
     speeds
@@ -714,9 +761,10 @@ pub fn cutting_scan(g: &Grinder, cut: &Cutting, fractions: &[f64], duration: f64
     g.validate()?;
     let bound = g.cr_bound(g.speed, cut);
     if !(bound.is_finite() && bound > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "autobalancer: no positive surface-stiffness bound at the operating speed (bound {bound})"
-        )));
+        return Err(Error::param(
+            "cut",
+            format!("autobalancer: no positive surface-stiffness bound at the operating speed (bound {bound})"),
+        ));
     }
     fractions
         .par_iter()
@@ -768,7 +816,7 @@ pub fn mean_projection_numeric(w: f64, w0: f64, h_tilde: f64, eps: f64, periods:
     }
     check("ε", eps, eps.abs() < 0.25, "|ε| < 0.25")?;
     if periods == 0 || periods > 100_000 {
-        return Err(Error::InvalidInput("mean projection: periods must be 1–100000".into()));
+        return Err(Error::param("periods", "mean projection: periods must be 1–100000"));
     }
     let tp = TAU / w;
     let settle = (30.0 / h_tilde / tp).ceil() * tp;

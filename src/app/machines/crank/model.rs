@@ -15,7 +15,7 @@
 //! - [`CrankDrive`]: mechanism + motor through a reducer (ratio i, efficiency η, drive inertia I_p
 //!   on the motor shaft, reduced as I_p i²): M_d(ω) = M(i ω)·i·η.
 //! - Integrators: [`baranov`], the paper's first-order finite-difference step in φ, and
-//!   [`energy_form`], the Dormand–Prince integrator of [`super::ode`] on d(Iω²)/dφ (with t as a
+//!   [`energy_form`], the Dormand–Prince integrator of [`crate::app::dynamics::ode`] on d(Iω²)/dφ (with t as a
 //!   second state); both run revolution by revolution until the revolution-to-revolution change of
 //!   the metrics is below a tolerance. [`run_up`] starts from rest in the time domain (the
 //!   φ-forms are singular at ω = 0) with a start-up treatment ([`Startup`]), and reports a stall.
@@ -25,8 +25,8 @@
 //! revolution). The paper's Table 1 quotes ω_mean equal to (ω_min + ω_max)/2 for one and two carts;
 //! the midrange is reported beside it.
 //!
-//! Units: SI (m, kg, N, N·m, kg·m², rad, rad/s, rad/s², s, W). Bad input gives
-//! [`crate::Error::InvalidInput`] naming the parameter; nothing panics.
+//! Units: SI (m, kg, N, N·m, kg·m², rad, rad/s, rad/s², s, W). Bad input gives an error at the
+//! parameter ([`crate::Error::param`]) naming it; nothing panics.
 
 // `!(x > 0.0)` is deliberate: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -35,16 +35,17 @@ use std::f64::consts::{PI, TAU};
 
 use serde::Serialize;
 
-use super::ode::{Dopri5Options, integrate};
+use crate::app::dynamics::ode::{Dopri5Options, integrate};
 use crate::{Error, Result};
 
 fn check(name: &str, v: f64, ok: bool, want: &str) -> Result<()> {
     if v.is_finite() && ok {
         Ok(())
     } else {
-        Err(Error::InvalidInput(format!(
-            "crank drive: {name} must be {want}, got {v}"
-        )))
+        Err(Error::param(
+            name,
+            format!("crank drive: {name} must be {want}, got {v}"),
+        ))
     }
 }
 
@@ -131,10 +132,13 @@ impl Mechanism {
         )?;
         check("gravity", self.gravity, self.gravity >= 0.0, "≥ 0 m/s²")?;
         if self.phases.is_empty() || self.phases.len() > 64 {
-            return Err(Error::InvalidInput(format!(
-                "crank drive: the number of carts must be 1–64, got {}",
-                self.phases.len()
-            )));
+            return Err(Error::param(
+                "phases",
+                format!(
+                    "crank drive: the number of carts must be 1–64, got {}",
+                    self.phases.len()
+                ),
+            ));
         }
         for p in &self.phases {
             check("a crank phase", *p, true, "finite")?;
@@ -333,8 +337,9 @@ impl Motor {
             )?;
         }
         if self.law == MotorLaw::KlossStartCorrected && self.starting_torque.is_none() {
-            return Err(Error::InvalidInput(
-                "crank drive: motor law 'kloss-corrected' needs the motor's starting_torque".into(),
+            return Err(Error::param(
+                "motor starting_torque",
+                "crank drive: motor law 'kloss-corrected' needs the motor's starting_torque",
             ));
         }
         Ok(())
@@ -448,8 +453,9 @@ impl CrankDrive {
         check("torque scale", self.torque_scale, self.torque_scale > 0.0, "> 0")?;
         let i_min = self.reduced_inertia_range(360).0;
         if !(i_min > 0.0) {
-            return Err(Error::InvalidInput(
-                "crank drive: the reduced inertia is zero somewhere (give the drive inertia or cart masses)".into(),
+            return Err(Error::param(
+                "reducer inertia",
+                "crank drive: the reduced inertia is zero somewhere (give the drive inertia or cart masses)",
             ));
         }
         Ok(())
@@ -516,14 +522,18 @@ impl Metrics {
     /// The metrics from the extremes, as the paper's Table 1 computes them.
     pub fn from_extremes(omega_min: f64, omega_max: f64, omega_mean: f64, eps_max: f64) -> Result<Metrics> {
         if !(omega_mean.is_finite() && omega_mean > 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "metrics: the mean speed must be > 0, got {omega_mean}"
-            )));
+            return Err(Error::param(
+                "omega_mean",
+                format!("metrics: the mean speed must be > 0, got {omega_mean}"),
+            ));
         }
         if !(omega_min.is_finite() && omega_max.is_finite() && eps_max.is_finite() && omega_max >= omega_min) {
-            return Err(Error::InvalidInput(format!(
-                "metrics: need finite extremes with ω_max ≥ ω_min, got {omega_min}, {omega_max}, |ε| {eps_max}"
-            )));
+            return Err(Error::param(
+                "omega_max",
+                format!(
+                    "metrics: need finite extremes with ω_max ≥ ω_min, got {omega_min}, {omega_max}, |ε| {eps_max}"
+                ),
+            ));
         }
         let delta = (omega_max - omega_min) / omega_mean;
         let mu = eps_max.abs() / (omega_mean * omega_mean);
@@ -706,15 +716,21 @@ pub struct SteadyRun {
     pub omega_midrange: Option<f64>,
     /// Angle mean (1/2π)∫ω dφ of the last revolution, rad/s.
     pub omega_angle_mean: Option<f64>,
-    /// ω_mean of each revolution, rad/s (the approach to the steady state).
+    /// ω_mean of each revolution, rad/s (the approach to the steady state; not serialised).
+    #[serde(skip)]
     pub mean_per_revolution: Vec<f64>,
-    /// The last revolution, φ from 0 to 2π relative to its start.
+    /// The last revolution, φ from 0 to 2π relative to its start (in the plots; not serialised).
+    #[serde(skip)]
     pub last: Samples,
     /// Set if the drive stalled.
     pub stall: Option<Stall>,
     /// Right-hand-side evaluations (adaptive) or steps (Baranov).
     pub evaluations: usize,
 }
+
+/// Most steps (of the Baranov step, or output samples of the adaptive integrator) a steady-state
+/// run may take over all its revolutions: 360/step per revolution × the revolutions.
+pub const MAX_STEADY_STEPS: usize = 10_000_000;
 
 fn validate_steady(drive: &CrankDrive, o: &SteadyOptions) -> Result<usize> {
     drive.validate()?;
@@ -728,16 +744,35 @@ fn validate_steady(drive: &CrankDrive, o: &SteadyOptions) -> Result<usize> {
     )?;
     let per_rev = (TAU / o.step).round();
     if (per_rev * o.step - TAU).abs() > 1e-9 * TAU {
-        return Err(Error::InvalidInput(format!(
-            "crank drive: the step {}° must divide 360° into a whole number of steps",
-            o.step.to_degrees()
-        )));
+        return Err(Error::param(
+            "step",
+            format!(
+                "crank drive: the step {}° must divide 360° into a whole number of steps",
+                o.step.to_degrees()
+            ),
+        ));
     }
     if o.min_revolutions < 2 || o.max_revolutions < o.min_revolutions || o.max_revolutions > 10_000 {
-        return Err(Error::InvalidInput(format!(
-            "crank drive: revolutions must satisfy 2 ≤ min ≤ max ≤ 10000, got {}..{}",
-            o.min_revolutions, o.max_revolutions
-        )));
+        return Err(Error::param(
+            "max_revolutions",
+            format!(
+                "crank drive: revolutions must satisfy 2 ≤ min ≤ max ≤ 10000, got {}..{}",
+                o.min_revolutions, o.max_revolutions
+            ),
+        ));
+    }
+    // Each revolution takes per_rev steps and keeps as many samples.
+    if per_rev * o.max_revolutions as f64 > MAX_STEADY_STEPS as f64 {
+        return Err(Error::param(
+            "step",
+            format!(
+                "crank drive: a step of {}° over up to {} revolutions asks for {:.3e} steps (at most {:.0e})",
+                o.step.to_degrees(),
+                o.max_revolutions,
+                per_rev * o.max_revolutions as f64,
+                MAX_STEADY_STEPS as f64
+            ),
+        ));
     }
     check(
         "steady tolerance",
