@@ -367,8 +367,10 @@ pub fn finish(
     let (volume, solid_mass) = model.volume_and_mass()?;
     let mass = solid_mass + model.discrete_mass();
 
-    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
-    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
+    // NaN-propagating maxima: a NaN residual fails the verdict instead of being dropped.
+    let max_nan = |a: f64, b: f64| if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) };
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| max_nan(a, b));
+    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| max_nan(a, b));
     let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let mut notes = model.notes.clone();
     notes.extend(sol.notes.iter().cloned());

@@ -12,6 +12,7 @@
 
 use crate::analysis::modal::{ModalReport, ModalTarget};
 use crate::analysis::statics::Load;
+use crate::app::engines::{Before, Engine};
 use crate::app::report::StaticReport;
 use crate::dof::parse_components;
 use crate::element::MassLumping;
@@ -1122,7 +1123,8 @@ impl Scene {
         let t_model = Instant::now();
         let model = crate::model::Model::build(&mesh, &self.spec, &source)?;
         let t_model = t_model.elapsed().as_secs_f64();
-        let sys = if self.slepc_ranks.is_some() && self.static_cases.is_none() && self.harmonic.is_none() {
+        let engine = self.slepc_ranks.map_or(Engine::Native, Engine::slepc);
+        let sys = if !engine.factorises_here() && self.static_cases.is_none() && self.harmonic.is_none() {
             // SLEPc factorises on its ranks: no ordering or memory check for this machine.
             crate::system::System::assemble_only(model, &source)?
         } else {
@@ -1145,21 +1147,11 @@ impl Scene {
                     block: *block,
                     ..Default::default()
                 };
-                let mut run = match self.slepc_ranks {
-                    None => crate::analysis::modal::solve(&sys, &params)?,
-                    Some(ranks) => crate::app::slepc::solve(
-                        &sys,
-                        &params,
-                        &crate::app::slepc::SlepcOptions {
-                            ranks,
-                            ..Default::default()
-                        },
-                    )?,
+                let before = Before {
+                    read_s: read_time,
+                    model_s: t_model,
                 };
-                let tm = &mut run.report.timings_s;
-                tm.read = read_time;
-                tm.assemble += t_model;
-                tm.total += read_time + t_model;
+                let mut run = engine.solve(&sys, &params, before)?;
                 log::info!(
                     "scene {}: modal: assemble {:.3} s, factor {:.3} s, eigen {:.3} s",
                     self.name,

@@ -16,4 +16,5 @@ mod machine3d;
 mod machines;
 mod numerics_15;
 mod scenes;
+mod slepc_import;
 mod sweep;
