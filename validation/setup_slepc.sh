@@ -5,7 +5,7 @@
 #   bash validation/setup_slepc.sh        # idempotent; as root with apt-get (CI, containers)
 #
 # The Debian build needs PETSC_DIR and SLEPC_DIR; vibrofem sets them to Debian's paths when they
-# are unset (see src/app/slepc.rs), and this script checks the import with them.
+# are unset (see src/app/engines/slepc.rs), and this script checks the import with them.
 set -euo pipefail
 export PETSC_DIR="${PETSC_DIR:-/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu-real}"
 export SLEPC_DIR="${SLEPC_DIR:-/usr/lib/slepcdir/slepc3.18/x86_64-linux-gnu-real}"

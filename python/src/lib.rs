@@ -1,20 +1,37 @@
 //! `vibrofem._core`: the compiled half of the Python package. The Python half
 //! (`pysrc/vibrofem/__init__.py`) turns keyword arguments into vibrofem's option grammar and
 //! arrays into scipy matrices; this module holds meshes, models and their assembled systems and
-//! returns numpy arrays. Heavy work runs with the interpreter detached.
+//! returns numpy arrays.
+//!
+//! It calls the library's documented entry points only: `input::source::load` (meshes),
+//! `model::Model` and `system::System` (K, M, the DOF map), `app::engines::Engine` (the modal
+//! solve, native or SLEPc, the same switch as the command line's `--engine`),
+//! `analysis::statics::run_static` with `app::report::static_report` (statics), `app::harmonic`
+//! (harmonic response, with the command line's sweep rules), `app::engines::export` and
+//! `app::scene::run` (scene files).
+//!
+//! Heavy work runs on a worker thread with the interpreter released, while the calling thread
+//! checks for signals: Ctrl-C raises `KeyboardInterrupt` at once (the work already started
+//! finishes in the background and its result is dropped). A `Model` may be used from several
+//! threads: its system is built once, under a lock, and shared read-only by the analyses.
 
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use std::sync::Arc;
-use vibrofem::analysis::modal::{self, ModalParams, ModalTarget};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use vibrofem::analysis::modal::{ModalParams, ModalRun, ModalTarget};
 use vibrofem::analysis::statics::{StaticOptions, run_static};
+use vibrofem::app::engines::{self, Before, Engine, SlepcOptions};
 use vibrofem::dof::{COMPONENT_NAMES, NCOMP};
 use vibrofem::input::options::{LoadOptions, ModelOptions, length_scale};
 use vibrofem::mesh::{CellKind, Mesh};
 use vibrofem::model::Model;
 use vibrofem::system::{System, SystemOptions};
+
+type Array2 = numpy::ndarray::Array2<f64>;
+type Array3 = numpy::ndarray::Array3<f64>;
 
 create_exception!(_core, VibrofemError, PyException, "An error reported by vibrofem.");
 create_exception!(
@@ -58,6 +75,45 @@ fn json_err(e: serde_json::Error) -> PyErr {
     OutputError::new_err(format!("cannot serialise the report: {e}"))
 }
 
+fn json_output(e: serde_json::Error) -> vibrofem::Error {
+    vibrofem::Error::output("JSON", e)
+}
+
+/// How often the calling thread looks for signals while a worker computes.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Run `work` on a worker thread with the interpreter released, checking for signals every
+/// 50 ms: Ctrl-C raises `KeyboardInterrupt` at once (the worker finishes in the background, its
+/// result dropped). Errors map to vibrofem's exceptions; a panic of the worker resumes here.
+fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    work: impl FnOnce() -> vibrofem::Result<T> + Send + 'static,
+) -> PyResult<T> {
+    let (tx, mut rx) = std::sync::mpsc::channel();
+    std::thread::Builder::new()
+        .name("vibrofem".into())
+        .spawn(move || {
+            let _ = tx.send(std::panic::catch_unwind(std::panic::AssertUnwindSafe(work)));
+        })
+        .map_err(|e| VibrofemError::new_err(format!("cannot start a worker thread: {e}")))?;
+    loop {
+        let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_POLL), rx));
+        rx = back;
+        match got {
+            Ok(Ok(result)) => {
+                // A Ctrl-C that came with the last poll raises before any array is made.
+                py.check_signals()?;
+                return result.map_err(err);
+            }
+            Ok(Err(panic)) => std::panic::resume_unwind(panic),
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(VibrofemError::new_err("the worker thread ended without a result"));
+            }
+        }
+    }
+}
+
 /// A mesh in SI units (read from a gmsh file or a generator).
 #[pyclass(name = "Mesh", module = "vibrofem._core", frozen)]
 struct PyMesh {
@@ -77,7 +133,7 @@ impl PyMesh {
     #[getter]
     fn nodes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let flat: Vec<f64> = self.mesh.nodes.iter().flat_map(|x| x.iter().copied()).collect();
-        numpy::ndarray::Array2::from_shape_vec((self.mesh.nodes.len(), 3), flat)
+        Array2::from_shape_vec((self.mesh.nodes.len(), 3), flat)
             .expect("n × 3")
             .into_pyarray(py)
     }
@@ -164,15 +220,14 @@ impl PyMesh {
 }
 
 /// Read a gmsh mesh (MSH 2.2 or 4.1) or generate one (`box:…`, `helix:…`, `sandwich:…`,
-/// `ibeam-*:…`), scaling coordinates from `length_unit` (m, cm or mm) to metres.
+/// `ibeam-*:…`), scaling coordinates from `length_unit` (m, cm or mm) to metres. A path is
+/// text here: the Python half decodes bytes and path objects with `os.fsdecode`.
 #[pyfunction]
 #[pyo3(signature = (source, length_unit = "m"))]
 fn read_mesh(py: Python<'_>, source: &str, length_unit: &str) -> PyResult<PyMesh> {
     let scale = length_scale(length_unit).map_err(err)?;
     let src = source.to_string();
-    let mesh = py
-        .detach(move || vibrofem::input::source::load(&src, scale))
-        .map_err(err)?;
+    let mesh = interruptible(py, move || vibrofem::input::source::load(&src, scale))?;
     Ok(PyMesh {
         mesh: Arc::new(mesh),
         source: source.to_string(),
@@ -180,41 +235,122 @@ fn read_mesh(py: Python<'_>, source: &str, length_unit: &str) -> PyResult<PyMesh
 }
 
 /// A model: a mesh with materials, supports, couplings, parts, in vibrofem's option grammar.
-#[pyclass(name = "Model", module = "vibrofem._core")]
+/// Frozen (no mutable borrow): several threads may use one model; the system is built once,
+/// by the first that needs it, under a lock.
+#[pyclass(name = "Model", module = "vibrofem._core", frozen)]
 struct PyModel {
     mesh: Arc<Mesh>,
     source: String,
     options: ModelOptions,
-    system: Option<Arc<System>>,
+    system: Arc<Mutex<Option<Arc<System>>>>,
 }
 
-impl PyModel {
-    /// The assembled system (built on first use, then shared by every analysis).
-    fn system(&mut self, py: Python<'_>) -> PyResult<Arc<System>> {
-        if let Some(s) = &self.system {
-            return Ok(s.clone());
+/// The arrays of a modal solution: report JSON, eigenvalues, free-DOF vectors, nodal shapes.
+struct ModesOut {
+    json: String,
+    lambda: Vec<f64>,
+    vectors: Array2,
+    shapes: Array3,
+}
+
+/// The report and arrays of a modal run: the vectors over the free DOFs and the shapes with
+/// rotations at the mesh nodes (n_nodes × 6 × k).
+fn modes_out(sys: &System, run: ModalRun) -> vibrofem::Result<ModesOut> {
+    let json = serde_json::to_string(&run.report).map_err(json_output)?;
+    let nf = run.vectors.nrows();
+    let k = run.vectors.ncols();
+    let vectors = Array2::from_shape_fn((nf, k), |(i, j)| run.vectors[(i, j)]);
+    let model = sys.model();
+    let n_mesh = model.n_mesh_nodes;
+    let mut shapes = Array3::zeros((n_mesh, 6, k));
+    for j in 0..k {
+        let col: Vec<f64> = (0..nf).map(|i| run.vectors[(i, j)]).collect();
+        let full = model.dofs.full(&col);
+        for a in 0..n_mesh {
+            for c in 0..6 {
+                shapes[(a, c, j)] = full[NCOMP * a + c];
+            }
         }
-        let (mesh, opts, source) = (self.mesh.clone(), self.options.clone(), self.source.clone());
-        let sys = py
-            .detach(move || -> vibrofem::Result<System> {
-                let model = Model::build(&mesh, &opts.spec()?, &source)?;
-                System::build(model, &SystemOptions::default(), &source)
-            })
-            .map_err(err)?;
-        let sys = Arc::new(sys);
-        self.system = Some(sys.clone());
-        Ok(sys)
+    }
+    Ok(ModesOut {
+        json,
+        lambda: run.lambda,
+        vectors,
+        shapes,
+    })
+}
+
+/// A static run's report, displacements at the mesh nodes (n × 6, flat) and nodal von Mises
+/// stress of the solids.
+fn static_out(
+    mesh: &Mesh,
+    source: &str,
+    opts: &ModelOptions,
+    loads: LoadOptions,
+) -> vibrofem::Result<(String, Vec<f64>, Vec<f64>)> {
+    let mut spec = opts.spec()?;
+    let case = loads.apply(&mut spec)?;
+    let run = run_static(
+        mesh,
+        source,
+        &StaticOptions {
+            spec,
+            cases: vec![case],
+        },
+    )?;
+    let report = vibrofem::app::report::static_report(mesh, source, &run)?;
+    let json = serde_json::to_string(&report).map_err(json_output)?;
+    let n = run.model.n_mesh_nodes;
+    let mut u6 = vec![0.0; 6 * n];
+    for a in 0..n {
+        u6[6 * a..6 * a + 6].copy_from_slice(&run.u[0][NCOMP * a..NCOMP * a + 6]);
+    }
+    let u3 = vibrofem::app::report::mesh_displacements(&run, 0);
+    let ns = vibrofem::post::stress::nodal_stress(&run.model.solids, n, &u3)?;
+    Ok((json, u6, ns.von_mises))
+}
+
+/// A harmonic run's report and the real and imaginary displacements (frequencies × n_nodes ×
+/// 3, flat).
+fn harmonic_out(
+    sys: &System,
+    mesh: &Mesh,
+    req: &vibrofem::app::harmonic::HarmonicRequest,
+) -> vibrofem::Result<(String, Vec<f64>, Vec<f64>)> {
+    let run = vibrofem::app::harmonic::run(sys, mesh, req)?;
+    let json = serde_json::to_string(&run.report).map_err(json_output)?;
+    let n = mesh.nodes.len();
+    let (mut re, mut im) = (Vec::with_capacity(run.nodal.len() * n * 3), Vec::new());
+    for nodal in &run.nodal {
+        for v in nodal.iter().take(n) {
+            for c in &v[..3] {
+                re.push(c.re);
+                im.push(c.im);
+            }
+        }
+    }
+    Ok((json, re, im))
+}
+
+/// The frequencies of a harmonic request: one, or a sweep under the command line's rules
+/// (0 ≤ f0 < f1, 2 ≤ n ≤ its cap).
+fn harmonic_freqs(freq: Option<f64>, sweep: Option<(f64, f64, usize)>) -> PyResult<Vec<f64>> {
+    match (freq, sweep) {
+        (Some(f), None) => Ok(vec![f]),
+        (None, Some((f0, f1, n))) => vibrofem::app::harmonic::sweep_frequencies(f0, f1, n).map_err(err),
+        _ => Err(InputError::new_err(
+            "harmonic: give freq=Hz or sweep=(f0, f1, n), one of them",
+        )),
     }
 }
 
-fn csr<'py>(
-    py: Python<'py>,
-    a: &vibrofem::linalg::sparse::SymMatrix,
-) -> (
+type Csr<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<i64>>,
     Bound<'py, PyArray1<i64>>,
-) {
+);
+
+fn csr<'py>(py: Python<'py>, a: &vibrofem::linalg::sparse::SymMatrix) -> Csr<'py> {
     // Both triangles stored: the CSC arrays of a symmetric matrix are its CSR arrays.
     let p = &a.pattern;
     (
@@ -224,11 +360,36 @@ fn csr<'py>(
     )
 }
 
-type Csr<'py> = (
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<i64>>,
-    Bound<'py, PyArray1<i64>>,
-);
+impl PyModel {
+    /// A task that returns the system `engine` solves: the model's shared one (built here on
+    /// first use, one thread at a time), or for SLEPc, before that exists, an assembly of K
+    /// and M only (not kept: the factorisation it leaves out is SLEPc's).
+    fn system_task(&self, engine: Engine) -> impl FnOnce() -> vibrofem::Result<Arc<System>> + Send + 'static {
+        let (mesh, opts, source, slot) = (
+            self.mesh.clone(),
+            self.options.clone(),
+            self.source.clone(),
+            self.system.clone(),
+        );
+        move || {
+            let mut slot = slot.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            if let Some(s) = slot.as_ref() {
+                return Ok(s.clone());
+            }
+            let model = Model::build(&mesh, &opts.spec()?, &source)?;
+            let sys = Arc::new(engine.system(model, &SystemOptions::default(), &source)?);
+            if engine.factorises_here() {
+                *slot = Some(sys.clone());
+            }
+            Ok(sys)
+        }
+    }
+
+    /// The assembled system (built on first use, then shared by every analysis).
+    fn system(&self, py: Python<'_>) -> PyResult<Arc<System>> {
+        interruptible(py, self.system_task(Engine::Native))
+    }
+}
 
 #[pymethods]
 impl PyModel {
@@ -271,13 +432,13 @@ impl PyModel {
             mesh: mesh.mesh.clone(),
             source: mesh.source.clone(),
             options,
-            system: None,
+            system: Arc::new(Mutex::new(None)),
         })
     }
 
     /// Assemble (once) and return K and M over the free DOFs as CSR arrays
     /// `(data, indices, indptr)` each, and the dimension.
-    fn assemble<'py>(&mut self, py: Python<'py>) -> PyResult<(Csr<'py>, Csr<'py>, usize)> {
+    fn assemble<'py>(&self, py: Python<'py>) -> PyResult<(Csr<'py>, Csr<'py>, usize)> {
         let sys = self.system(py)?;
         let m = sys.m().map_err(err)?;
         Ok((csr(py, sys.k()), csr(py, m), sys.n_free()))
@@ -285,7 +446,7 @@ impl PyModel {
 
     /// Per free DOF: the node (0-based mesh index; reference nodes of couplings follow the mesh
     /// nodes) and the component (0..6: ux, uy, uz, rx, ry, rz, w).
-    fn dof_table<'py>(&mut self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
+    fn dof_table<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
         let sys = self.system(py)?;
         let d = sys.dofs();
         let (mut node, mut comp) = (Vec::with_capacity(d.n_free), Vec::with_capacity(d.n_free));
@@ -298,25 +459,26 @@ impl PyModel {
     }
 
     /// Number of mesh nodes and of all nodes (reference nodes included).
-    fn node_counts(&mut self, py: Python<'_>) -> PyResult<(usize, usize)> {
+    fn node_counts(&self, py: Python<'_>) -> PyResult<(usize, usize)> {
         let sys = self.system(py)?;
         Ok((sys.model().n_mesh_nodes, sys.model().nodes.len()))
     }
 
     /// Volume (m³), mass (kg, point masses included) and the model's notes.
-    fn summary(&mut self, py: Python<'_>) -> PyResult<(f64, f64, Vec<String>)> {
+    fn summary(&self, py: Python<'_>) -> PyResult<(f64, f64, Vec<String>)> {
         let sys = self.system(py)?;
         let model = sys.model();
         let (v, m) = model.volume_and_mass().map_err(err)?;
         Ok((v, m + model.discrete_mass(), model.notes.clone()))
     }
 
-    /// Modal analysis. Returns (report JSON, eigenvalues, free-DOF vectors n × k, shapes at the
-    /// mesh nodes n_nodes × 6 × k).
+    /// Modal analysis with `engine` (`native` or `slepc` on `ranks` MPI ranks: the command
+    /// line's `--engine` switch). Returns (report JSON, eigenvalues, free-DOF vectors n × k,
+    /// shapes at the mesh nodes n_nodes × 6 × k).
     #[pyo3(signature = (n = None, band = None, shift_hz = None, block = 6, engine = "native", ranks = 1))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn modes<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         n: Option<usize>,
         band: Option<(f64, f64)>,
@@ -328,7 +490,7 @@ impl PyModel {
         String,
         Bound<'py, PyArray1<f64>>,
         Bound<'py, PyArray2<f64>>,
-        Bound<'py, numpy::PyArray3<f64>>,
+        Bound<'py, PyArray3<f64>>,
     )> {
         let target = match (band, n) {
             (Some(_), Some(_)) => return Err(InputError::new_err("give n or band, not both")),
@@ -346,49 +508,25 @@ impl PyModel {
             block,
             ..Default::default()
         };
-        let run = match engine {
-            "native" => {
-                let sys = self.system(py)?;
-                py.detach(move || modal::solve(&sys, &params)).map_err(err)?
-            }
-            "slepc" => {
-                let (mesh, opts, source) = (self.mesh.clone(), self.options.clone(), self.source.clone());
-                py.detach(move || -> vibrofem::Result<_> {
-                    let model = Model::build(&mesh, &opts.spec()?, &source)?;
-                    let sys = System::assemble_only(model, &source)?;
-                    let so = vibrofem::app::slepc::SlepcOptions {
-                        ranks,
-                        ..Default::default()
-                    };
-                    vibrofem::app::slepc::solve(&sys, &params, &so)
-                })
-                .map_err(err)?
-            }
-            e => return Err(InputError::new_err(format!("engine '{e}': use native or slepc"))),
-        };
-        let json = serde_json::to_string(&run.report).map_err(json_err)?;
-        let nf = run.vectors.nrows();
-        let k = run.vectors.ncols();
-        let vec = numpy::ndarray::Array2::from_shape_fn((nf, k), |(i, j)| run.vectors[(i, j)]);
-        // Shapes with rotations: expand each mode over the mesh nodes, 6 components.
-        let sys = self.system(py)?;
-        let model = sys.model();
-        let n_mesh = model.n_mesh_nodes;
-        let mut shapes = numpy::ndarray::Array3::<f64>::zeros((n_mesh, 6, k));
-        for j in 0..k {
-            let col: Vec<f64> = (0..nf).map(|i| run.vectors[(i, j)]).collect();
-            let full = model.dofs.full(&col);
-            for a in 0..n_mesh {
-                for c in 0..6 {
-                    shapes[(a, c, j)] = full[NCOMP * a + c];
-                }
-            }
-        }
+        let engine = Engine::parse(
+            engine,
+            SlepcOptions {
+                ranks,
+                ..Default::default()
+            },
+        )
+        .map_err(err)?;
+        let system = self.system_task(engine.clone());
+        let out = interruptible(py, move || {
+            let sys = system()?;
+            let run = engine.solve(&sys, &params, Before::default())?;
+            modes_out(&sys, run)
+        })?;
         Ok((
-            json,
-            run.lambda.clone().into_pyarray(py),
-            vec.into_pyarray(py),
-            shapes.into_pyarray(py),
+            out.json,
+            out.lambda.into_pyarray(py),
+            out.vectors.into_pyarray(py),
+            out.shapes.into_pyarray(py),
         ))
     }
 
@@ -397,7 +535,7 @@ impl PyModel {
     #[pyo3(signature = (force = vec![], pressure = vec![], gravity = None, displace = vec![]))]
     #[allow(clippy::type_complexity)]
     fn static_analysis<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         force: Vec<String>,
         pressure: Vec<String>,
@@ -411,67 +549,50 @@ impl PyModel {
             displace,
         };
         let (mesh, opts, source) = (self.mesh.clone(), self.options.clone(), self.source.clone());
-        let (json, u, vm) = py
-            .detach(move || -> vibrofem::Result<(String, Vec<f64>, Vec<f64>)> {
-                let mut spec = opts.spec()?;
-                let case = loads.apply(&mut spec)?;
-                let run = run_static(
-                    &mesh,
-                    &source,
-                    &StaticOptions {
-                        spec,
-                        cases: vec![case],
-                    },
-                )?;
-                let report = vibrofem::app::report::static_report(&mesh, &source, &run)?;
-                let json = serde_json::to_string(&report).map_err(|e| vibrofem::Error::output("JSON", e))?;
-                let n = run.model.n_mesh_nodes;
-                let mut u6 = vec![0.0; 6 * n];
-                for a in 0..n {
-                    u6[6 * a..6 * a + 6].copy_from_slice(&run.u[0][NCOMP * a..NCOMP * a + 6]);
-                }
-                let u3 = vibrofem::app::report::mesh_displacements(&run, 0);
-                let ns = vibrofem::post::stress::nodal_stress(&run.model.solids, n, &u3)?;
-                Ok((json, u6, ns.von_mises))
-            })
-            .map_err(err)?;
+        let (json, u, vm) = interruptible(py, move || static_out(&mesh, &source, &opts, loads))?;
         let n = vm.len();
-        Ok((
-            json,
-            numpy::ndarray::Array2::from_shape_vec((n, 6), u)
-                .expect("n × 6")
-                .into_pyarray(py),
-            vm.into_pyarray(py),
-        ))
+        let u = Array2::from_shape_vec((n, 6), u).expect("n × 6");
+        Ok((json, u.into_pyarray(py), vm.into_pyarray(py)))
     }
 
     /// Harmonic response (see `vibrofem harmonic`): forces in the command line's grammar
-    /// (`GROUP=FX,FY,FZ[@DEG]`), frequencies in Hz, a modal damping ratio or Rayleigh (α, β).
-    /// Returns (report JSON, real and imaginary displacements, frequencies × n_nodes × 3).
-    #[pyo3(signature = (force, freqs, damping = None, rayleigh = None, method = "modal", modes = None, probe = vec![]))]
+    /// (`GROUP=FX,FY,FZ[@DEG]`), one frequency `freq` (Hz) or a `sweep` (f0, f1, n) under the
+    /// command line's rules (0 ≤ f0 < f1, 2 ≤ n ≤ its cap), a modal damping ratio or Rayleigh
+    /// (α, β). Returns (report JSON, the frequencies, real and imaginary displacements,
+    /// frequencies × n_nodes × 3).
+    #[pyo3(signature = (force, freq = None, sweep = None, damping = None, rayleigh = None, method = "modal",
+        modes = None, probe = vec![]))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn harmonic<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         force: Vec<String>,
-        freqs: Vec<f64>,
+        freq: Option<f64>,
+        sweep: Option<(f64, f64, usize)>,
         damping: Option<f64>,
         rayleigh: Option<(f64, f64)>,
         method: &str,
         modes: Option<usize>,
         probe: Vec<String>,
-    ) -> PyResult<(String, Bound<'py, PyArray3<f64>>, Bound<'py, PyArray3<f64>>)> {
+    ) -> PyResult<(
+        String,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray3<f64>>,
+        Bound<'py, PyArray3<f64>>,
+    )> {
         use vibrofem::analysis::harmonic::{Damping, GroupForce};
         use vibrofem::app::harmonic as h;
         let damping = match (damping, rayleigh) {
             (Some(z), None) => Damping::Ratio(z),
             (None, Some((alpha, beta))) => Damping::Rayleigh { alpha, beta },
             _ => {
-                return Err(err(vibrofem::Error::InvalidInput(
-                    "harmonic: give damping=ZETA or rayleigh=(ALPHA, BETA), one of them".into(),
-                )));
+                return Err(InputError::new_err(
+                    "harmonic: give damping=ZETA or rayleigh=(ALPHA, BETA), one of them",
+                ));
             }
         };
+        damping.validate().map_err(err)?;
+        let freqs = harmonic_freqs(freq, sweep)?;
         let forces = force
             .iter()
             .map(|f| GroupForce::parse("force", f))
@@ -479,69 +600,48 @@ impl PyModel {
             .map_err(err)?;
         let req = h::HarmonicRequest {
             forces,
-            freqs_hz: freqs,
+            freqs_hz: freqs.clone(),
             damping,
             method: h::Method::parse(method).map_err(err)?,
             modes,
             probes: probe,
         };
-        let sys = self.system(py)?;
+        let system = self.system_task(Engine::Native);
         let mesh = self.mesh.clone();
-        let (json, re, im, nf) = py
-            .detach(move || -> vibrofem::Result<(String, Vec<f64>, Vec<f64>, usize)> {
-                let run = h::run(&sys, &mesh, &req)?;
-                let json = serde_json::to_string(&run.report).map_err(|e| vibrofem::Error::output("JSON", e))?;
-                let n = mesh.nodes.len();
-                let (mut re, mut im) = (Vec::with_capacity(run.nodal.len() * n * 3), Vec::new());
-                for nodal in &run.nodal {
-                    for v in nodal.iter().take(n) {
-                        for c in &v[..3] {
-                            re.push(c.re);
-                            im.push(c.im);
-                        }
-                    }
-                }
-                Ok((json, re, im, run.nodal.len()))
-            })
-            .map_err(err)?;
+        let (json, re, im) = interruptible(py, move || harmonic_out(&system()?, &mesh, &req))?;
+        let nf = freqs.len();
         let n = re.len() / (3 * nf.max(1));
         let arr = |v: Vec<f64>| {
-            numpy::ndarray::Array3::from_shape_vec((nf, n, 3), v)
+            Array3::from_shape_vec((nf, n, 3), v)
                 .expect("frequencies × nodes × 3")
                 .into_pyarray(py)
         };
-        Ok((json, arr(re), arr(im)))
+        Ok((json, freqs.into_pyarray(py), arr(re), arr(im)))
     }
 
     /// Write K, M, the DOF map and model.json into `dir` (see `vibrofem export`); returns the
     /// files written.
     #[pyo3(signature = (dir, format = "both"))]
-    fn export(&mut self, py: Python<'_>, dir: std::path::PathBuf, format: &str) -> PyResult<Vec<String>> {
-        let formats = vibrofem::app::export::Formats::parse(format).map_err(err)?;
-        let sys = self.system(py)?;
-        let (_, files) = py
-            .detach(move || vibrofem::app::export::export(&sys, &dir, formats))
-            .map_err(err)?;
+    fn export(&self, py: Python<'_>, dir: PathBuf, format: &str) -> PyResult<Vec<String>> {
+        let formats = engines::export::Formats::parse(format).map_err(err)?;
+        let system = self.system_task(Engine::Native);
+        let (_, files) = interruptible(py, move || engines::export::export(&system()?, &dir, formats))?;
         Ok(files.iter().map(|p| p.display().to_string()).collect())
     }
 }
 
-/// Run a scene file (TOML) and return its report as JSON text.
+/// Run a scene file (TOML) and return its report as JSON text; with `out`, the result files
+/// the scene asks for are written there (the folder is created).
 #[pyfunction]
 #[pyo3(signature = (path, out = None))]
-fn run_scene(py: Python<'_>, path: std::path::PathBuf, out: Option<std::path::PathBuf>) -> PyResult<String> {
-    let report = py
-        .detach(move || -> vibrofem::Result<_> {
-            let scene = vibrofem::app::scene::Scene::load(&path)?;
-            match &out {
-                Some(o) => {
-                    std::fs::create_dir_all(o).map_err(|e| vibrofem::Error::io(o, e))?;
-                    scene.run(Some((o, "")))
-                }
-                None => scene.run(None),
-            }
-        })
-        .map_err(err)?;
+fn run_scene(py: Python<'_>, path: PathBuf, out: Option<PathBuf>) -> PyResult<String> {
+    let report = interruptible(py, move || match &out {
+        None => vibrofem::app::scene::run(&path),
+        Some(o) => {
+            std::fs::create_dir_all(o).map_err(|e| vibrofem::Error::io(o, e))?;
+            vibrofem::app::scene::Scene::load(&path)?.run(Some((o, "")))
+        }
+    })?;
     serde_json::to_string(&report).map_err(json_err)
 }
 

@@ -6,6 +6,7 @@ use crate::mesh::Mesh;
 use crate::model::{Model, ModelSpec};
 use crate::post::modal::{ParticipationTable, hz, lambda_of_hz, participation};
 use crate::system::{System, SystemOptions};
+use crate::util::max_nan;
 use crate::{Error, Result};
 use serde::Serialize;
 use std::time::Instant;
@@ -350,8 +351,8 @@ pub fn finish(
     let (volume, solid_mass) = model.volume_and_mass()?;
     let mass = solid_mass + model.discrete_mass();
 
-    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
-    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| max_nan(a, b));
+    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| max_nan(a, b));
     let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let notes = solution_notes(model, &sol, &parts, &modes, verify_tol, accurate);
     // The factorisation this process analysed (none when another engine solved).
@@ -450,8 +451,8 @@ fn solution_notes(
     verify_tol: f64,
     accurate: bool,
 ) -> Vec<String> {
-    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
-    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| max_nan(a, b));
+    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| max_nan(a, b));
     let mut notes = model.notes.clone();
     notes.extend(sol.notes.iter().cloned());
     notes.extend(free_part_notes(model, parts));
@@ -467,7 +468,7 @@ fn solution_notes(
     let max_res_elastic = modes
         .iter()
         .filter(|m| m.kind == "elastic")
-        .fold(0.0f64, |a, m| a.max(m.rel_residual));
+        .fold(0.0f64, |a, m| max_nan(a, m.rel_residual));
     if accurate && max_res_elastic > 1e-6 {
         notes.push(format!(
             "ill-conditioned model: the modes are backward stable (backward error {max_back:.1e}), but residuals \

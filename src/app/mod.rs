@@ -5,17 +5,18 @@
 //! - [`machines`]: the seed machines (crank drive, autobalancer, balancer data), one shape each, and
 //!   their registry.
 //! - [`studies`]: scene files and their runs, batch runs and merges, sweeps, convergence studies.
+//! - [`engines`]: the native/SLEPc switch every modal solve goes through, the SLEPc/MPI engine
+//!   and its import, and the export of K, M and the DOF map for other solvers.
+//! - [`harmonic`]: the harmonic command's run and report.
 //! - [`report`], [`cli`]: the report model and its renderers, clap options.
 //! - [`toml_file`]: the one reader of vibrofem's TOML input files (lines, keys, typed errors).
-//! - [`export`], [`slepc`]: K, M and the DOF map for other solvers; the SLEPc/MPI engine.
 pub mod cli;
 pub mod design;
 pub mod dynamics;
-pub mod export;
+pub mod engines;
 pub mod harmonic;
 pub mod machines;
 pub mod report;
-pub mod slepc;
 pub mod studies;
 pub mod toml_file;
 
@@ -31,3 +32,6 @@ pub mod sweep {
     pub use super::studies::sweep::*;
 }
 pub use studies::converge;
+
+// The engines' modules under their former paths.
+pub use engines::{export, slepc};

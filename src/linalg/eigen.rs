@@ -1516,7 +1516,12 @@ fn verify_of(lambda: &[f64], x: MatRef<'_, f64>, kx: &Mat<f64>, mx: &Mat<f64>, s
     for i in 0..nc {
         for j in 0..nc {
             let e = g[(i, j)] - if i == j { 1.0 } else { 0.0 };
-            err = err.max(e.abs());
+            // NaN-propagating: vectors holding a NaN are not M-orthonormal.
+            err = if err.is_nan() || e.is_nan() {
+                f64::NAN
+            } else {
+                err.max(e.abs())
+            };
         }
     }
     (res, err)

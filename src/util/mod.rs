@@ -4,3 +4,9 @@
 
 pub mod fmt;
 pub mod memory;
+
+/// The larger of two numbers, NaN if either is: a verdict (largest residual, backward error)
+/// must not drop a NaN as `f64::max` does.
+pub fn max_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() { f64::NAN } else { a.max(b) }
+}

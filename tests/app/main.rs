@@ -22,6 +22,7 @@ mod options;
 mod outputs;
 mod resource_limits;
 mod scenes;
+mod slepc_import;
 mod solid_elements;
 mod study_inputs;
 mod support;

@@ -33,9 +33,16 @@ hex8           ``"standard"`` or ``"incompatible"``          ``--hex8``
 
 Errors raise :class:`VibrofemError` subclasses (:class:`InputError`, :class:`NumericalError`,
 :class:`OutputError`, :class:`EngineError`) carrying the command line's message.
+
+Paths may be ``str``, ``bytes`` or :class:`os.PathLike` objects. Long computations run with the
+interpreter released and stop at Ctrl-C (:class:`KeyboardInterrupt`; the computation already
+started finishes in the background and its result is dropped). A :class:`Model` may be shared by
+threads: its matrices are assembled once, by the first analysis that needs them.
 """
 
 import json as _json
+import operator as _operator
+import os as _os
 from dataclasses import dataclass as _dataclass, field as _field
 
 import numpy as _np
@@ -134,6 +141,32 @@ def _couplings(d):
     return list(d)
 
 
+def _path(p, what):
+    """A path as text: ``str`` as is, ``bytes`` and path objects decoded as the OS does."""
+    if isinstance(p, str):
+        return p
+    if isinstance(p, (bytes, _os.PathLike)):
+        return _os.fsdecode(_os.fspath(p))
+    raise TypeError(f"{what}: expected a path (str, bytes or os.PathLike), got {type(p).__name__}")
+
+
+def _sweep(sweep):
+    """(f0, f1, n) with n a whole number, as the command line's ``--sweep F0 F1 N``."""
+    try:
+        f0, f1, n = sweep
+    except (TypeError, ValueError):
+        raise InputError(f"sweep: give (f0, f1, n), got {sweep!r}") from None
+    try:
+        n = _operator.index(n)
+    except TypeError:
+        if not (isinstance(n, float) and n.is_integer()):
+            raise InputError(f"sweep: N {n!r} must be a whole number ≥ 2") from None
+        n = int(n)
+    if n < 2:
+        raise InputError(f"sweep: need at least 2 points, got {n}")
+    return float(f0), float(f1), n
+
+
 def _names(d):
     if d is None:
         return []
@@ -194,7 +227,7 @@ def read_mesh(source, length_unit="m"):
     """Read a gmsh mesh (MSH 2.2 or 4.1, ASCII or binary) or generate one
     (``box:LX,LY,LZ:NX,NY,NZ:KIND``, ``helix:…``, ``sandwich:paper[,SIZE]``, ``ibeam-*:…``),
     scaling coordinates from ``length_unit`` (m, cm, mm) to metres."""
-    return Mesh(_core.read_mesh(str(source), length_unit))
+    return Mesh(_core.read_mesh(_path(source, "read_mesh"), length_unit))
 
 
 @_dataclass
@@ -288,7 +321,7 @@ class Model:
         beam=None,
         hex8="standard",
     ):
-        if isinstance(mesh, (str, bytes)):
+        if isinstance(mesh, (str, bytes, _os.PathLike)):
             mesh = read_mesh(mesh)
         self.mesh = mesh
         gm = group_material
@@ -383,7 +416,8 @@ class Model:
                  probe=None):
         """Steady-state response to harmonic forces (as ``vibrofem harmonic``):
         ``force={group: (Fx, Fy, Fz)}`` or ``(Fx, Fy, Fz, phase_deg)`` (N, total on the group);
-        ``freq=Hz`` or ``sweep=(f0, f1, n)``; ``damping=ζ`` (modal) or ``rayleigh=(α, β)``
+        ``freq=Hz`` or ``sweep=(f0, f1, n)`` (n points from f0 to f1, 0 ≤ f0 < f1, as the command
+        line's ``--sweep``, with its cap on n); ``damping=ζ`` (modal) or ``rayleigh=(α, β)``
         (C = αM + βK); ``method`` "modal" (superposition with static correction), "direct" or
         "both"; ``modes`` superposed (default: all below 2 × the highest frequency)."""
         forces = []
@@ -396,17 +430,17 @@ class Model:
             forces = _group_values(force, "force")
         if (freq is None) == (sweep is None):
             raise InputError("harmonic: give freq=Hz or sweep=(f0, f1, n), one of them")
-        freqs = [float(freq)] if freq is not None else [float(f) for f in _np.linspace(sweep[0], sweep[1], int(sweep[2]))]
-        rep, re, im = self._core.harmonic(
+        rep, freqs, re, im = self._core.harmonic(
             force=forces,
-            freqs=freqs,
+            freq=None if freq is None else float(freq),
+            sweep=None if sweep is None else _sweep(sweep),
             damping=None if damping is None else float(damping),
             rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
             method=method,
             modes=modes,
             probe=[] if probe is None else _names(probe),
         )
-        return Harmonic(frequencies_hz=_np.array(freqs), displacement=re + 1j * im, report=_json.loads(rep))
+        return Harmonic(frequencies_hz=freqs, displacement=re + 1j * im, report=_json.loads(rep))
 
     def static(self, force=None, pressure=None, gravity=None, displace=None):
         """Linear statics, one load case: ``force={group: (Fx, Fy, Fz)}`` (N; on a coupled group
@@ -436,7 +470,7 @@ class Model:
 
     def export(self, dir, format="both"):
         """Write K, M (PETSc binary, Matrix Market), dofs.csv and model.json into ``dir``."""
-        return self._core.export(str(dir), format)
+        return self._core.export(_path(dir, "export"), format)
 
     def __repr__(self):
         return f"<vibrofem Model of {self.mesh.source!r}>"
@@ -457,4 +491,4 @@ class Harmonic:
 def run_scene(path, out=None):
     """Run a scene file (TOML) and return its report (what ``vibrofem run --json`` prints) as a
     dict; ``out`` is the folder for the result files the scene asks for."""
-    return _json.loads(_core.run_scene(str(path), None if out is None else str(out)))
+    return _json.loads(_core.run_scene(_path(path, "run_scene"), None if out is None else _path(out, "run_scene")))

@@ -33,26 +33,32 @@ pub struct ExportArgs {
 }
 
 pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
-    use crate::app::export;
+    use crate::app::engines::{export, slepc};
     let formats = export::Formats::parse(&a.format)?;
+    // The SLEPc job beside the PETSc matrices, its numbers checked before any work.
+    let job = (formats != export::Formats::MatrixMarket)
+        .then(|| -> Result<_> {
+            let target = match &a.band {
+                Some(b) => ModalTarget::Band(b[0], b[1]),
+                None => ModalTarget::Modes(a.modes),
+            };
+            let params = crate::analysis::modal::ModalParams {
+                target,
+                shift_hz: a.shift,
+                ..Default::default()
+            };
+            slepc::check_params(&params)?;
+            Ok(params)
+        })
+        .transpose()?;
     let spec = a.model.spec()?;
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let model = crate::model::Model::build(&mesh, &spec, &a.mesh)?;
     let sys = crate::system::System::assemble_only(model, &a.mesh)?;
     let (summary, mut files) = export::export(&sys, &a.out, formats)?;
-    if formats != export::Formats::MatrixMarket {
+    if let Some(params) = &job {
         // The SLEPc job beside the PETSc matrices: `mpirun -n N python3 DIR/slepc_modes.py DIR`.
-        let target = match (&a.band, a.modes) {
-            (Some(b), _) => ModalTarget::Band(b[0], b[1]),
-            (None, 0) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
-            (None, n) => ModalTarget::Modes(n),
-        };
-        let params = crate::analysis::modal::ModalParams {
-            target,
-            shift_hz: a.shift,
-            ..Default::default()
-        };
-        crate::app::slepc::write_job(&sys, &params, &a.out, false)?;
+        slepc::write_job(&sys, params, &a.out, false)?;
         files.push(a.out.join("params.json"));
         files.push(a.out.join("slepc_modes.py"));
     }

@@ -1,8 +1,9 @@
 //! `vibrofem modes`: natural frequencies and mode shapes of a mesh.
 
 use super::{check_outputs, emit, ordering, parse_bytes};
-use crate::analysis::modal::{ModalOptions, ModalTarget, run_modal};
+use crate::analysis::modal::{ModalOptions, ModalTarget};
 use crate::app::cli::args::{ModelArgs, length_scale};
+use crate::app::engines::{Engine, SlepcOptions};
 use crate::io;
 use crate::{Error, Result};
 use std::path::PathBuf;
@@ -81,46 +82,21 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
         max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
         max_applications: a.max_applications,
     };
+    // The engine switch: native, SLEPc under mpirun, or the import of a SLEPc job.
+    let engine = Engine::parse(
+        &a.engine,
+        SlepcOptions {
+            ranks: a.ranks,
+            workdir: a.slepc_dir.clone(),
+            import: a.slepc_import.clone(),
+            ..Default::default()
+        },
+    )?;
     check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref()], None)?;
     let t = std::time::Instant::now();
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
-    let source = a.mesh.clone();
-    let engine = if a.slepc_import.is_some() {
-        "slepc"
-    } else {
-        a.engine.as_str()
-    };
-    let run = match engine {
-        "native" => {
-            if a.ranks != 1 || a.slepc_dir.is_some() {
-                return Err(Error::InvalidInput(
-                    "--ranks and --slepc-dir apply to --engine slepc".into(),
-                ));
-            }
-            run_modal(&mesh, &source, &opts, read_time)?
-        }
-        "slepc" => {
-            let t = std::time::Instant::now();
-            let model = crate::model::Model::build(&mesh, &opts.spec, &source)?;
-            let sys = crate::system::System::assemble_only(model, &source)?;
-            let t_model = t.elapsed().as_secs_f64() - sys.timings.assemble;
-            let so = crate::app::slepc::SlepcOptions {
-                ranks: a.ranks,
-                workdir: a.slepc_dir.clone(),
-                import: a.slepc_import.clone(),
-                ..Default::default()
-            };
-            let mut run = crate::app::slepc::solve(&sys, &opts.params(), &so)?;
-            run.report.timings_s.read = read_time;
-            run.report.timings_s.assemble += t_model;
-            run.report.timings_s.total += read_time + t_model;
-            run
-        }
-        e => {
-            return Err(Error::InvalidInput(format!("--engine '{e}': use native or slepc")));
-        }
-    };
+    let run = engine.solve_mesh(&mesh, &a.mesh, &opts, read_time)?;
     if a.json {
         outln!(
             "{}",

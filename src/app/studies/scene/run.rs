@@ -3,6 +3,7 @@
 //! harmonic), each writing the result files asked for in `[output]`.
 
 use super::{Formulation, MeshSource, ModeShapes, Scene, SceneReport};
+use crate::app::engines::{Before, Engine};
 use crate::app::toml_file;
 use crate::mesh::Mesh;
 use crate::system::System;
@@ -190,7 +191,8 @@ impl Scene {
         let t_model = Instant::now();
         let model = crate::model::Model::build(&mesh, &self.spec, &source)?;
         let model_time = t_model.elapsed().as_secs_f64();
-        let sys = if self.slepc_ranks.is_some() && self.static_cases.is_none() && self.harmonic.is_none() {
+        let engine = self.slepc_ranks.map_or(Engine::Native, Engine::slepc);
+        let sys = if !engine.factorises_here() && self.static_cases.is_none() && self.harmonic.is_none() {
             // SLEPc factorises on its ranks: no ordering or memory check for this machine.
             System::assemble_only(model, &source)?
         } else {
@@ -242,21 +244,13 @@ impl Run<'_> {
             block,
             ..Default::default()
         };
-        let mut run = match scene.slepc_ranks {
-            None => crate::analysis::modal::solve(&self.sys, &params)?,
-            Some(ranks) => crate::app::slepc::solve(
-                &self.sys,
-                &params,
-                &crate::app::slepc::SlepcOptions {
-                    ranks,
-                    ..Default::default()
-                },
-            )?,
+        let engine = scene.slepc_ranks.map_or(Engine::Native, Engine::slepc);
+        let before = Before {
+            read_s: self.read_time,
+            model_s: self.model_time,
         };
-        let tm = &mut run.report.timings_s;
-        tm.read = self.read_time;
-        tm.assemble += self.model_time;
-        tm.total += self.read_time + self.model_time;
+        let mut run = engine.solve(&self.sys, &params, before)?;
+        let tm = &run.report.timings_s;
         log::info!(
             "scene {}: modal: assemble {:.3} s, factor {:.3} s, eigen {:.3} s",
             scene.name,

@@ -8,17 +8,21 @@
 //! it recomputes every residual and backward error with its own K and M, the M-orthonormality,
 //! participation and shapes, and takes completeness from the MUMPS Sturm counts.
 //!
+//! A job run elsewhere (`vibrofem export`, then the script on a cluster) is imported the same
+//! way (`--slepc-import DIR`), after checking that it was computed for this model (K and M) and
+//! for this request (the modes asked for lie among those computed).
+//!
 //! SLEPc, PETSc and MUMPS come from Debian's `python3-slepc4py`, mpirun from `openmpi-bin`
 //! (`bash validation/setup_slepc.sh` installs them). The Debian build needs `PETSC_DIR` and
 //! `SLEPC_DIR`; they default to Debian's paths when unset.
 
+use super::results;
 use crate::analysis::modal::{self, ModalParams, ModalRun, ModalTarget, Timings};
 use crate::io::matrix;
-use crate::linalg::eigen::{self, EigenParams, EigenSolution, SturmCheck};
+use crate::linalg::eigen::{self, EigenParams};
 use crate::post::modal::lambda_of_hz;
 use crate::system::System;
 use crate::{Error, Result};
-use faer::Mat;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
@@ -63,7 +67,7 @@ impl Default for SlepcOptions {
     }
 }
 
-fn engine_err(msg: impl Into<String>) -> Error {
+pub(super) fn engine_err(msg: impl Into<String>) -> Error {
     Error::Engine {
         engine: ENGINE.into(),
         msg: msg.into(),
@@ -173,52 +177,112 @@ fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
     Ok(WorkDir { path, remove })
 }
 
-/// A fingerprint of K (size, entries, Σ|Kij|) that ties SLEPc results to the model they were
-/// computed for: importing them for other model options is refused.
-fn fingerprint(sys: &System) -> serde_json::Value {
-    let k = sys.k();
-    let sum: f64 = k.values.iter().map(|v| v.abs()).sum();
-    serde_json::json!({ "n": sys.n_free(), "nnz": k.pattern.nnz(), "abs_sum": sum })
-}
-
-/// Write the SLEPc job for `sys` into `dir` — `params.json` (what to compute, σ, the model's
-/// fingerprint) and the script `slepc_modes.py` — beside K and M in PETSc format (written here
-/// when `matrices`). σ and the target follow the native solver's conventions. Returns σ.
-pub fn write_job(sys: &System, params: &ModalParams, dir: &Path, matrices: bool) -> Result<f64> {
+/// A fingerprint of K and M (size, entries, Σ|Kij|, Σ|Mij|, Σ Mii, the mass matrix's kind)
+/// that ties SLEPc results to the model they were computed for: importing them for other model
+/// options (supports, couplings, materials, density, lumped mass, point masses) is refused.
+pub(super) fn fingerprint(sys: &System) -> Result<serde_json::Value> {
     let k = sys.k();
     let m = sys.m()?;
-    if matrices {
-        matrix::write_petsc(&dir.join("K.petsc"), k)?;
-        // On K's pattern: the script forms K − sM with PETSc's SAME_NONZERO_PATTERN.
-        matrix::write_petsc(&dir.join("M.petsc"), &m.on_pattern(k.pattern.clone()))?;
+    let abs_sum = |v: &[f64]| v.iter().map(|x| x.abs()).sum::<f64>();
+    Ok(serde_json::json!({
+        "n": sys.n_free(),
+        "nnz": k.pattern.nnz(),
+        "abs_sum": abs_sum(&k.values),
+        "m_nnz": m.pattern.nnz(),
+        "m_abs_sum": abs_sum(&m.values),
+        "m_diag_sum": m.diagonal().iter().sum::<f64>(),
+        "mass_matrix": sys.model().spec.lumping.name(),
+    }))
+}
+
+/// What a SLEPc job computes: the pairs nearest σ, or every eigenvalue in a band (λ units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum JobTarget {
+    /// The `nev` eigenvalues nearest σ.
+    Nearest(usize),
+    /// Every eigenvalue in [lo, hi], rad²/s².
+    Band(f64, f64),
+}
+
+/// A SLEPc job: its target and shift σ (rad²/s²), as `params.json` holds them.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Job {
+    pub target: JobTarget,
+    pub sigma: f64,
+}
+
+/// Check the numbers of a modal request before any work: a shift and a band whose eigenvalues
+/// (2πf)² are finite, a band from low to high, at least one mode. Errors name the option.
+pub fn check_params(params: &ModalParams) -> Result<()> {
+    let usable = |f: f64| f.is_finite() && lambda_of_hz(f).is_finite();
+    if let Some(f) = params.shift_hz {
+        if !usable(f) {
+            return Err(Error::option(
+                "--shift",
+                format!("--shift: {f} Hz is not a usable frequency (finite, with (2πf)² representable)"),
+            ));
+        }
     }
+    match params.target {
+        ModalTarget::Modes(0) => Err(Error::option("--modes", "--modes must be at least 1")),
+        ModalTarget::Modes(_) => Ok(()),
+        ModalTarget::Band(lo, hi) if !usable(lo) || !usable(hi) => Err(Error::option(
+            "--band",
+            format!("--band: [{lo}, {hi}] Hz is not a usable band (finite, with (2πf)² representable)"),
+        )),
+        ModalTarget::Band(lo, hi) if !(lo < hi) => Err(Error::option(
+            "--band",
+            format!("--band: lower frequency {lo} must be below the upper {hi}"),
+        )),
+        ModalTarget::Band(..) => Ok(()),
+    }
+}
+
+/// The SLEPc job of a request on `sys`: σ and the target follow the native solver's
+/// conventions (the default shift below the spectrum; a band's lower end).
+pub(super) fn job_of(sys: &System, params: &ModalParams) -> Result<Job> {
+    check_params(params)?;
+    let k = sys.k();
+    let m = sys.m()?;
     let sigma = match (params.shift_hz, params.target) {
         (Some(f), _) => lambda_of_hz(f),
         (None, ModalTarget::Band(lo, _)) if lo > 0.0 => lambda_of_hz(lo) * (1.0 - 1e-9),
         _ => eigen::default_shift(k, m),
     };
     if !sigma.is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "--shift: {:?} Hz is not a usable frequency",
-            params.shift_hz
-        )));
+        return Err(Error::option(
+            "--shift",
+            format!("--shift: {:?} Hz is not a usable frequency", params.shift_hz),
+        ));
     }
-    let n = sys.n_free();
-    let mut p = match params.target {
-        ModalTarget::Modes(nm) => serde_json::json!({ "nev": nm.min(n), "sigma": sigma, "tol": 1e-12 }),
+    let target = match params.target {
+        ModalTarget::Modes(nm) => JobTarget::Nearest(nm.min(sys.n_free())),
         ModalTarget::Band(lo, hi) => {
-            if !(lo < hi) {
-                return Err(Error::InvalidInput(format!(
-                    "--band: lower frequency {lo} must be below the upper {hi}"
-                )));
-            }
             let (l, h) = (lambda_of_hz(lo), lambda_of_hz(hi));
             // A band from 0 includes the rigid-body modes, which round to either side of 0.
             let l = if lo <= 0.0 { sigma.min(-1e-9 * h.abs()) } else { l };
-            serde_json::json!({ "band": [l, h], "sigma": sigma, "tol": 1e-12 })
+            JobTarget::Band(l, h)
         }
     };
-    p["model"] = fingerprint(sys);
+    Ok(Job { target, sigma })
+}
+
+/// Write the SLEPc job for `sys` into `dir` — `params.json` (what to compute, σ, the model's
+/// fingerprint) and the script `slepc_modes.py` — beside K and M in PETSc format (written here
+/// when `matrices`). σ and the target follow the native solver's conventions. Returns σ.
+pub fn write_job(sys: &System, params: &ModalParams, dir: &Path, matrices: bool) -> Result<f64> {
+    let job = job_of(sys, params)?;
+    if matrices {
+        let k = sys.k();
+        matrix::write_petsc(&dir.join("K.petsc"), k)?;
+        // On K's pattern: the script forms K − sM with PETSc's SAME_NONZERO_PATTERN.
+        matrix::write_petsc(&dir.join("M.petsc"), &sys.m()?.on_pattern(k.pattern.clone()))?;
+    }
+    let mut p = match job.target {
+        JobTarget::Nearest(nev) => serde_json::json!({ "nev": nev, "sigma": job.sigma, "tol": 1e-12 }),
+        JobTarget::Band(l, h) => serde_json::json!({ "band": [l, h], "sigma": job.sigma, "tol": 1e-12 }),
+    };
+    p["model"] = fingerprint(sys)?;
     let path = dir.join("params.json");
     std::fs::write(
         &path,
@@ -227,22 +291,7 @@ pub fn write_job(sys: &System, params: &ModalParams, dir: &Path, matrices: bool)
     .map_err(|e| Error::io(&path, e))?;
     let script = dir.join("slepc_modes.py");
     std::fs::write(&script, SCRIPT).map_err(|e| Error::io(&script, e))?;
-    Ok(sigma)
-}
-
-/// What the script reports in `slepc.json`.
-#[derive(Debug, serde::Deserialize)]
-struct SlepcOut {
-    n: usize,
-    nconv: usize,
-    converged: usize,
-    iterations: usize,
-    ranks: usize,
-    sigma: f64,
-    lower: (f64, usize),
-    upper: (f64, usize),
-    timings_s: std::collections::BTreeMap<String, f64>,
-    slepc: String,
+    Ok(job.sigma)
 }
 
 /// Run the job in `dir` under mpirun (Open MPI's flags only for Open MPI's launchers).
@@ -286,168 +335,38 @@ fn run_mpi(o: &SlepcOptions, dir: &Path, versions: &str) -> Result<()> {
     Ok(())
 }
 
-/// The shift of the job in `dir`, after checking that it was exported from this very model
-/// (same K: size, entries and Σ|Kij| to rounding).
-fn check_import(sys: &System, dir: &Path) -> Result<f64> {
-    let path = dir.join("params.json");
-    let p: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?)
-        .map_err(|e| Error::InvalidInput(format!("{}: {e}", path.display())))?;
-    let want = fingerprint(sys);
-    let have = &p["model"];
-    let same = have["n"] == want["n"]
-        && have["nnz"] == want["nnz"]
-        && match (have["abs_sum"].as_f64(), want["abs_sum"].as_f64()) {
-            (Some(a), Some(b)) => (a - b).abs() <= 1e-12 * b.abs(),
-            _ => false,
-        };
-    if !same {
-        return Err(Error::InvalidInput(format!(
-            "{}: these results were computed for another model (exported: {} DOFs, {} entries; this model: {} DOFs, {} entries, or other values): give the mesh and model options of the export",
-            dir.display(),
-            have["n"],
-            have["nnz"],
-            want["n"],
-            want["nnz"]
-        )));
-    }
-    p["sigma"]
-        .as_f64()
-        .ok_or_else(|| Error::InvalidInput(format!("{}: no 'sigma'", path.display())))
-}
-
-/// Solve the modal problem of `sys` with SLEPc under MPI and verify it here.
+/// Solve the modal problem of `sys` with SLEPc under MPI (or import the results of a job run
+/// elsewhere) and verify it here.
 pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<ModalRun> {
     let t_all = Instant::now();
     if o.ranks == 0 {
-        return Err(Error::InvalidInput("--ranks must be at least 1".into()));
+        return Err(Error::option("--ranks", "--ranks must be at least 1"));
     }
+    let want = job_of(sys, params)?;
     // Either run the job here under mpirun, or import the results of one run elsewhere (a
     // cluster) from the folder `vibrofem export` wrote.
-    let (wd, sigma, t_export, t_slepc) = match &o.import {
+    let (wd, (job, notes), t_export, t_slepc) = match &o.import {
         Some(dir) => {
-            let sigma = check_import(sys, dir)?;
-            (
-                WorkDir {
-                    path: dir.clone(),
-                    remove: false,
-                },
-                sigma,
-                0.0,
-                0.0,
-            )
+            let job = results::check_job(sys, params, &want, dir)?;
+            let wd = WorkDir {
+                path: dir.clone(),
+                remove: false,
+            };
+            (wd, job, 0.0, 0.0)
         }
         None => {
             let versions = check_available(o)?;
             let wd = workdir(o)?;
             let t = Instant::now();
-            let sigma = write_job(sys, params, &wd.path, true)?;
+            write_job(sys, params, &wd.path, true)?;
             let t_export = t.elapsed().as_secs_f64();
             let t = Instant::now();
             run_mpi(o, &wd.path, &versions)?;
-            (wd, sigma, t_export, t.elapsed().as_secs_f64())
+            (wd, (want, Vec::new()), t_export, t.elapsed().as_secs_f64())
         }
     };
-    let dir = &wd.path;
-    let info_path = dir.join("slepc.json");
-    let info: SlepcOut =
-        serde_json::from_str(&std::fs::read_to_string(&info_path).map_err(|e| Error::io(&info_path, e))?)
-            .map_err(|e| engine_err(format!("{}: {e}", info_path.display())))?;
-    let n = sys.n_free();
-    if info.n != n {
-        return Err(engine_err(format!(
-            "SLEPc solved a problem of size {} for a model of {n} DOFs",
-            info.n
-        )));
-    }
-    let lam_all = matrix::read_f64_le(&dir.join("lambda.bin"))?;
-    let x_all = matrix::read_f64_le(&dir.join("vectors.bin"))?;
-    if lam_all.len() != info.nconv || x_all.len() != n * info.nconv {
-        return Err(engine_err(format!(
-            "expected {} eigenpairs of size {n} in {}, found {} values and {} vector entries",
-            info.nconv,
-            dir.display(),
-            lam_all.len(),
-            x_all.len()
-        )));
-    }
-
-    // Keep what was asked for, ascending: the nearest to σ, or the band.
-    let tv = Instant::now();
-    let mut idx: Vec<usize> = (0..info.nconv).collect();
-    match params.target {
-        ModalTarget::Modes(nm) => {
-            // The script kept the nearest to σ already; this guards the count.
-            idx.sort_by(|&a, &b| (lam_all[a] - sigma).abs().total_cmp(&(lam_all[b] - sigma).abs()));
-            idx.truncate(nm.min(n));
-        }
-        ModalTarget::Band(..) => {
-            idx.retain(|&i| lam_all[i] > info.lower.0 && lam_all[i] <= info.upper.0);
-        }
-    }
-    idx.sort_by(|&a, &b| lam_all[a].total_cmp(&lam_all[b]));
-    let k = sys.k();
-    let m = sys.m()?;
-    let mut x = Mat::zeros(n, idx.len());
-    let mut lambda = Vec::with_capacity(idx.len());
-    for (c, &i) in idx.iter().enumerate() {
-        let col = &x_all[i * n..(i + 1) * n];
-        // M-normalise here (SLEPc's B-normalisation, re-done in our arithmetic).
-        let mx = m.mul_vec(col);
-        let s = col.iter().zip(&mx).map(|(a, b)| a * b).sum::<f64>().sqrt();
-        let s = if s > 0.0 { 1.0 / s } else { 1.0 };
-        for r in 0..n {
-            x[(r, c)] = col[r] * s;
-        }
-        lambda.push(lam_all[i]);
-    }
-    let (rel_residual, m_orth, backward_error) = eigen::verify_with_backward_errors(k, m, &lambda, x.as_ref(), sigma);
-    let found = lambda.iter().filter(|&&l| l > info.lower.0 && l < info.upper.0).count();
-    let expected = info.upper.1.saturating_sub(info.lower.1);
-    let sturm = SturmCheck {
-        lower: info.lower,
-        upper: info.upper,
-        expected,
-        found,
-        complete: expected == found,
-    };
-    let time_verify = tv.elapsed().as_secs_f64();
-    let sol = EigenSolution {
-        lambda,
-        vectors: x,
-        rel_residual,
-        backward_error,
-        notes: vec![format!(
-            "solved by SLEPc {} (Krylov–Schur, shift-and-invert at σ = {:.4e} rad²/s², MUMPS LDLᵀ) on {} MPI ranks \
-             in {} restarts ({} pairs converged, {} kept, refined by {} inverse iteration(s) with Rayleigh–Ritz); \
-             residuals, backward errors and M-orthonormality recomputed here; \
-             completeness from the inertia of MUMPS factorisations of K − sM at s = {:.6e} and {:.6e} (Sturm counts {} and {})",
-            info.slepc,
-            info.sigma,
-            info.ranks,
-            info.iterations,
-            info.converged,
-            info.nconv,
-            info.timings_s.get("refinements").copied().unwrap_or(0.0),
-            info.lower.0,
-            info.upper.0,
-            info.lower.1,
-            info.upper.1
-        )],
-        m_orthonormality: m_orth,
-        sturm,
-        shift: sigma,
-        applications: 0,
-        // The shift factorisation and the Sturm factorisation at the upper end (the lower one
-        // is a second factorisation unless SLEPc's shift is the lower point).
-        factorizations: 3,
-        time_factor: 0.0,
-        time_iterate: info.timings_s.get("solve").copied().unwrap_or(0.0),
-        time_verify: time_verify + info.timings_s.get("sturm").copied().unwrap_or(0.0),
-        // MUMPS's factorisations are not probed here; the recomputed backward errors are the check.
-        factor_backward_error: 0.0,
-        memory: Default::default(),
-    };
-    let ts = |k: &str| info.timings_s.get(k).copied().unwrap_or(0.0);
+    let (sol, ts) = results::load(sys, &wd.path, (&job, &want), notes)?;
+    let ts = |k: &str| ts.get(k).copied().unwrap_or(0.0);
     let tm = Timings {
         assemble: sys.timings.assemble + t_export,
         order: sys.timings.order,

@@ -1,0 +1,117 @@
+"""How the package is called: paths of every kind, arguments under the command line's rules,
+Ctrl-C during a long computation, one model shared by threads (run by validation/run_live.sh
+with the other package tests: ``python -m pytest -q python/tests``)."""
+
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+import vibrofem as vf
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+TET10 = os.path.join(ROOT, "meshes", "s1_plate_tet10_h30.msh")
+BAR = "box:0.3,0.05,0.02:12,2,2:hex20"
+
+
+def test_paths_as_bytes_and_path_objects(tmp_path):
+    for p in (os.fsencode(TET10), pathlib.Path(TET10)):
+        mesh = vf.read_mesh(p)
+        assert mesh.source == TET10, mesh.source
+        assert mesh.cell_kinds["tet10"] > 0
+    assert vf.Model(os.fsencode(TET10)).mesh.source == TET10
+    assert vf.Model(pathlib.Path(TET10)).mesh.source == TET10
+    with pytest.raises(TypeError, match="read_mesh"):
+        vf.read_mesh(42)
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    files = model.export(os.fsencode(str(tmp_path / "k")), format="mtx")
+    assert all(f.startswith(str(tmp_path / "k")) for f in files), files
+
+
+def test_a_sweep_follows_the_command_lines_rules():
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    force = {"xmax": (0, 0, 10)}
+    # Reversed, as the command line refuses it.
+    with pytest.raises(vf.InputError, match="F0 < F1"):
+        model.harmonic(force=force, sweep=(600.0, 20.0, 5), damping=0.02)
+    # More points than the command line's cap, refused before any work.
+    t = time.perf_counter()
+    with pytest.raises(vf.InputError, match="sweep"):
+        model.harmonic(force=force, sweep=(20.0, 600.0, 10**9), damping=0.02)
+    assert time.perf_counter() - t < 5.0
+    with pytest.raises(vf.InputError, match="whole number"):
+        model.harmonic(force=force, sweep=(20.0, 600.0, 2.5), damping=0.02)
+    with pytest.raises(vf.InputError, match="at least 2"):
+        model.harmonic(force=force, sweep=(20.0, 600.0, 1), damping=0.02)
+    h = model.harmonic(force=force, sweep=(20.0, 600.0, 3.0), damping=0.02)
+    assert np.allclose(h.frequencies_hz, [20.0, 310.0, 600.0])
+    assert h.displacement.shape[0] == 3
+
+
+def test_one_model_is_shared_by_threads():
+    """Several threads on one model: one assembly, the same answers, no 'Already borrowed'."""
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    ref = vf.Model(vf.read_mesh(BAR), fix=["xmin"]).modes(6).frequencies_hz
+
+    def work(i):
+        if i % 3 == 0:
+            return model.modes(6).frequencies_hz
+        if i % 3 == 1:
+            K, _ = model.assemble()
+            return K.shape[0]
+        return model.mass
+
+    with ThreadPoolExecutor(6) as ex:
+        out = list(ex.map(work, range(12)))
+    for i, o in enumerate(out):
+        if i % 3 == 0:
+            assert np.allclose(o, ref, rtol=1e-12), (o, ref)
+    assert len({o for i, o in enumerate(out) if i % 3 == 1}) == 1
+
+
+CTRL_C = """
+import sys, time
+import vibrofem as vf
+model = vf.Model(vf.read_mesh(sys.argv[1]), fix=["xmin"])
+print("ready", flush=True)
+t = time.perf_counter()
+try:
+    model.modes(30)
+except KeyboardInterrupt:
+    print("interrupted after %.3f s" % (time.perf_counter() - t), flush=True)
+    sys.exit(3)
+print("finished after %.3f s" % (time.perf_counter() - t), flush=True)
+"""
+
+
+def test_ctrl_c_stops_a_long_modal_analysis_at_once():
+    """SIGINT during modes(): KeyboardInterrupt within a fraction of a second, not after the solve
+    (which takes several seconds here) and never a PanicException."""
+    big = "box:0.6,0.6,0.02:60,60,2:hex20"
+    p = subprocess.Popen(
+        [sys.executable, "-c", CTRL_C, big],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert p.stdout.readline().strip() == "ready"
+        time.sleep(1.0)
+        sent = time.perf_counter()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=300)
+        waited = time.perf_counter() - sent
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    assert "PanicException" not in err, err
+    assert p.returncode == 3, (p.returncode, out, err)
+    assert "interrupted" in out, out
+    assert waited < 2.0, f"KeyboardInterrupt came {waited:.1f} s after SIGINT: {out}"
