@@ -608,7 +608,7 @@ impl PyModel {
         };
         let system = self.system_task(Engine::Native);
         let mesh = self.mesh.clone();
-        let (json, re, im) = interruptible(py, move || harmonic_out(&system()?, &mesh, &req))?;
+        let (json, re, im) = interruptible(py, move || harmonic_out(&*system()?, &mesh, &req))?;
         let nf = freqs.len();
         let n = re.len() / (3 * nf.max(1));
         let arr = |v: Vec<f64>| {
@@ -625,7 +625,7 @@ impl PyModel {
     fn export(&self, py: Python<'_>, dir: PathBuf, format: &str) -> PyResult<Vec<String>> {
         let formats = engines::export::Formats::parse(format).map_err(err)?;
         let system = self.system_task(Engine::Native);
-        let (_, files) = interruptible(py, move || engines::export::export(&system()?, &dir, formats))?;
+        let (_, files) = interruptible(py, move || engines::export::export(&*system()?, &dir, formats))?;
         Ok(files.iter().map(|p| p.display().to_string()).collect())
     }
 }
