@@ -1221,7 +1221,7 @@ impl Scene {
         let harmonic = match &self.harmonic {
             None => None,
             Some(req) => {
-                let run = crate::app::harmonic::run(&sys, &mesh, req)?;
+                let run = crate::app::harmonic::run_with(&sys, &mesh, req, crate::app::harmonic::Fields::Peak)?;
                 if let Some((dir, prefix)) = out {
                     let k = crate::app::harmonic::peak_index(&run.report);
                     let vtu = self.vtu.then(|| dir.join(format!("{prefix}harmonic.vtu")));

@@ -12,6 +12,7 @@ mod design;
 mod dynamics;
 mod export_engine;
 mod harmonic;
+mod harmonic_inputs;
 mod machine3d;
 mod machines;
 mod numerics_15;

@@ -37,7 +37,11 @@ pub fn design_cmd(a: &DesignArgs) -> Result<i32> {
             )));
         }
     }
-    check_outputs(&[], Some(&a.out))?;
+    check_outputs(
+        &[],
+        Some(("--out", &a.out)),
+        &a.file.iter().map(|f| ("design file", f.as_path())).collect::<Vec<_>>(),
+    )?;
     let bar = if std::io::stderr().is_terminal() {
         let b = indicatif::ProgressBar::new_spinner();
         b.enable_steady_tick(std::time::Duration::from_millis(120));
