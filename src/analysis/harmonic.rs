@@ -186,7 +186,8 @@ fn check_request(sys: &System, load: &[c64], omegas: &[f64], damping: &Damping) 
 
 /// Steady-state response by modal superposition, one free-DOF vector per angular frequency in
 /// `omegas` (rad/s). With `residual`, the static correction for the modes not in `modes` is added
-/// (one factorisation of K − σM and one solve, whatever the number of frequencies).
+/// (one factorisation of K − σM and one solve, whatever the number of frequencies). Rigid-body
+/// modes count with λ = 0 exactly (see [`Superposition`]).
 pub fn superpose(
     sys: &System,
     modes: &ModalRun,
@@ -195,58 +196,117 @@ pub fn superpose(
     damping: &Damping,
     residual: bool,
 ) -> Result<Vec<Vec<c64>>> {
-    let n = check_request(sys, load, omegas, damping)?;
-    let phi = &modes.vectors;
-    let k = phi.ncols();
-    if phi.nrows() != n {
-        return Err(Error::param(
-            "modes",
-            format!(
+    check_request(sys, load, omegas, damping)?;
+    let s = Superposition::new(sys, modes, load, damping, residual)?;
+    omegas.iter().map(|&w| s.at(w)).collect()
+}
+
+/// The frequency-independent part of a modal superposition (modal loads, the static residual),
+/// evaluated one frequency at a time with [`Superposition::at`] (a sweep keeps one response at
+/// a time, not all of them).
+///
+/// Verified rigid-body modes (the first `modes.report.n_rigid`) are taken with λ = 0 exactly:
+/// their computed eigenvalues are rounding (±1e-5 rad²/s² on a steel block), which at a low
+/// excitation frequency (ω² = 4e-5 at 1 mHz) would change the response by tens of per cent.
+pub struct Superposition<'a> {
+    modes: &'a ModalRun,
+    lambda: Vec<f64>,
+    q: Vec<c64>,
+    residual: Option<Vec<c64>>,
+    damping: Damping,
+    n_rigid: usize,
+}
+
+impl<'a> Superposition<'a> {
+    /// Modal loads q_j = φ_jᵀF and, with `residual`, the static correction R F.
+    pub fn new(
+        sys: &System,
+        modes: &'a ModalRun,
+        load: &[c64],
+        damping: &Damping,
+        residual: bool,
+    ) -> Result<Superposition<'a>> {
+        let n = check_request(sys, load, &[], damping)?;
+        let phi = &modes.vectors;
+        let k = phi.ncols();
+        if phi.nrows() != n {
+            return Err(Error::InvalidInput(format!(
                 "the modes have {} rows, the system {n} free DOFs: they belong to another model",
                 phi.nrows()
-            ),
-        ));
-    }
-    // Modal loads q_j = φ_jᵀ F.
-    let q: Vec<c64> = (0..k)
-        .map(|j| {
-            let mut s = c64::new(0.0, 0.0);
-            for i in 0..n {
-                s += load[i] * phi[(i, j)];
+            )));
+        }
+        let n_rigid = modes.report.n_rigid.min(k);
+        let lambda: Vec<f64> = (0..k)
+            .map(|j| if j < n_rigid { 0.0 } else { modes.lambda[j] })
+            .collect();
+        // Modal loads q_j = φ_jᵀ F.
+        let q: Vec<c64> = (0..k)
+            .map(|j| {
+                let mut s = c64::new(0.0, 0.0);
+                for i in 0..n {
+                    s += load[i] * phi[(i, j)];
+                }
+                s
+            })
+            .collect();
+        let residual = if residual {
+            let sigma = residual_shift(modes)?;
+            let mut r = solve_real_shifted(sys, sigma, load)?;
+            for j in 0..k {
+                let c = q[j] / (lambda[j] - sigma);
+                for i in 0..n {
+                    r[i] -= c * phi[(i, j)];
+                }
             }
-            s
+            Some(r)
+        } else {
+            None
+        };
+        Ok(Superposition {
+            modes,
+            lambda,
+            q,
+            residual,
+            damping: *damping,
+            n_rigid,
         })
-        .collect();
-    let res = if residual {
-        Some(static_correction(sys, modes, &q, load)?)
-    } else {
-        None
-    };
-    let mut out = Vec::with_capacity(omegas.len());
-    for &w in omegas {
-        let mut u = res.clone().unwrap_or_else(|| vec![c64::new(0.0, 0.0); n]);
-        for j in 0..k {
-            let lam = modes.lambda[j];
-            let den = c64::new(lam - w * w, w * damping.modal(lam));
+    }
+
+    /// The response at angular frequency `w` (rad/s).
+    pub fn at(&self, w: f64) -> Result<Vec<c64>> {
+        if !(w.is_finite() && w >= 0.0) {
+            return Err(Error::InvalidInput(format!(
+                "harmonic frequency must be finite and ≥ 0, got {w} rad/s"
+            )));
+        }
+        let phi = &self.modes.vectors;
+        let n = phi.nrows();
+        let mut u = self.residual.clone().unwrap_or_else(|| vec![c64::new(0.0, 0.0); n]);
+        for (j, (&lam, &qj)) in self.lambda.iter().zip(&self.q).enumerate() {
+            let den = c64::new(lam - w * w, w * self.damping.modal(lam));
             if den.norm() == 0.0 {
-                return Err(Error::param(
-                    "damping",
+                return Err(Error::InvalidInput(if j < self.n_rigid {
+                    format!(
+                        "response at 0 Hz of a model with rigid-body modes (mode {}): an unbalanced force has \
+                         no static response on a free body; support the model or give a frequency above 0",
+                        j + 1
+                    )
+                } else {
                     format!(
                         "undamped response at {:.6} Hz, the frequency of mode {}: infinite; give --damping or \
-                     --rayleigh",
+                         --rayleigh",
                         w / (2.0 * std::f64::consts::PI),
                         j + 1
-                    ),
-                ));
+                    )
+                }));
             }
-            let c = q[j] / den;
+            let c = qj / den;
             for i in 0..n {
                 u[i] += c * phi[(i, j)];
             }
         }
-        out.push(u);
+        Ok(u)
     }
-    Ok(out)
 }
 
 /// The static (residual) correction for the modes after the first `q.len()` of `modes`:
@@ -403,6 +463,64 @@ pub fn direct(sys: &System, load: &[c64], omega: f64, damping: &Damping) -> Resu
     Ok(u)
 }
 
+/// [`direct`] on a model with rigid-body modes `rigid` (M-orthonormal columns, e.g. the verified
+/// rigid-body modes of a modal solve): the rigid part of the response is taken exactly,
+/// φᵀF̂ / (−ω² + iωc(0)) per mode (K φ = 0), and only the load orthogonal to them, F̂ − Mφφᵀ F̂,
+/// goes through the complex solve, whose rigid part is projected out. Without this, the rounding
+/// of K's null space (rigid "eigenvalues" of ±1e-5 rad²/s²) competes with ω² at low frequencies.
+/// Refuses ω = 0 (no static response of a free body to an unbalanced force).
+pub fn direct_free(
+    sys: &System,
+    load: &[c64],
+    omega: f64,
+    damping: &Damping,
+    rigid: faer::MatRef<'_, f64>,
+) -> Result<Vec<c64>> {
+    let n = check_request(sys, load, &[omega], damping)?;
+    let r = rigid.ncols();
+    if r == 0 {
+        return direct(sys, load, omega, damping);
+    }
+    if rigid.nrows() != n {
+        return Err(Error::InvalidInput(format!(
+            "the rigid-body modes have {} rows, the system {n} free DOFs: they belong to another model",
+            rigid.nrows()
+        )));
+    }
+    let den = c64::new(-omega * omega, omega * damping.modal(0.0));
+    if den.norm() == 0.0 {
+        return Err(Error::InvalidInput(
+            "response at 0 Hz of a model with rigid-body modes: an unbalanced force has no static response on \
+             a free body; support the model or give a frequency above 0"
+                .into(),
+        ));
+    }
+    let mut mr = faer::Mat::<f64>::zeros(n, r);
+    sys.m()?.mul_block(rigid, mr.as_mut());
+    let dot = |a: faer::MatRef<'_, f64>, j: usize, v: &[c64]| -> c64 {
+        let mut s = c64::new(0.0, 0.0);
+        for (i, vi) in v.iter().enumerate() {
+            s += vi * a[(i, j)];
+        }
+        s
+    };
+    let q: Vec<c64> = (0..r).map(|j| dot(rigid, j, load)).collect();
+    let mut f = load.to_vec();
+    for (j, &qj) in q.iter().enumerate() {
+        for (i, fi) in f.iter_mut().enumerate() {
+            *fi -= qj * mr[(i, j)];
+        }
+    }
+    let mut u = direct(sys, &f, omega, damping)?;
+    for (j, &qj) in q.iter().enumerate() {
+        let c = qj / den - dot(mr.as_ref(), j, &u);
+        for (i, ui) in u.iter_mut().enumerate() {
+            *ui += c * rigid[(i, j)];
+        }
+    }
+    Ok(u)
+}
+
 /// Per-node complex displacement `[ux, uy, uz, rx, ry, rz]` from a free-DOF vector (constrained
 /// components through their constraints, fixed ones 0: a harmonic load has no prescribed motion).
 pub fn expand(sys: &System, u: &[c64]) -> Vec<[c64; 6]> {
@@ -419,6 +537,16 @@ pub fn expand(sys: &System, u: &[c64]) -> Vec<[c64; 6]> {
 /// Peak displacement of a node over one period: the semi-major axis of the orbit traced by
 /// Re(û e^{iωt}) for û = a + ib (equals |û| when the components are in phase).
 pub fn peak(u: &[c64; 3]) -> f64 {
+    if u.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
+        return f64::NAN;
+    }
+    // Squares of components beyond 1e154 overflow (and below 1e-154 underflow): compute those
+    // on the components divided by a power of two (exact).
+    let s = u.iter().map(|v| v.re.abs().max(v.im.abs())).fold(0.0, f64::max);
+    if s > 1e150 || (s > 0.0 && s < 1e-150) {
+        let k = 2f64.powi(s.log2().floor() as i32);
+        return k * peak(&u.map(|v| v / k));
+    }
     let aa: f64 = u.iter().map(|v| v.re * v.re).sum();
     let bb: f64 = u.iter().map(|v| v.im * v.im).sum();
     let ab: f64 = u.iter().map(|v| v.re * v.im).sum();

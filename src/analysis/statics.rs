@@ -187,25 +187,33 @@ pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<
                     continue;
                 }
                 let g = mesh.group(group)?;
-                force_on_constraints(model, group, force, &mesh.group_nodes(g))?;
+                let (used, all) = used_group_nodes(mesh, model, group)?;
+                force_on_constraints(model, group, force, &used)?;
                 if g.dim == 2 {
                     let (w, area, _) = surface_weights(mesh, group)?;
+                    // Over the nodes the model uses: a node of no element would take its share
+                    // out of the model unused. With every node used, the weights sum to the area.
+                    let w: Vec<(u32, f64)> = w.into_iter().filter(|&(a, _)| node_used(model, a)).collect();
+                    let total = if used.len() == all {
+                        area
+                    } else {
+                        w.iter().map(|x| x.1).sum()
+                    };
+                    if !(total > 0.0) {
+                        return Err(Error::group(
+                            group.as_str(),
+                            format!("force on '{group}': no element of the model uses its surface"),
+                        ));
+                    }
                     for (a, wa) in w {
                         for d in 0..3 {
-                            f[NCOMP * a as usize + d] += wa / area * force[d];
+                            f[NCOMP * a as usize + d] += wa / total * force[d];
                         }
                     }
                 } else {
-                    let nodes = mesh.group_nodes(g);
-                    if nodes.is_empty() {
-                        return Err(Error::group(
-                            group.as_str(),
-                            format!("force on '{group}': the group has no nodes"),
-                        ));
-                    }
-                    for a in &nodes {
+                    for a in &used {
                         for d in 0..3 {
-                            f[NCOMP * *a as usize + d] += force[d] / nodes.len() as f64;
+                            f[NCOMP * *a as usize + d] += force[d] / used.len() as f64;
                         }
                     }
                 }
@@ -260,6 +268,58 @@ pub(crate) fn load_vector(mesh: &Mesh, model: &Model, loads: &[Load]) -> Result<
         }
     }
     Ok(f)
+}
+
+/// Whether an element of the model uses node `a` (one of its translations is a DOF).
+fn node_used(model: &Model, a: u32) -> bool {
+    model.dofs.active.get(a as usize).is_some_and(|&m| m & 0b111 != 0)
+}
+
+/// The nodes of group `group` that an element of the model uses, and the group's node count.
+/// A group with none is refused: a force on it would act on nothing.
+fn used_group_nodes(mesh: &Mesh, model: &Model, group: &str) -> Result<(Vec<u32>, usize)> {
+    let nodes = mesh.group_nodes(mesh.group(group)?);
+    if nodes.is_empty() {
+        return Err(Error::group(
+            group,
+            format!("force on '{group}': the group has no nodes"),
+        ));
+    }
+    let all = nodes.len();
+    let used: Vec<u32> = nodes.into_iter().filter(|&a| node_used(model, a)).collect();
+    if used.is_empty() {
+        return Err(Error::group(
+            group,
+            format!(
+                "force on '{group}': none of its {all} nodes belongs to an element of the model, the force \
+                 would act on nothing (is the part that holds it analysed?)"
+            ),
+        ));
+    }
+    Ok((used, all))
+}
+
+/// Notes on the forces of `loads` spread over groups some of whose nodes belong to no element
+/// of the model: those nodes take no share, the others the whole force.
+pub(crate) fn load_notes(mesh: &Mesh, model: &Model, loads: &[Load]) -> Vec<String> {
+    let mut notes = Vec::new();
+    for load in loads {
+        let Load::Force { group, .. } = load else { continue };
+        if model.references.iter().any(|r| &r.group == group) {
+            continue;
+        }
+        if let Ok((used, all)) = used_group_nodes(mesh, model, group)
+            && used.len() < all
+        {
+            notes.push(format!(
+                "force on '{group}': {} of its {all} nodes belong to no element of the model and take no \
+                 share; the whole force acts on the other {}",
+                all - used.len(),
+                used.len()
+            ));
+        }
+    }
+    notes
 }
 
 /// Refuse a force component that would act only on held DOFs: every node it is spread over has
@@ -682,7 +742,8 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
         }
         let u = model.dofs.full(&xc);
         let rel_residual = if f2 > 0.0 { (r2 / f2).sqrt() } else { r2.sqrt() };
-        let report = case_report(model, mesh, &sets, &raw_f[ci], &u, rel_residual)?;
+        let mut report = case_report(model, mesh, &sets, &raw_f[ci], &u, rel_residual)?;
+        report.notes.extend(load_notes(mesh, model, &cases[ci]));
         if !(report.max_displacement.0.is_finite() && report.rel_residual.is_finite()) {
             return Err(Error::Factorization(format!(
                 "load case {}: the solution is not finite (largest |u| {:.1e} m, solve residual {:.1e}): \

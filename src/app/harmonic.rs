@@ -36,9 +36,10 @@ impl Method {
             "modal" => Ok(Method::Modal),
             "direct" => Ok(Method::Direct),
             "both" => Ok(Method::Both),
-            _ => Err(Error::InvalidInput(format!(
-                "--method: unknown method '{s}' (modal, direct or both)"
-            ))),
+            _ => Err(Error::option(
+                "--method",
+                format!("--method: unknown method '{s}' (modal, direct or both)"),
+            )),
         }
     }
 }
@@ -63,16 +64,34 @@ pub struct HarmonicRequest {
 
 /// Frequencies of a sweep: `n` points from `f0` to `f1` Hz, evenly spaced.
 pub fn sweep_frequencies(f0: f64, f1: f64, n: usize) -> Result<Vec<f64>> {
+    use crate::io::fmt_sig;
     if !(f0.is_finite() && f1.is_finite() && f0 >= 0.0 && f1 > f0) {
-        return Err(Error::InvalidInput(format!(
-            "--sweep: need 0 ≤ F0 < F1 (Hz), got {f0} {f1}"
-        )));
+        return Err(Error::option(
+            "--sweep",
+            format!(
+                "--sweep: need 0 ≤ F0 < F1 (Hz), got {} {}",
+                fmt_sig(f0, 4),
+                fmt_sig(f1, 4)
+            ),
+        ));
+    }
+    if let Some(p) = frequency_problem(f1) {
+        return Err(Error::option(
+            "--sweep",
+            format!("--sweep: F1 = {} Hz: {p}", fmt_sig(f1, 4)),
+        ));
     }
     if n < 2 {
-        return Err(Error::InvalidInput(format!("--sweep: need at least 2 points, got {n}")));
+        return Err(Error::option(
+            "--sweep",
+            format!("--sweep: need at least 2 points, got {n}"),
+        ));
     }
     if n > 100_000 {
-        return Err(Error::InvalidInput(format!("--sweep: {n} points is more than 100000")));
+        return Err(Error::option(
+            "--sweep",
+            format!("--sweep: {n} points is more than 100000"),
+        ));
     }
     Ok((0..n).map(|i| f0 + (f1 - f0) * i as f64 / (n - 1) as f64).collect())
 }
@@ -179,12 +198,15 @@ pub struct ForceRow {
     pub phase_deg: f64,
 }
 
-/// A run: the report and the nodal responses (per frequency, per node [ux..rz]) for fields.
+/// A run: the report and the nodal responses (per node [ux..rz]) kept for fields.
 pub struct HarmonicRun {
     /// Report.
     pub report: HarmonicReport,
-    /// Per frequency, per node: the complex displacement.
+    /// Per kept frequency, per node: the complex displacement ([`Fields::All`]: every frequency,
+    /// in order; [`Fields::Peak`]: the largest response's).
     pub nodal: Vec<Vec<[c64; 6]>>,
+    /// Index in `report.points` of each entry of `nodal`.
+    pub field_points: Vec<usize>,
 }
 
 fn damping_text(d: &Damping) -> String {
@@ -198,170 +220,157 @@ fn damping_text(d: &Damping) -> String {
     }
 }
 
-/// Run the harmonic analysis on an assembled system.
+/// Highest excitation frequency computed (Hz): (2π · 2f)², the top of the default modal band,
+/// stays far from the overflow of double precision (1.8e308).
+pub const MAX_FREQ_HZ: f64 = 1e150;
+
+/// Modes below 2 × the highest frequency beyond which the default modal superposition is not
+/// used: finding them all costs more than solving directly at a few frequencies.
+pub const MAX_BAND_MODES: usize = 200;
+
+/// Frequencies up to which a default modal request of more than [`MAX_BAND_MODES`] modes is
+/// solved directly instead (a longer sweep is refused with the choices).
+pub const DIRECT_MAX_FREQS: usize = 50;
+
+/// What is wrong with an excitation frequency `f` (Hz), if anything (the caller names where it
+/// was given).
+pub fn frequency_problem(f: f64) -> Option<String> {
+    if !(f.is_finite() && f >= 0.0) {
+        return Some("a frequency must be a finite number ≥ 0 (Hz)".into());
+    }
+    if f > MAX_FREQ_HZ {
+        return Some(format!(
+            "above the highest frequency computed, {} Hz (beyond it (2πf)² nears the overflow of double \
+             precision)",
+            crate::io::fmt_sig(MAX_FREQ_HZ, 3)
+        ));
+    }
+    None
+}
+
+/// Refuse damping that leaves a resonance infinite (ζ = 0, or α = β = 0) besides what
+/// [`Damping::validate`] refuses; `ratio` and `rayleigh` name the options (or keys) that set them.
+pub fn check_damping(d: &Damping, ratio: &str, rayleigh: &str) -> Result<()> {
+    d.validate()?;
+    match *d {
+        Damping::Ratio(z) if z == 0.0 => Err(Error::option(
+            ratio,
+            format!(
+                "{ratio} 0: no damping; the response at a resonance would be infinite: give a ratio > 0 (e.g. \
+                 0.02)"
+            ),
+        )),
+        Damping::Rayleigh { alpha, beta } if alpha == 0.0 && beta == 0.0 => Err(Error::option(
+            rayleigh,
+            format!(
+                "{rayleigh} 0,0: no damping; the response at a resonance would be infinite: give α > 0 or β > 0 \
+                 (e.g. 0,1e-5)"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Which nodal fields a run keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fields {
+    /// Every frequency's (for a library caller's arrays); refused when they would need more than
+    /// half the memory available.
+    All,
+    /// Only the field of the largest response (what the VTU and MSH outputs write): a sweep of
+    /// any length needs the memory of one field.
+    Peak,
+}
+
+/// Run the harmonic analysis on an assembled system, keeping every frequency's nodal field.
 pub fn run(sys: &System, mesh: &Mesh, req: &HarmonicRequest) -> Result<HarmonicRun> {
+    run_with(sys, mesh, req, Fields::All)
+}
+
+/// Run the harmonic analysis on an assembled system: check the request, build the load, pick
+/// the method, find the modes it needs, then solve one frequency at a time (each point's report
+/// rows are kept, its field only as `keep` says).
+pub fn run_with(sys: &System, mesh: &Mesh, req: &HarmonicRequest, keep: Fields) -> Result<HarmonicRun> {
     let t_all = Instant::now();
-    req.damping.validate()?;
-    if req.forces.is_empty() {
-        return Err(Error::InvalidInput(
-            "harmonic: no force given (--force GROUP=FX,FY,FZ[@PHASE_DEG])".into(),
-        ));
+    let probes = check_request(req)?;
+    if keep == Fields::All {
+        check_field_memory(sys, req.freqs_hz.len())?;
     }
-    if req.freqs_hz.is_empty() {
-        return Err(Error::InvalidInput(
-            "harmonic: no frequency given (--freq HZ or --sweep F0 F1 N)".into(),
-        ));
-    }
-    if let Some(f) = req.freqs_hz.iter().find(|f| !(f.is_finite() && **f >= 0.0)) {
-        return Err(Error::InvalidInput(format!(
-            "harmonic: frequency {f} Hz must be finite and ≥ 0"
-        )));
-    }
-    let probes: Vec<String> = if req.probes.is_empty() {
-        let mut g: Vec<String> = Vec::new();
-        for f in &req.forces {
-            if !g.contains(&f.group) {
-                g.push(f.group.clone());
-            }
-        }
-        g
-    } else {
-        req.probes.clone()
-    };
-    // Nodes of each probe: a coupled group answers with its reference node.
-    let model = sys.model();
-    let mut probe_nodes = Vec::new();
-    for g in &probes {
-        let nodes: Vec<usize> = match model.references.iter().find(|r| &r.group == g) {
-            Some(r) => vec![r.node],
-            None => mesh.group_nodes(mesh.group(g)?).iter().map(|&a| a as usize).collect(),
-        };
-        if nodes.is_empty() {
-            return Err(Error::InvalidInput(format!("harmonic: group '{g}' has no nodes")));
-        }
-        probe_nodes.push(nodes);
-    }
-    let load = harmonic::group_load(sys, mesh, &req.forces)?;
-    if load.iter().all(|v| v.norm() == 0.0) {
-        return Err(Error::InvalidInput(
-            "harmonic: the forces are all zero on the free degrees of freedom".into(),
-        ));
-    }
-    let omegas: Vec<f64> = req.freqs_hz.iter().map(|f| std::f64::consts::TAU * f).collect();
-    let mut tm = HarmonicTimings::default();
     let mut notes = Vec::new();
-    let fmax = req.freqs_hz.iter().copied().fold(0.0, f64::max);
-    let (modal_u, modes_used, mode_hz) = if req.method != Method::Direct {
-        let t = Instant::now();
-        let target = match req.modes {
-            Some(0) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
-            Some(n) => ModalTarget::Modes(n),
-            None => ModalTarget::Band(-1.0, (2.0 * fmax).max(1.0)),
-        };
-        let params = ModalParams {
-            target,
-            ..Default::default()
-        };
-        let mut modes = crate::analysis::modal::solve(sys, &params)?;
-        let n_rigid = modes.report.n_rigid;
-        if req.modes.is_none() && n_rigid == modes.lambda.len() {
-            // Only rigid-body modes in the band: the static correction needs the first elastic
-            // one (its shift sits below it).
-            let params = ModalParams {
-                target: ModalTarget::Modes(n_rigid + 6),
-                ..Default::default()
-            };
-            modes = crate::analysis::modal::solve(sys, &params)?;
-        }
-        if !modes.report.complete || !modes.report.accurate {
-            return Err(Error::Verification(format!(
-                "the modes for the superposition failed their checks (complete: {}, accurate: {}); use \
-                 --method direct",
-                modes.report.complete, modes.report.accurate
-            )));
-        }
-        tm.modes = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let u = harmonic::superpose(sys, &modes, &load, &omegas, &req.damping, true)?;
-        tm.superpose = t.elapsed().as_secs_f64();
-        let hz: Vec<f64> = modes.lambda.iter().map(|&l| crate::post::modal::hz(l)).collect();
-        if let Some(&top) = hz.last()
-            && top < 1.5 * fmax
-        {
-            notes.push(format!(
-                "the highest mode superposed ({} Hz) is below 1.5 × the highest frequency ({} Hz): the static \
-                 correction covers the rest only approximately; raise --modes or check with --method both",
-                crate::io::fmt_sig(top, 4),
-                crate::io::fmt_sig(fmax, 4)
-            ));
-        }
-        (Some(u), modes.lambda.len(), hz)
-    } else {
-        (None, 0, Vec::new())
+    let (load, scale) = scaled_load(sys, mesh, &req.forces, &mut notes)?;
+    let probe_nodes = probe_nodes(sys, mesh, &probes, &mut notes)?;
+    let mut tm = HarmonicTimings::default();
+    let t = Instant::now();
+    let (method, target) = plan(sys, req, &mut notes)?;
+    let free = free_motions(sys, req, method)?;
+    let modes = target
+        .map(|target| modal_modes(sys, req, target, &mut notes))
+        .transpose()?;
+    let rigid = match method {
+        Method::Modal => None,
+        _ => rigid_basis(sys, modes.as_ref(), &free)?,
     };
-    let direct_u = if req.method != Method::Modal {
-        let t = Instant::now();
-        if let Damping::Ratio(_) = req.damping {
-            notes.push(
-                "direct solve: the modal damping ratio ζ is taken as structural damping K(1 + 2iζ), equal to modal \
-                 damping at each resonance, not between them; give --rayleigh for a viscous damping matrix"
-                    .into(),
-            );
-        }
-        let mut out = Vec::with_capacity(omegas.len());
-        for &w in &omegas {
-            out.push(harmonic::direct(sys, &load, w, &req.damping)?);
-        }
-        tm.direct = t.elapsed().as_secs_f64();
-        Some(out)
-    } else {
-        None
+    tm.modes = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let sup = modes
+        .as_ref()
+        .map(|m| harmonic::Superposition::new(sys, m, &load, &req.damping, true))
+        .transpose()?;
+    tm.superpose = t.elapsed().as_secs_f64();
+    if method != Method::Modal
+        && let Damping::Ratio(_) = req.damping
+    {
+        notes.push(
+            "direct solve: the modal damping ratio ζ is taken as structural damping K(1 + 2iζ), equal to modal \
+             damping at each resonance, not between them; give --rayleigh for a viscous damping matrix"
+                .into(),
+        );
+    }
+    let solver = Solver {
+        sys,
+        load: &load,
+        scale,
+        damping: &req.damping,
+        sup,
+        direct: method != Method::Modal,
+        rigid,
     };
-    let used = modal_u.as_ref().or(direct_u.as_ref()).expect("one method ran");
-    let mut points = Vec::with_capacity(omegas.len());
-    let mut nodal = Vec::with_capacity(omegas.len());
-    for (k, u) in used.iter().enumerate() {
-        let full = harmonic::expand(sys, u);
-        let n_mesh = mesh.nodes.len();
-        let (mut max_peak, mut max_node) = (0.0f64, 0usize);
-        for (a, v) in full.iter().enumerate().take(n_mesh) {
-            let p = harmonic::peak(&[v[0], v[1], v[2]]);
-            if p > max_peak {
-                max_peak = p;
-                max_node = a;
-            }
-        }
-        let groups = probes
-            .iter()
-            .zip(&probe_nodes)
-            .map(|(g, nodes)| group_response(g, nodes, &full))
-            .collect();
-        let modal_vs_direct = match (&modal_u, &direct_u) {
-            (Some(m), Some(d)) => {
-                let num: f64 = m[k]
-                    .iter()
-                    .zip(&d[k])
-                    .map(|(a, b)| (a - b).norm_sqr())
-                    .sum::<f64>()
-                    .sqrt();
-                let den: f64 = d[k].iter().map(|b| b.norm_sqr()).sum::<f64>().sqrt();
-                Some(if den > 0.0 { num / den } else { num })
-            }
-            _ => None,
+    let ctx = PointContext {
+        sys,
+        mesh,
+        probes: &probes,
+        probe_nodes: &probe_nodes,
+        forces: &req.forces,
+        free: free.count > 0 || modes.as_ref().is_some_and(|m| m.report.n_rigid > 0),
+    };
+    let mut points: Vec<Point> = Vec::with_capacity(req.freqs_hz.len());
+    let (mut nodal, mut field_points) = (Vec::new(), Vec::new());
+    for (k, &f) in req.freqs_hz.iter().enumerate() {
+        let (modal_u, direct_u) = solver.at(std::f64::consts::TAU * f, &mut tm)?;
+        let (point, full) = ctx.point(f, modal_u.as_deref(), direct_u.as_deref())?;
+        let keep_this = match keep {
+            Fields::All => true,
+            Fields::Peak => field_points
+                .first()
+                .is_none_or(|&b: &usize| point.max_peak_m > points[b].max_peak_m),
         };
-        points.push(Point {
-            freq_hz: req.freqs_hz[k],
-            groups,
-            max_peak_m: max_peak,
-            max_node,
-            modal_vs_direct,
-        });
-        nodal.push(full);
+        if keep_this {
+            if keep == Fields::Peak {
+                nodal.clear();
+                field_points.clear();
+            }
+            nodal.push(full);
+            field_points.push(k);
+        }
+        points.push(point);
     }
     tm.total = t_all.elapsed().as_secs_f64();
+    let mode_hz: Vec<f64> = modes.as_ref().map_or_else(Vec::new, |m| {
+        m.lambda.iter().map(|&l| crate::post::modal::hz(l)).collect()
+    });
     let report = HarmonicReport {
         dofs: sys.n_free(),
-        method: req.method,
+        method,
         damping: damping_text(&req.damping),
         forces: req
             .forces
@@ -372,14 +381,456 @@ pub fn run(sys: &System, mesh: &Mesh, req: &HarmonicRequest) -> Result<HarmonicR
                 phase_deg: f.phase_deg,
             })
             .collect(),
-        modes_used,
+        modes_used: mode_hz.len(),
         highest_mode_hz: mode_hz.last().copied(),
         mode_frequencies_hz: mode_hz,
         points,
         notes,
         timings_s: tm,
     };
-    Ok(HarmonicRun { report, nodal })
+    Ok(HarmonicRun {
+        report,
+        nodal,
+        field_points,
+    })
+}
+
+/// Refuse a request without forces or frequencies, with a frequency out of range, without
+/// damping or with `modes = 0`; the groups reported otherwise (the loaded ones by default).
+fn check_request(req: &HarmonicRequest) -> Result<Vec<String>> {
+    check_damping(&req.damping, "damping", "rayleigh")?;
+    if req.forces.is_empty() {
+        return Err(Error::param(
+            "forces",
+            "harmonic: no force given (--force GROUP=FX,FY,FZ[@PHASE_DEG])",
+        ));
+    }
+    if req.freqs_hz.is_empty() {
+        return Err(Error::param(
+            "freqs_hz",
+            "harmonic: no frequency given (--freq HZ or --sweep F0 F1 N)",
+        ));
+    }
+    for &f in &req.freqs_hz {
+        if let Some(p) = frequency_problem(f) {
+            return Err(Error::param(
+                "freqs_hz",
+                format!("harmonic: frequency {} Hz: {p}", crate::io::fmt_sig(f, 4)),
+            ));
+        }
+    }
+    if req.modes == Some(0) {
+        return Err(Error::param("modes", "--modes must be at least 1"));
+    }
+    Ok(if req.probes.is_empty() {
+        let mut g: Vec<String> = Vec::new();
+        for f in &req.forces {
+            if !g.contains(&f.group) {
+                g.push(f.group.clone());
+            }
+        }
+        g
+    } else {
+        req.probes.clone()
+    })
+}
+
+/// Refuse, before the work, a run keeping every frequency's field when they would take more than
+/// half the memory available (the command line and scenes keep only the peak's).
+fn check_field_memory(sys: &System, n_freqs: usize) -> Result<()> {
+    // Per frequency and node: 6 complex displacements, and the caller's real and imaginary
+    // copies of the translations.
+    let per_freq = sys.dofs().n_nodes() as u64 * (96 + 48);
+    let need = per_freq.saturating_mul(n_freqs as u64);
+    let budget = crate::system::available_memory().unwrap_or(8 << 30) / 2;
+    if need > budget {
+        return Err(Error::param(
+            "freqs_hz",
+            format!(
+                "harmonic: the fields of {n_freqs} frequencies on {} nodes need about {} (more than half of the {} \
+                 available): fewer frequencies, or the report alone (the command line and scenes keep one field)",
+                sys.dofs().n_nodes(),
+                crate::io::fmt_bytes(need),
+                crate::io::fmt_bytes(budget * 2)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Nodes of each probe that the model uses: a coupled group answers with its reference node;
+/// nodes of no element are left out of the mean (with a note), a group with none is refused.
+fn probe_nodes(sys: &System, mesh: &Mesh, probes: &[String], notes: &mut Vec<String>) -> Result<Vec<Vec<usize>>> {
+    let model = sys.model();
+    let dofs = sys.dofs();
+    let mut out = Vec::new();
+    for g in probes {
+        if let Some(r) = model.references.iter().find(|r| &r.group == g) {
+            out.push(vec![r.node]);
+            continue;
+        }
+        let all: Vec<usize> = mesh.group_nodes(mesh.group(g)?).iter().map(|&a| a as usize).collect();
+        if all.is_empty() {
+            return Err(Error::group(g.as_str(), format!("harmonic: group '{g}' has no nodes")));
+        }
+        let used: Vec<usize> = all
+            .iter()
+            .copied()
+            .filter(|&a| dofs.active.get(a).is_some_and(|&m| m != 0))
+            .collect();
+        if used.is_empty() {
+            return Err(Error::group(
+                g.as_str(),
+                format!(
+                    "harmonic: none of the {} nodes of group '{g}' belongs to an element of the model: it has no \
+                     response to report",
+                    all.len()
+                ),
+            ));
+        }
+        if used.len() < all.len() {
+            notes.push(format!(
+                "group '{g}': {} of its {} nodes belong to no element of the model and are left out of its mean \
+                 motion",
+                all.len() - used.len(),
+                all.len()
+            ));
+        }
+        out.push(used);
+    }
+    Ok(out)
+}
+
+/// The free-DOF load of the forces divided by a power of two near its largest entry (exact: the
+/// response is scaled back exactly), so that huge forces overflow only where the response does.
+fn scaled_load(sys: &System, mesh: &Mesh, forces: &[GroupForce], notes: &mut Vec<String>) -> Result<(Vec<c64>, f64)> {
+    let mut load = harmonic::group_load(sys, mesh, forces)?;
+    let loads: Vec<crate::analysis::statics::Load> = forces
+        .iter()
+        .map(|f| crate::analysis::statics::Load::Force {
+            group: f.group.clone(),
+            force: f.force,
+        })
+        .collect();
+    notes.extend(crate::analysis::statics::load_notes(mesh, sys.model(), &loads));
+    let big = load.iter().map(|v| v.re.abs().max(v.im.abs())).fold(0.0, f64::max);
+    if big == 0.0 {
+        return Err(Error::param(
+            "forces",
+            "harmonic: the forces are all zero on the free degrees of freedom",
+        ));
+    }
+    let scale = 2f64.powi(big.log2().floor() as i32);
+    if scale.is_finite() && scale >= f64::MIN_POSITIVE && scale != 1.0 {
+        for v in &mut load {
+            *v /= scale;
+        }
+        return Ok((load, scale));
+    }
+    Ok((load, 1.0))
+}
+
+/// The method and the modes asked of the modal solve. By default (`modes` not given) every mode
+/// below 2 × the highest frequency is superposed; when that band holds more than
+/// [`MAX_BAND_MODES`] (a Sturm count, one factorisation), a short list of frequencies is solved
+/// directly, `both` superposes the [`MAX_BAND_MODES`] lowest, a long sweep is refused.
+fn plan(sys: &System, req: &HarmonicRequest, notes: &mut Vec<String>) -> Result<(Method, Option<ModalTarget>)> {
+    if req.method == Method::Direct {
+        return Ok((Method::Direct, None));
+    }
+    let fmax = req.freqs_hz.iter().copied().fold(0.0, f64::max);
+    let top = (2.0 * fmax).max(1.0);
+    if let Some(n) = req.modes {
+        return Ok((req.method, Some(ModalTarget::Modes(n))));
+    }
+    let band = ModalTarget::Band(-1.0, top);
+    if sys.n_free() <= crate::linalg::eigen::EigenParams::default().dense_below {
+        return Ok((req.method, Some(band)));
+    }
+    let Some(count) = modes_below(sys, top) else {
+        return Ok((req.method, Some(band)));
+    };
+    if count <= MAX_BAND_MODES {
+        return Ok((req.method, Some(band)));
+    }
+    let fs = crate::io::fmt_sig(top, 4);
+    let nf = req.freqs_hz.len();
+    match req.method {
+        Method::Both => {
+            notes.push(format!(
+                "{count} modes lie below {fs} Hz (2 × the highest frequency): the superposition uses the \
+                 {MAX_BAND_MODES} lowest with the static correction, the direct solve checks it"
+            ));
+            Ok((Method::Both, Some(ModalTarget::Modes(MAX_BAND_MODES))))
+        }
+        _ if nf <= DIRECT_MAX_FREQS => {
+            notes.push(format!(
+                "{count} modes lie below {fs} Hz (2 × the highest frequency), more than {MAX_BAND_MODES}: solved \
+                 directly at the {nf} frequenc{} instead of superposing them (--modes N superposes the N lowest)",
+                if nf == 1 { "y" } else { "ies" }
+            ));
+            Ok((Method::Direct, None))
+        }
+        _ => Err(Error::option(
+            "--method",
+            format!(
+                "harmonic: {count} modes lie below {fs} Hz (2 × the highest frequency), more than \
+                 {MAX_BAND_MODES}: finding them all would take longer than the sweep; give --modes N to superpose \
+                 the N lowest with the static correction, or --method direct ({nf} complex solves)"
+            ),
+        )),
+    }
+}
+
+/// Number of eigenvalues below `hz` (Hz): the inertia of K − (2π hz)² M. `None` if that
+/// factorisation fails (the modal solve then reports the problem).
+fn modes_below(sys: &System, hz: f64) -> Option<usize> {
+    let lam = (std::f64::consts::TAU * hz).powi(2);
+    let fac =
+        crate::linalg::factor::Factor::new_shifted(sys.symbolic().ok()?.clone(), sys.k(), Some((sys.m().ok()?, lam)))
+            .ok()?;
+    Some(fac.negative_pivots)
+}
+
+/// The free rigid motions of the model (none when supported).
+struct FreeMotions {
+    /// Their number (the rigid-body modes).
+    count: usize,
+    /// Names of the basic ones (`ux`, …, `rz`).
+    names: Vec<&'static str>,
+}
+
+/// The model's free rigid motions, found when the method solves directly or a frequency is 0
+/// (where a free body is refused: an unbalanced force has no static response).
+fn free_motions(sys: &System, req: &HarmonicRequest, method: Method) -> Result<FreeMotions> {
+    let at_zero = req.freqs_hz.contains(&0.0);
+    if method == Method::Modal && !at_zero {
+        return Ok(FreeMotions {
+            count: 0,
+            names: vec![],
+        });
+    }
+    let model = sys.model();
+    let empty = faer::Mat::<f64>::zeros(sys.n_free(), 0);
+    let parts = crate::post::modal::rigid_analysis(sys.k(), sys.m()?, &model.dofs, &model.nodes, empty.as_ref());
+    let free = FreeMotions {
+        count: parts.free.iter().map(|p| p.count).sum(),
+        names: parts.free.iter().flat_map(|p| p.motions.iter().copied()).collect(),
+    };
+    if at_zero && free.count > 0 {
+        return Err(Error::param(
+            "freqs_hz",
+            format!(
+                "harmonic: a frequency of 0 Hz on a model that moves freely as a rigid body ({} free motion{}{}): \
+                 an unbalanced force has no static response; support the model (--fix) or start above 0 Hz",
+                free.count,
+                if free.count == 1 { "" } else { "s" },
+                if free.names.is_empty() {
+                    String::new()
+                } else {
+                    format!(": {}", free.names.join(", "))
+                }
+            ),
+        ));
+    }
+    Ok(free)
+}
+
+/// The verified modes of the superposition (at least one elastic mode beyond the rigid ones, for
+/// the static correction's shift).
+fn modal_modes(
+    sys: &System,
+    req: &HarmonicRequest,
+    target: ModalTarget,
+    notes: &mut Vec<String>,
+) -> Result<crate::analysis::modal::ModalRun> {
+    let params = ModalParams {
+        target,
+        ..Default::default()
+    };
+    let mut modes = crate::analysis::modal::solve(sys, &params)?;
+    let n_rigid = modes.report.n_rigid;
+    if matches!(target, ModalTarget::Band(..)) && n_rigid == modes.lambda.len() {
+        // Only rigid-body modes in the band: the static correction needs the first elastic
+        // one (its shift sits below it).
+        let params = ModalParams {
+            target: ModalTarget::Modes(n_rigid + 6),
+            ..Default::default()
+        };
+        modes = crate::analysis::modal::solve(sys, &params)?;
+    }
+    if !modes.report.complete || !modes.report.accurate {
+        return Err(Error::Verification(format!(
+            "the modes for the superposition failed their checks (complete: {}, accurate: {}); use \
+             --method direct",
+            modes.report.complete, modes.report.accurate
+        )));
+    }
+    let fmax = req.freqs_hz.iter().copied().fold(0.0, f64::max);
+    if let Some(&top) = modes.lambda.last()
+        && crate::post::modal::hz(top) < 1.5 * fmax
+    {
+        notes.push(format!(
+            "the highest mode superposed ({} Hz) is below 1.5 × the highest frequency ({} Hz): the static \
+             correction covers the rest only approximately; raise --modes or check with --method both",
+            crate::io::fmt_sig(crate::post::modal::hz(top), 4),
+            crate::io::fmt_sig(fmax, 4)
+        ));
+    }
+    Ok(modes)
+}
+
+/// The rigid-body modes the direct solve deflates on a free model (M-orthonormal columns): those
+/// of the superposition's modes, or of a modal solve for them alone; `None` on a supported model.
+fn rigid_basis(
+    sys: &System,
+    modes: Option<&crate::analysis::modal::ModalRun>,
+    free: &FreeMotions,
+) -> Result<Option<faer::Mat<f64>>> {
+    if free.count == 0 {
+        return Ok(None);
+    }
+    let own;
+    let modes = match modes {
+        Some(m) if m.report.n_rigid >= free.count => m,
+        _ => {
+            let params = ModalParams {
+                target: ModalTarget::Modes(free.count),
+                ..Default::default()
+            };
+            own = crate::analysis::modal::solve(sys, &params)?;
+            &own
+        }
+    };
+    let r = modes.report.n_rigid;
+    if r != free.count || !modes.report.accurate {
+        return Err(Error::Verification(format!(
+            "the model moves freely in {} rigid motions, but {r} verified rigid-body modes were found: the direct \
+             solve cannot separate the rigid response; support the model or use --method modal",
+            free.count
+        )));
+    }
+    Ok(Some(modes.vectors.subcols(0, r).to_owned()))
+}
+
+/// The solves at one frequency: the superposition and/or the direct solve of the scaled load.
+struct Solver<'a> {
+    sys: &'a System,
+    load: &'a [c64],
+    scale: f64,
+    damping: &'a Damping,
+    sup: Option<harmonic::Superposition<'a>>,
+    direct: bool,
+    rigid: Option<faer::Mat<f64>>,
+}
+
+impl Solver<'_> {
+    /// (modal, direct) responses at ω (rad/s), each when its method runs.
+    fn at(&self, w: f64, tm: &mut HarmonicTimings) -> Result<(Option<Vec<c64>>, Option<Vec<c64>>)> {
+        let unscale = |mut u: Vec<c64>| {
+            if self.scale != 1.0 {
+                u.iter_mut().for_each(|v| *v *= self.scale);
+            }
+            u
+        };
+        let t = Instant::now();
+        let modal = self.sup.as_ref().map(|s| s.at(w)).transpose()?.map(unscale);
+        tm.superpose += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let direct = if self.direct {
+            let u = match &self.rigid {
+                Some(r) => harmonic::direct_free(self.sys, self.load, w, self.damping, r.as_ref())?,
+                None => harmonic::direct(self.sys, self.load, w, self.damping)?,
+            };
+            Some(unscale(u))
+        } else {
+            None
+        };
+        tm.direct += t.elapsed().as_secs_f64();
+        Ok((modal, direct))
+    }
+}
+
+/// What a point's report needs besides the response.
+struct PointContext<'a> {
+    sys: &'a System,
+    mesh: &'a Mesh,
+    probes: &'a [String],
+    probe_nodes: &'a [Vec<usize>],
+    forces: &'a [GroupForce],
+    free: bool,
+}
+
+impl PointContext<'_> {
+    /// The report of frequency `f` (Hz) from the modal and/or direct response (the modal one is
+    /// reported when both ran) and the nodal field; a non-finite result is refused (exit 2).
+    fn point(&self, f: f64, modal: Option<&[c64]>, direct: Option<&[c64]>) -> Result<(Point, Vec<[c64; 6]>)> {
+        let u = modal.or(direct).expect("one method ran");
+        let full = harmonic::expand(self.sys, u);
+        let (mut max_peak, mut max_node) = (0.0f64, 0usize);
+        let mut finite = true;
+        for (a, v) in full.iter().enumerate().take(self.mesh.nodes.len()) {
+            let p = harmonic::peak(&[v[0], v[1], v[2]]);
+            finite &= p.is_finite();
+            if p > max_peak {
+                max_peak = p;
+                max_node = a;
+            }
+        }
+        let groups: Vec<GroupResponse> = self
+            .probes
+            .iter()
+            .zip(self.probe_nodes)
+            .map(|(g, nodes)| group_response(g, nodes, &full))
+            .collect();
+        let modal_vs_direct = match (modal, direct) {
+            (Some(m), Some(d)) => {
+                let num: f64 = m.iter().zip(d).map(|(a, b)| (a - b).norm_sqr()).sum::<f64>().sqrt();
+                let den: f64 = d.iter().map(|b| b.norm_sqr()).sum::<f64>().sqrt();
+                Some(if den > 0.0 { num / den } else { num })
+            }
+            _ => None,
+        };
+        finite &= groups.iter().all(|g| {
+            g.peak_m.is_finite()
+                && g.max_node_peak_m.is_finite()
+                && g.mean
+                    .iter()
+                    .all(|c| c.amplitude_m.is_finite() && c.phase_deg.is_finite())
+        });
+        if !finite {
+            return Err(self.not_finite(f));
+        }
+        let point = Point {
+            freq_hz: f,
+            groups,
+            max_peak_m: max_peak,
+            max_node,
+            modal_vs_direct,
+        };
+        Ok((point, full))
+    }
+
+    /// The error of a response that overflows double precision, with its likely cause.
+    fn not_finite(&self, f: f64) -> Error {
+        let fmax = self
+            .forces
+            .iter()
+            .flat_map(|g| g.force)
+            .map(f64::abs)
+            .fold(0.0, f64::max);
+        Error::Factorization(format!(
+            "the harmonic response at {} Hz is not finite: it overflows double precision (forces up to {} N{}); \
+             the response is linear in the forces: scale them down",
+            crate::io::fmt_sig(f, 4),
+            crate::io::fmt_sig(fmax, 4),
+            if self.free {
+                ", on a free body, whose rigid response grows as 1/f² towards 0 Hz"
+            } else {
+                ""
+            }
+        ))
+    }
 }
 
 fn group_response(group: &str, nodes: &[usize], full: &[[c64; 6]]) -> GroupResponse {
@@ -518,7 +969,13 @@ pub fn write_fields(
     vtu: Option<&std::path::Path>,
     msh: Option<&std::path::Path>,
 ) -> Result<()> {
-    let f = fields(mesh, &run.nodal[k]);
+    let Some(i) = run.field_points.iter().position(|&p| p == k) else {
+        return Err(Error::param(
+            "k",
+            format!("harmonic: the field of frequency {k} was not kept by the run"),
+        ));
+    };
+    let f = fields(mesh, &run.nodal[i]);
     let freq = run.report.points[k].freq_hz;
     if let Some(p) = vtu {
         let pf: Vec<crate::io::vtk::PointField> = f
@@ -563,8 +1020,9 @@ pub fn write_frf_svg(path: &std::path::Path, r: &HarmonicReport) -> Result<()> {
     let fs: Vec<f64> = r.points.iter().map(|p| p.freq_hz).collect();
     let (f0, f1) = (fs[0], *fs.last().unwrap_or(&fs[0]));
     if !(f1 > f0) {
-        return Err(Error::InvalidInput(
-            "FRF plot: a sweep of at least two frequencies is needed".into(),
+        return Err(Error::option(
+            "--plot",
+            "FRF plot: a sweep of at least two frequencies is needed",
         ));
     }
     let ng = r.points[0].groups.len();

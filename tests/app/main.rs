@@ -13,6 +13,7 @@ mod design_inputs;
 mod dynamics;
 mod export_engine;
 mod harmonic;
+mod harmonic_inputs;
 mod machine3d;
 mod machine_inputs;
 mod machines;

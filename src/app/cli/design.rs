@@ -41,7 +41,11 @@ pub fn design_cmd(a: &DesignArgs) -> Result<i32> {
             ));
         }
     }
-    check_outputs(&[], Some(&a.out))?;
+    check_outputs(
+        &[],
+        Some(("--out", &a.out)),
+        &a.file.iter().map(|f| ("design file", f.as_path())).collect::<Vec<_>>(),
+    )?;
     let t0 = std::time::Instant::now();
     let r = with_progress(t0, |p| design::run_design(&d, Some(&a.out), p))?;
     let report = design::report::report(&r);

@@ -52,6 +52,11 @@ pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
         })
         .transpose()?;
     let spec = a.model.spec()?;
+    super::check_outputs(
+        &[],
+        Some(("--out", &a.out)),
+        &[("input mesh", std::path::Path::new(&a.mesh))],
+    )?;
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let model = crate::model::Model::build(&mesh, &spec, &a.mesh)?;
     let sys = crate::system::System::assemble_only(model, &a.mesh)?;

@@ -65,63 +65,18 @@ pub struct HarmonicArgs {
 }
 
 pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
-    use crate::analysis::harmonic::{Damping, GroupForce};
     use crate::app::harmonic as h;
     let spec = a.model.spec()?;
-    let forces = a
-        .force
-        .iter()
-        .map(|f| GroupForce::parse("--force", f))
-        .collect::<Result<Vec<_>>>()?;
-    let freqs = match (&a.freq, &a.sweep) {
-        (Some(f), _) => vec![*f],
-        (None, Some(s)) => {
-            let num = |t: &str| -> Result<f64> {
-                t.trim()
-                    .parse()
-                    .map_err(|_| Error::InvalidInput(format!("--sweep: cannot read '{t}' as a number")))
-            };
-            let n: usize = s[2]
-                .trim()
-                .parse()
-                .map_err(|_| Error::InvalidInput(format!("--sweep: N '{}' must be a whole number ≥ 2", s[2])))?;
-            h::sweep_frequencies(num(&s[0])?, num(&s[1])?, n)?
-        }
-        (None, None) => return Err(Error::InvalidInput("give --freq HZ or --sweep F0 F1 N".into())),
-    };
-    let damping = match (&a.damping, &a.rayleigh) {
-        (Some(z), _) => Damping::Ratio(*z),
-        (None, Some(r)) => {
-            let v = crate::input::options::numbers("--rayleigh", r, r)?;
-            if v.len() != 2 {
-                return Err(Error::InvalidInput(format!("--rayleigh '{r}': expected ALPHA,BETA")));
-            }
-            Damping::Rayleigh {
-                alpha: v[0],
-                beta: v[1],
-            }
-        }
-        (None, None) => {
-            return Err(Error::InvalidInput(
-                "give --damping RATIO (e.g. 0.02) or --rayleigh ALPHA,BETA: an undamped response is infinite at \
-                 resonance"
-                    .into(),
-            ));
-        }
-    };
-    damping.validate()?;
-    if a.plot.is_some() && freqs.len() < 2 {
-        return Err(Error::InvalidInput("--plot draws an FRF: it needs --sweep".into()));
-    }
-    let req = h::HarmonicRequest {
-        forces,
-        freqs_hz: freqs,
-        damping,
-        method: h::Method::parse(&a.method)?,
-        modes: a.modes,
-        probes: a.probe.clone(),
-    };
-    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref(), a.plot.as_deref()], None)?;
+    let req = request(a)?;
+    check_outputs(
+        &[
+            ("--vtu", a.vtu.as_deref()),
+            ("--msh-out", a.msh_out.as_deref()),
+            ("--plot", a.plot.as_deref()),
+        ],
+        None,
+        &[("input mesh", std::path::Path::new(&a.mesh))],
+    )?;
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let model = crate::model::Model::build(&mesh, &spec, &a.mesh)?;
     let opts = crate::system::SystemOptions {
@@ -130,7 +85,7 @@ pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
         mass: true,
     };
     let sys = crate::system::System::build(model, &opts, &a.mesh)?;
-    let run = h::run(&sys, &mesh, &req)?;
+    let run = h::run_with(&sys, &mesh, &req, h::Fields::Peak)?;
     if a.json {
         outln!(
             "{}",
@@ -156,4 +111,73 @@ pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
         eprintln!("note: {n}");
     }
     Ok(0)
+}
+
+/// The request the options describe, checked before any work: forces, frequencies (named by the
+/// option that gave them), damping, method.
+fn request(a: &HarmonicArgs) -> Result<crate::app::harmonic::HarmonicRequest> {
+    use crate::analysis::harmonic::{Damping, GroupForce};
+    use crate::app::harmonic as h;
+    use crate::io::fmt_sig;
+    let forces = a
+        .force
+        .iter()
+        .map(|f| GroupForce::parse("--force", f))
+        .collect::<Result<Vec<_>>>()?;
+    let freqs = match (&a.freq, &a.sweep) {
+        (Some(f), _) => {
+            if let Some(p) = h::frequency_problem(*f) {
+                return Err(Error::option("--freq", format!("--freq {}: {p}", fmt_sig(*f, 4))));
+            }
+            vec![*f]
+        }
+        (None, Some(s)) => {
+            let num = |t: &str| -> Result<f64> {
+                t.trim()
+                    .parse()
+                    .map_err(|_| Error::option("--sweep", format!("--sweep: cannot read '{t}' as a number")))
+            };
+            let n: usize = s[2]
+                .trim()
+                .parse()
+                .map_err(|_| Error::option("--sweep", format!("--sweep: N '{}' must be a whole number ≥ 2", s[2])))?;
+            h::sweep_frequencies(num(&s[0])?, num(&s[1])?, n)?
+        }
+        (None, None) => return Err(Error::option("--freq", "give --freq HZ or --sweep F0 F1 N")),
+    };
+    let damping = match (&a.damping, &a.rayleigh) {
+        (Some(z), _) => Damping::Ratio(*z),
+        (None, Some(r)) => {
+            let v = crate::input::options::numbers("--rayleigh", r, r)?;
+            if v.len() != 2 {
+                return Err(Error::option(
+                    "--rayleigh",
+                    format!("--rayleigh '{r}': expected ALPHA,BETA"),
+                ));
+            }
+            Damping::Rayleigh {
+                alpha: v[0],
+                beta: v[1],
+            }
+        }
+        (None, None) => {
+            return Err(Error::option(
+                "--damping",
+                "give --damping RATIO (e.g. 0.02) or --rayleigh ALPHA,BETA: an undamped response is infinite at \
+                 resonance",
+            ));
+        }
+    };
+    h::check_damping(&damping, "--damping", "--rayleigh")?;
+    if a.plot.is_some() && freqs.len() < 2 {
+        return Err(Error::option("--plot", "--plot draws an FRF: it needs --sweep"));
+    }
+    Ok(h::HarmonicRequest {
+        forces,
+        freqs_hz: freqs,
+        damping,
+        method: h::Method::parse(&a.method)?,
+        modes: a.modes,
+        probes: a.probe.clone(),
+    })
 }

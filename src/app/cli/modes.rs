@@ -92,7 +92,11 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
             ..Default::default()
         },
     )?;
-    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref()], None)?;
+    check_outputs(
+        &[("--vtu", a.vtu.as_deref()), ("--msh-out", a.msh_out.as_deref())],
+        None,
+        &[("input mesh", std::path::Path::new(&a.mesh))],
+    )?;
     let t = std::time::Instant::now();
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();

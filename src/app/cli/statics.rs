@@ -28,7 +28,11 @@ pub struct StaticArgs {
 pub fn static_cmd(a: &StaticArgs) -> Result<i32> {
     let mut spec = a.model.spec()?;
     let loads = a.loads.apply(&mut spec)?;
-    check_outputs(&[a.vtu.as_deref(), a.msh_out.as_deref()], None)?;
+    check_outputs(
+        &[("--vtu", a.vtu.as_deref()), ("--msh-out", a.msh_out.as_deref())],
+        None,
+        &[("input mesh", std::path::Path::new(&a.mesh))],
+    )?;
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let opts = crate::analysis::statics::StaticOptions {
         spec,

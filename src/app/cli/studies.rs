@@ -18,7 +18,7 @@ pub struct RunArgs {
 
 pub fn run_cmd(a: &RunArgs) -> Result<i32> {
     let scene = crate::app::studies::scene::Scene::load(&a.scene)?;
-    check_outputs(&[], Some(&a.out))?;
+    check_outputs(&[], Some(("--out", &a.out)), &[("scene file", &a.scene)])?;
     let report = scene.run(Some((&a.out, "")))?;
     let json = serde_json::to_string_pretty(&report).map_err(|e| Error::output("JSON", e))?;
     let path = a.out.join("summary.json");
@@ -64,7 +64,7 @@ pub struct BatchArgs {
 
 pub fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     use std::io::IsTerminal;
-    check_outputs(&[], Some(&a.out))?;
+    check_outputs(&[], Some(("--out", &a.out)), &[("template scene", &a.scene)])?;
     let opts = crate::app::studies::batch::BatchOptions {
         pattern: a.pattern.clone(),
         template: a.scene.clone(),
@@ -179,7 +179,7 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
     if let Some(n) = a.check {
         study.check.designs = n;
     }
-    check_outputs(&[], Some(&a.out))?;
+    check_outputs(&[], Some(("--out", &a.out)), &[("study file", &a.study)])?;
     let o = sweep::run_sweep(
         &study,
         &sweep::SweepOptions {
@@ -214,7 +214,11 @@ pub fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
     } else {
         converge::builtin(&a.case)?
     };
-    check_outputs(&[], Some(&a.out))?;
+    check_outputs(
+        &[],
+        Some(("--out", &a.out)),
+        &[("case file", std::path::Path::new(&a.case))],
+    )?;
     let c = converge::run_case(&case, &|l| eprintln!("{l}"))?;
     converge::write_outputs(&c, &a.out)?;
     out!("{}", converge::table_markdown(&c));
@@ -233,7 +237,8 @@ pub struct MergeArgs {
 }
 
 pub fn merge_cmd(a: &MergeArgs) -> Result<i32> {
-    check_outputs(&[], Some(&a.out))?;
+    let inputs: Vec<(&str, &std::path::Path)> = a.dirs.iter().map(|d| ("batch folder merged", d.as_path())).collect();
+    check_outputs(&[], Some(("--out", &a.out)), &inputs)?;
     let s = crate::app::studies::merge::merge(&a.dirs, Some(&a.out))?;
     outln!(
         "{} cases ({} failed) merged from {} folders into {}",

@@ -317,7 +317,7 @@ impl Run<'_> {
         req: &crate::app::harmonic::HarmonicRequest,
         out: Out,
     ) -> Result<crate::app::harmonic::HarmonicReport> {
-        let run = crate::app::harmonic::run(&self.sys, &self.mesh, req)?;
+        let run = crate::app::harmonic::run_with(&self.sys, &self.mesh, req, crate::app::harmonic::Fields::Peak)?;
         if let Some((dir, prefix)) = out {
             let k = crate::app::harmonic::peak_index(&run.report);
             let (vtu, msh) = self.field_files(out, "harmonic");
