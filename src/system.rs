@@ -282,6 +282,19 @@ impl System {
         })
     }
 
+    /// Replace K by `k` on the same pattern (the tangent `K + K_σ` of a prestressed model,
+    /// [`crate::analysis::prestress`]); returns the previous K. The ordering and symbolic
+    /// factorisation stay valid because the pattern is the same; another pattern is an error.
+    pub fn replace_stiffness(&mut self, k: SymMatrix) -> Result<SymMatrix> {
+        if !Arc::ptr_eq(&k.pattern, &self.pattern) {
+            return Err(Error::InvalidInput(format!(
+                "{}: a replacement stiffness must be assembled on the system's own sparsity pattern",
+                self.source
+            )));
+        }
+        Ok(std::mem::replace(&mut self.k, k))
+    }
+
     /// True if the mass matrix was assembled.
     pub fn has_mass(&self) -> bool {
         self.m.is_some()

@@ -12,6 +12,7 @@
 //! - [`incompatible`]: hex8 with condensed incompatible modes (Wilson–Taylor), chosen per model.
 //! - [`shell`]: MITC3/MITC4 flat shells (`Tri3`, `Quad4`).
 //! - [`beam`]: Timoshenko beams (`Line2`, `Line3`), optional warping DOF.
+//! - [`geometric`]: geometric (initial-stress) stiffness of solids, shells and beams.
 //! - [`lumping`]: the [`MassLumping`] choice and the HRZ and row-sum lumping schemes.
 //!
 //! Geometry (Jacobians, surface and line metrics, vector algebra) is [`crate::fe::geometry`];
@@ -52,6 +53,7 @@
 //! places (no `_ =>` arm hides one).
 
 pub mod beam;
+pub mod geometric;
 pub mod incompatible;
 pub mod lumping;
 pub mod shell;

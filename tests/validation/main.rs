@@ -3,12 +3,15 @@
 //! - `skfem_modes`, `skfem_static`: scikit-fem on the very same meshes with the same elements
 //!   (references in `validation/reference/`, regenerated live by `validation/run_live.sh`);
 //! - `published_shells_beams`: published benchmarks (Scordelis–Lo roof, Navier plate, MacNeal–
-//!   Harder, closed-form beams) and the formulation comparisons of scenes S1, S2, S5, S6, S7.
+//!   Harder, closed-form beams) and the formulation comparisons of scenes S1, S2, S5, S6, S7;
+//! - `prestress`: prestressed modes against the axially loaded beam's closed form, and the
+//!   geometric stiffness kernels' exact properties.
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod harmonic;
+mod prestress;
 mod published_shells_beams;
 mod skfem_modes;
 mod skfem_static;

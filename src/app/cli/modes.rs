@@ -2,7 +2,8 @@
 
 use super::{check_outputs, emit, ordering, parse_bytes};
 use crate::analysis::modal::{ModalOptions, ModalTarget};
-use crate::app::cli::args::{ModelArgs, length_scale};
+use crate::analysis::statics::Load;
+use crate::app::cli::args::{LoadArgs, ModelArgs, length_scale};
 use crate::app::engines::{Engine, SlepcOptions};
 use crate::io;
 use crate::{Error, Result};
@@ -20,6 +21,13 @@ pub struct ModesArgs {
     band: Option<Vec<f64>>,
     #[command(flatten)]
     model: ModelArgs,
+    /// Prestressed modes: solve the static case of --force, --pressure, --gravity and
+    /// --displace first and find the modes of the preloaded structure, (K + K_σ)x = λMx, with
+    /// K_σ the geometric stiffness of its stresses.
+    #[arg(long)]
+    prestress: bool,
+    #[command(flatten)]
+    loads: LoadArgs,
     /// Shift in Hz: find the modes nearest this frequency (negative: a negative λ shift).
     #[arg(long, allow_negative_numbers = true)]
     shift: Option<f64>,
@@ -61,8 +69,31 @@ pub struct ModesArgs {
     slepc_import: Option<PathBuf>,
 }
 
+/// The static loads of `--prestress` (adding its prescribed displacements to `spec`); load
+/// options without `--prestress` are an error.
+fn prestress_loads(a: &ModesArgs, spec: &mut crate::model::ModelSpec) -> Result<Option<Vec<Load>>> {
+    if a.prestress {
+        return Ok(Some(a.loads.apply(spec)?));
+    }
+    let l = &a.loads;
+    let given = [
+        ("--force", !l.force.is_empty()),
+        ("--pressure", !l.pressure.is_empty()),
+        ("--gravity", l.gravity.is_some()),
+        ("--displace", !l.displace.is_empty()),
+    ];
+    match given.iter().find(|(_, g)| *g) {
+        Some((name, _)) => Err(Error::option(
+            *name,
+            "a static load applies to modes with --prestress (the preload of prestressed modes)",
+        )),
+        None => Ok(None),
+    }
+}
+
 pub fn run(a: &ModesArgs) -> Result<i32> {
-    let spec = a.model.spec()?;
+    let mut spec = a.model.spec()?;
+    let loads = prestress_loads(a, &mut spec)?;
     let target = match (&a.band, a.modes) {
         (Some(b), _) => ModalTarget::Band(b[0], b[1]),
         (None, Some(n)) if n > 0 => ModalTarget::Modes(n),
@@ -100,7 +131,18 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
     let t = std::time::Instant::now();
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let read_time = t.elapsed().as_secs_f64();
-    let run = engine.solve_mesh(&mesh, &a.mesh, &opts, read_time)?;
+    let run = match &loads {
+        Some(l) => {
+            if !matches!(engine, Engine::Native) {
+                return Err(Error::option(
+                    "--prestress",
+                    "prestressed modes are solved by --engine native only",
+                ));
+            }
+            crate::analysis::prestress::run_prestressed_modes(&mesh, &a.mesh, &opts, l, read_time)?.modal
+        }
+        None => engine.solve_mesh(&mesh, &a.mesh, &opts, read_time)?,
+    };
     if a.json {
         outln!(
             "{}",

@@ -1,0 +1,475 @@
+//! Geometric (initial-stress) stiffness `K_σ` of the element families, from a stress state
+//! at their integration points.
+//!
+//! A body carrying a stress `σ⁰` stores, to second order in an added displacement `u`, the
+//! work `½ ∫ σ⁰_ij u_k,i u_k,j dV` of the preload on the quadratic part of the Green strain.
+//! Its matrix is the geometric stiffness; `K + K_σ` is the tangent stiffness about the
+//! preloaded state (tension stiffens, compression softens; `det(K + λ K_σ) = 0` is linear
+//! buckling). The kernels write dense, row-major element matrices with the layout of the
+//! element's stiffness (node-major DOFs).
+//!
+//! - **Solids** (every kind of [`crate::element::solid`]): `K_σ,ab = ∫ ∇N_aᵀ σ ∇N_b dV · I₃`,
+//!   i.e. `∫ Gᵀ S G dV` with `G` the 9 × 3n displacement-gradient matrix and `S` the 9 × 9
+//!   block diagonal of the 3 × 3 Cauchy stress, integrated with the cell's stiffness rule
+//!   ([`solid_rule`]) at whose points the stress is given. A hex8 with incompatible modes gets
+//!   the geometric stiffness of its nodal (compatible) field: the condensed modes carry no
+//!   geometric term.
+//! - **Beams** (`Line2`, `Line3`): the axial force `N` acts on the transverse displacements,
+//!   `N ∫ v'δv' + w'δw' dx`, and on the twist through the Wagner term
+//!   `N (I_p/A) ∫ θ_x' δθ_x' dx` (`I_p = I_y + I_z` about the centroid). On `Line2` the
+//!   transverse slopes are those of the element's own interdependent interpolation
+//!   (Friedman and Kosmatka 1993), which for `Φ = 0` gives the classical consistent matrix
+//!   `N/(30L) [36, 3L, −36, 3L; 3L, 4L², −3L, −L²; …]` (Przemieniecki 1968, §15); the twist
+//!   uses the element's linear (or, with warping, cubic Hermite) interpolation. `Line3` uses
+//!   its quadratic interpolation at the 2 Gauss points of its stiffness, with the component of
+//!   `u'` across the tangent. Not included: the terms of bending moments and shear forces
+//!   (lateral–torsional buckling of a bent beam), and the axial term `N ∫ u'δu'`.
+//! - **Shells** (MITC3/MITC4): the membrane forces `N_αβ` (per unit length, in the element
+//!   frame) act on the in-plane gradients of all three translations of the mid-surface,
+//!   `∫ N_αβ u_k,α δu_k,β dA` — the transverse component is the plate's buckling term, the
+//!   in-plane ones the membrane's. Mid-surface translations follow the nodes through the
+//!   offset and warping links of the stiffness (`u_mid = u + d n × θ`). Not included: the
+//!   rotations' term `t²/12 N_αβ θ,α θ,β` and the transverse shear forces.
+
+// Index loops over nodes, components and points read like the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
+use std::sync::OnceLock;
+
+use crate::element::beam::{self, NodeTransform, congruence};
+use crate::element::shell;
+use crate::element::solid::{self, Integration};
+use crate::error::{Error, Result};
+use crate::fe::geometry::{dot, norm, physical_gradient, plane_jacobian, sub, volume_jacobian};
+use crate::fe::quadrature::{self, GAUSS2, GAUSS4, QUAD_2X2, Rule, TRIANGLE_3};
+use crate::fe::shape::{self, MAX_NODES};
+use crate::material::Material;
+use crate::mesh::CellKind;
+use crate::section::{BeamSection, ShellSection};
+
+/// Index of a solid kind in the rule cache.
+fn solid_slot(kind: CellKind) -> Option<usize> {
+    match kind {
+        CellKind::Tet4 => Some(0),
+        CellKind::Tet10 => Some(1),
+        CellKind::Hex8 => Some(2),
+        CellKind::Hex20 => Some(3),
+        CellKind::Hex27 => Some(4),
+        CellKind::Wedge6 => Some(5),
+        CellKind::Wedge15 => Some(6),
+        CellKind::Point1
+        | CellKind::Line2
+        | CellKind::Line3
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9 => None,
+    }
+}
+
+static SOLID_RULES: [[OnceLock<Rule>; 2]; 7] = [const { [const { OnceLock::new() }, const { OnceLock::new() }] }; 7];
+
+/// The rule a solid cell's `K_σ` is integrated with: its stiffness rule
+/// ([`solid::stiffness_degree`], or [`solid::curved_stiffness_degree`] for a curved cell).
+/// The stress is wanted at these points. `None` for a kind that is not a solid.
+pub fn solid_rule(kind: CellKind, integration: Integration) -> Option<&'static Rule> {
+    let i = solid_slot(kind)?;
+    let (slot, degree) = match integration {
+        Integration::Straight => (0, solid::stiffness_degree(kind)),
+        Integration::Curved => (1, solid::curved_stiffness_degree(kind)),
+    };
+    Some(SOLID_RULES[i][slot].get_or_init(|| quadrature::for_cell(kind, degree)))
+}
+
+/// The symmetric 3 × 3 tensor of a Voigt vector `[σxx, σyy, σzz, σyz, σxz, σxy]`.
+pub fn tensor(s: &[f64; 6]) -> [[f64; 3]; 3] {
+    [[s[0], s[5], s[4]], [s[5], s[1], s[3]], [s[4], s[3], s[2]]]
+}
+
+/// Geometric stiffness of a solid cell: `K_σ,(3a+i)(3b+j) = δ_ij ∫ ∇N_a · σ ∇N_b dV`.
+///
+/// - `x`: node coordinates; `integration`: the rule set ([`solid::integration`] of the cell);
+/// - `sigma`: the Cauchy stress (Voigt order of [`crate::material`], Pa) at each point of
+///   [`solid_rule`]`(kind, integration)`, in its order;
+/// - `kg`: output, `3n × 3n` row-major, fully written.
+///
+/// `Err(det)` for a non-positive Jacobian determinant (`NaN` for a kind that is not a solid).
+///
+/// ```
+/// use vibrofem::{element::{geometric, solid::Integration}, mesh::CellKind};
+/// // Unit tet under σxx = 1: K_σ = V ∂N_a/∂x ∂N_b/∂x per component.
+/// let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+/// let mut kg = [0.0; 144];
+/// geometric::solid(CellKind::Tet4, &x, Integration::Straight, &[[1.0, 0.0, 0.0, 0.0, 0.0, 0.0]], &mut kg).unwrap();
+/// assert!((kg[0] - 1.0 / 6.0).abs() < 1e-15 && (kg[3] + 1.0 / 6.0).abs() < 1e-15 && kg[1] == 0.0);
+/// ```
+pub fn solid(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    integration: Integration,
+    sigma: &[[f64; 6]],
+    kg: &mut [f64],
+) -> std::result::Result<(), f64> {
+    let rule = solid_rule(kind, integration).ok_or(f64::NAN)?;
+    let n = kind.n_nodes();
+    assert_eq!(x.len(), n, "geometric::solid: {kind} needs {n} node coordinates");
+    assert_eq!(sigma.len(), rule.len(), "geometric::solid: one stress per rule point");
+    assert_eq!(kg.len(), 9 * n * n, "geometric::solid: kg must be 3n × 3n");
+    kg.fill(0.0);
+    let nd = 3 * n;
+    let mut dn = [[0.0; 3]; MAX_NODES];
+    let mut g = [[0.0; 3]; MAX_NODES];
+    let mut sg = [[0.0; 3]; MAX_NODES];
+    for (q, (&p, &w)) in rule.points.iter().zip(&rule.weights).enumerate() {
+        shape::gradients(kind, p, &mut dn[..n]);
+        let (det, inv) = volume_jacobian(x, &dn[..n])?;
+        let c = w * det;
+        let s = tensor(&sigma[q]);
+        for a in 0..n {
+            g[a] = physical_gradient(&inv, dn[a]);
+            for i in 0..3 {
+                sg[a][i] = c * (s[i][0] * g[a][0] + s[i][1] * g[a][1] + s[i][2] * g[a][2]);
+            }
+        }
+        for a in 0..n {
+            for b in a..n {
+                let v = dot(g[a], sg[b]);
+                for i in 0..3 {
+                    kg[(3 * a + i) * nd + 3 * b + i] += v;
+                }
+            }
+        }
+    }
+    for a in 0..n {
+        for b in a + 1..n {
+            for i in 0..3 {
+                kg[(3 * b + i) * nd + 3 * a + i] = kg[(3 * a + i) * nd + 3 * b + i];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The `(ξ, η, weight)` points at which a shell's membrane forces are sampled and its `K_σ`
+/// integrated: 2 × 2 Gauss on `Quad4`, the 3-point rule on `Tri3` (the element's own rules).
+pub fn shell_points(kind: CellKind) -> &'static [(f64, f64, f64)] {
+    if kind == CellKind::Quad4 {
+        &QUAD_2X2
+    } else {
+        &TRIANGLE_3
+    }
+}
+
+/// Membrane forces `[N_11, N_22, N_12]` (N/m, in the element frame
+/// [`shell::local_frame`]) at the points of [`shell_points`] for element displacements `ue`
+/// (global, `6n`): the thickness times the mid-surface stress of [`shell::stress_at`].
+/// Unused entries (triangles) are 0. `Err(det)` as for [`shell::stiffness`].
+pub fn shell_membrane_forces(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    sec: &ShellSection,
+    mat: &Material,
+    ue: &[f64],
+) -> std::result::Result<[[f64; 3]; 4], f64> {
+    let r = shell::local_frame(kind, x)?;
+    let mut out = [[0.0; 3]; 4];
+    for (q, &(xi, eta, _)) in shell_points(kind).iter().enumerate() {
+        let s = tensor(&shell::stress_at(kind, x, sec, mat, ue, [xi, eta, 0.0])?.middle);
+        let along = |a: [f64; 3], b: [f64; 3]| {
+            let mut v = 0.0;
+            for i in 0..3 {
+                for j in 0..3 {
+                    v += a[i] * s[i][j] * b[j];
+                }
+            }
+            sec.thickness * v
+        };
+        out[q] = [along(r[0], r[0]), along(r[1], r[1]), along(r[0], r[1])];
+    }
+    Ok(out)
+}
+
+/// Geometric stiffness of a shell element (`Tri3`, `Quad4`) from its membrane forces
+/// `nf[q] = [N_11, N_22, N_12]` at the points of [`shell_points`] (element frame):
+/// `∫ N_αβ u_k,α δu_k,β dA` over the three translations of the mid-surface, joined to the
+/// nodes by the links of the stiffness (offset and warping heights). `kg`: `6n × 6n`
+/// row-major, fully written. `Err(det)` as for [`shell::stiffness`].
+pub fn shell(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    sec: &ShellSection,
+    nf: &[[f64; 3]],
+    kg: &mut [f64],
+) -> std::result::Result<(), f64> {
+    let r = shell::local_frame(kind, x)?;
+    let nn = kind.n_nodes();
+    let nd = 6 * nn;
+    assert_eq!(kg.len(), nd * nd, "geometric::shell: kg must be 6n × 6n");
+    let mut c = [0.0; 3];
+    for xa in x {
+        for i in 0..3 {
+            c[i] += xa[i] / nn as f64;
+        }
+    }
+    let mut p = [[0.0; 2]; 4];
+    let mut d = [0.0; 4];
+    for a in 0..nn {
+        let v = sub(x[a], c);
+        p[a] = [dot(v, r[0]), dot(v, r[1])];
+        d[a] = sec.offset + if nn == 4 { dot(v, r[2]) } else { 0.0 };
+    }
+    // Scalar matrix k_ab = ∫ N_αβ ∂N_a/∂x_α ∂N_b/∂x_β dA.
+    let mut k = [[0.0; 4]; 4];
+    for (q, &(xi, eta, w)) in shell_points(kind).iter().enumerate() {
+        let mut nv = [0.0; 4];
+        let mut g3 = [[0.0; 3]; 4];
+        shape::values_and_gradients(kind, [xi, eta, 0.0], &mut nv[..nn], &mut g3[..nn]);
+        let dn: [[f64; 2]; 4] = g3.map(|g| [g[0], g[1]]);
+        let (det, inv) = plane_jacobian(&p, &dn, nn)?;
+        let mut g = [[0.0; 2]; 4];
+        for a in 0..nn {
+            g[a] = [
+                inv[0][0] * dn[a][0] + inv[0][1] * dn[a][1],
+                inv[1][0] * dn[a][0] + inv[1][1] * dn[a][1],
+            ];
+        }
+        let [n11, n22, n12] = nf[q];
+        let cw = w * det;
+        for a in 0..nn {
+            let t = [n11 * g[a][0] + n12 * g[a][1], n12 * g[a][0] + n22 * g[a][1]];
+            for b in 0..nn {
+                k[a][b] += cw * (t[0] * g[b][0] + t[1] * g[b][1]);
+            }
+        }
+    }
+    // Mid-surface translation of node a: u + d_a n × θ = T_a [u; θ], T_a = [I | d_a [n]×].
+    let n = r[2];
+    let nx = [[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]];
+    let t_of = |a: usize| -> [[f64; 6]; 3] {
+        let mut t = [[0.0; 6]; 3];
+        for i in 0..3 {
+            t[i][i] = 1.0;
+            for j in 0..3 {
+                t[i][3 + j] = d[a] * nx[i][j];
+            }
+        }
+        t
+    };
+    kg.fill(0.0);
+    for a in 0..nn {
+        let ta = t_of(a);
+        for b in 0..nn {
+            let tb = t_of(b);
+            for pp in 0..6 {
+                for qq in 0..6 {
+                    let v: f64 = (0..3).map(|i| ta[i][pp] * tb[i][qq]).sum();
+                    kg[(6 * a + pp) * nd + 6 * b + qq] = k[a][b] * v;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Axial forces `N` (N, tension positive) of a beam element at the points of its geometric
+/// stiffness for element displacements `ue` (global, [`beam::dofs_per_node`] per node):
+/// `Line2` the constant `EA (u_1 − u_0)·e_x / L` (twice), `Line3` `EA t·u'` at its 2 Gauss
+/// points.
+pub fn beam_axial_forces(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    sec: &BeamSection,
+    mat: &Material,
+    ue: &[f64],
+) -> Result<[f64; 2]> {
+    let nd = beam::dofs_per_node(sec);
+    let ea = mat.young * sec.area;
+    match kind {
+        CellKind::Line2 => {
+            let axis = sub(x[1], x[0]);
+            let l = norm(axis);
+            let du: f64 = (0..3).map(|i| (ue[nd + i] - ue[i]) * axis[i] / l).sum();
+            let f = ea * du / l;
+            Ok([f, f])
+        }
+        CellKind::Line3 => {
+            let mut out = [0.0; 2];
+            for (q, &(xi, _)) in GAUSS2.iter().enumerate() {
+                let (tan, jac, dn) = line3_metric(x, xi);
+                let mut du = [0.0; 3];
+                for a in 0..3 {
+                    for i in 0..3 {
+                        du[i] += dn[a] / jac * ue[nd * a + i];
+                    }
+                }
+                out[q] = ea * dot(tan, du) / jac;
+            }
+            Ok(out)
+        }
+        CellKind::Point1
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet4
+        | CellKind::Tet10
+        | CellKind::Hex8
+        | CellKind::Hex20
+        | CellKind::Hex27
+        | CellKind::Wedge6
+        | CellKind::Wedge15 => Err(not_a_beam(kind)),
+    }
+}
+
+/// Tangent `x_ξ`, its length and the `ξ`-derivatives of the `Line3` shape functions at `ξ`.
+fn line3_metric(x: &[[f64; 3]], xi: f64) -> ([f64; 3], f64, [f64; 3]) {
+    let mut nv = [0.0; 3];
+    let mut g = [[0.0; 3]; 3];
+    shape::values_and_gradients(CellKind::Line3, [xi, 0.0, 0.0], &mut nv, &mut g);
+    let dn = [g[0][0], g[1][0], g[2][0]];
+    let mut tan = [0.0; 3];
+    for a in 0..3 {
+        for i in 0..3 {
+            tan[i] += dn[a] * x[a][i];
+        }
+    }
+    (tan, norm(tan), dn)
+}
+
+/// Slopes `dN/dx` of the interdependent deflection functions of the exact two-node
+/// Timoshenko element (Friedman and Kosmatka 1993) at `ξ = x/L`, for `(d_1, θ_1, d_2, θ_2)`.
+fn kosmatka_slopes(xi: f64, l: f64, phi: f64) -> [f64; 4] {
+    let c = 1.0 / (1.0 + phi);
+    let x2 = xi * xi;
+    [
+        c * (6.0 * x2 - 6.0 * xi - phi) / l,
+        c * (3.0 * x2 - (4.0 + phi) * xi + 1.0 + 0.5 * phi),
+        c * (-6.0 * x2 + 6.0 * xi + phi) / l,
+        c * (3.0 * x2 - (2.0 - phi) * xi - 0.5 * phi),
+    ]
+}
+
+/// Geometric stiffness of a beam element from its axial forces `axial` at the points of
+/// [`beam_axial_forces`] (see the module docs for the terms). `kg`: `(n·d)²` row-major in
+/// global axes, `d` = [`beam::dofs_per_node`]; fully written. Errors as for
+/// [`beam::stiffness`].
+pub fn beam(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    orientation: [f64; 3],
+    sec: &BeamSection,
+    mat: &Material,
+    axial: [f64; 2],
+    kg: &mut [f64],
+) -> Result<()> {
+    let nd = beam::dofs_per_node(sec);
+    let wagner = sec.polar() / sec.area;
+    kg.fill(0.0);
+    match kind {
+        CellKind::Line2 => {
+            let axis = sub(x[1], x[0]);
+            let r = beam::local_axes(axis, orientation)?;
+            let l = norm(axis);
+            let n = 2 * nd;
+            let f = axial[0];
+            let mut kl = [0.0; 14 * 14];
+            let (e, g) = (mat.young, mat.shear_modulus());
+            let phi_y = 12.0 * e * sec.iz / (sec.ky * g * sec.area * l * l);
+            let phi_z = 12.0 * e * sec.iy / (sec.kz * g * sec.area * l * l);
+            for (d, rr, sr, phi) in [(1, 5, 1.0, phi_y), (2, 4, -1.0, phi_z)] {
+                let idx = [d, rr, nd + d, nd + rr];
+                let sgn = [1.0, sr, 1.0, sr];
+                for &(xi, w) in &GAUSS4 {
+                    let s = kosmatka_slopes(0.5 * (1.0 + xi), l, phi);
+                    let c = 0.5 * w * l * f;
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            kl[idx[i] * n + idx[j]] += c * sgn[i] * sgn[j] * s[i] * s[j];
+                        }
+                    }
+                }
+            }
+            if nd == 6 {
+                let kt = f * wagner / l;
+                for (i, j, v) in [(3, 3, kt), (nd + 3, nd + 3, kt), (3, nd + 3, -kt), (nd + 3, 3, -kt)] {
+                    kl[i * n + j] += v;
+                }
+            } else {
+                // The twist's cubic Hermite interpolation in (θx, w) of the warping element.
+                let idx = [3, 6, nd + 3, nd + 6];
+                for &(xi, w) in &GAUSS4 {
+                    let t = 0.5 * (1.0 + xi);
+                    let t2 = t * t;
+                    let dh = [
+                        (6.0 * t2 - 6.0 * t) / l,
+                        1.0 - 4.0 * t + 3.0 * t2,
+                        (6.0 * t - 6.0 * t2) / l,
+                        3.0 * t2 - 2.0 * t,
+                    ];
+                    let c = 0.5 * w * l * f * wagner;
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            kl[idx[i] * n + idx[j]] += c * dh[i] * dh[j];
+                        }
+                    }
+                }
+            }
+            let mut gt: NodeTransform = [[0.0; 7]; 7];
+            for i in 0..3 {
+                for j in 0..3 {
+                    gt[i][j] = r[i][j];
+                    gt[3 + i][3 + j] = r[i][j];
+                }
+            }
+            if nd == 7 {
+                gt[6][6] = 1.0;
+            }
+            congruence(&kl, 2, nd, &[gt, gt], kg);
+            Ok(())
+        }
+        CellKind::Line3 => {
+            if nd != 6 {
+                return Err(Error::InvalidInput(
+                    "the warping degree of freedom is available on 2-node beams (line2) only".into(),
+                ));
+            }
+            for (q, &(xi, w)) in GAUSS2.iter().enumerate() {
+                let (tan, jac, dn) = line3_metric(x, xi);
+                let t = beam::local_axes(tan, orientation)?[0];
+                let c = w * jac * axial[q];
+                for a in 0..3 {
+                    for b in 0..3 {
+                        let v = c * (dn[a] / jac) * (dn[b] / jac);
+                        for i in 0..3 {
+                            for j in 0..3 {
+                                let across = if i == j { 1.0 } else { 0.0 } - t[i] * t[j];
+                                kg[(6 * a + i) * 18 + 6 * b + j] += v * across;
+                                kg[(6 * a + 3 + i) * 18 + 6 * b + 3 + j] += v * wagner * t[i] * t[j];
+                            }
+                        }
+                    }
+                }
+            }
+            Ok(())
+        }
+        CellKind::Point1
+        | CellKind::Tri3
+        | CellKind::Tri6
+        | CellKind::Quad4
+        | CellKind::Quad8
+        | CellKind::Quad9
+        | CellKind::Tet4
+        | CellKind::Tet10
+        | CellKind::Hex8
+        | CellKind::Hex20
+        | CellKind::Hex27
+        | CellKind::Wedge6
+        | CellKind::Wedge15 => Err(not_a_beam(kind)),
+    }
+}
+
+fn not_a_beam(kind: CellKind) -> Error {
+    Error::InvalidInput(format!("{kind} is not a beam cell kind (line2 or line3)"))
+}
