@@ -8,7 +8,8 @@
 //! - [`engines`]: the native/SLEPc switch every modal solve goes through, the SLEPc/MPI engine
 //!   and its import, and the export of K, M and the DOF map for other solvers.
 //! - [`harmonic`]: the harmonic command's run and report.
-//! - [`report`], [`cli`]: the report model and its renderers, clap options.
+//! - [`report`], [`output`], [`cli`]: the report model and its renderers, the checked standard
+//!   output and output-file checks, clap options.
 //! - [`toml_file`]: the one reader of vibrofem's TOML input files (lines, keys, typed errors).
 pub mod cli;
 pub mod design;
@@ -16,6 +17,7 @@ pub mod dynamics;
 pub mod engines;
 pub mod harmonic;
 pub mod machines;
+pub mod output;
 pub mod report;
 pub mod studies;
 pub mod toml_file;

@@ -10,21 +10,10 @@
 use crate::linalg::ordering::Ordering;
 use crate::{Error, Result};
 use clap::{Parser, Subcommand};
-use std::path::{Path, PathBuf};
+
 use std::process::ExitCode;
 
-/// Write to stdout. A closed pipe (`vibrofem … | head`) ends the program quietly with 141, as
-/// a Unix tool killed by SIGPIPE; any other failure (a full disk) is an [`Error::Output`].
-pub(crate) fn emit(s: &str) -> Result<()> {
-    use std::io::Write;
-    let mut o = std::io::stdout().lock();
-    o.write_all(s.as_bytes()).and_then(|()| o.flush()).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::BrokenPipe {
-            std::process::exit(141);
-        }
-        Error::output("standard output", e)
-    })
-}
+pub(crate) use crate::app::output::{check_outputs, emit};
 
 macro_rules! out {
     ($($t:tt)*) => { emit(&format!($($t)*))? };
@@ -102,96 +91,6 @@ pub enum Cmd {
     /// subcommand each.
     #[command(flatten)]
     Machine(crate::app::machines::MachineCommand),
-}
-
-/// Refuse, before any work (named, exit 1): two outputs that are the same file, an output (file
-/// or folder) that is one of the inputs, and outputs that cannot be written. `files` and `dir`
-/// pair each output with the option that names it, `inputs` each input with what it is (`input
-/// mesh`, `scene file`); an input that is no existing file or folder (a generator such as
-/// `box:…`) is skipped. Paths are compared canonically (symbolic links, `..`, hard links); a
-/// file that does not exist yet by its folder's canonical path and its name.
-pub(crate) fn check_outputs(
-    files: &[(&str, Option<&Path>)],
-    dir: Option<(&str, &Path)>,
-    inputs: &[(&str, &Path)],
-) -> Result<()> {
-    let outs: Vec<(&str, &Path, PathBuf)> = files
-        .iter()
-        .filter_map(|&(o, p)| p.map(|p| (o, p, canonical(p))))
-        .chain(dir.map(|(o, p)| (o, p, canonical(p))))
-        .collect();
-    for (i, (oi, pi, ci)) in outs.iter().enumerate() {
-        for (oj, _, cj) in &outs[..i] {
-            if same_file(ci, cj) {
-                return Err(Error::option(
-                    *oi,
-                    format!(
-                        "{oj} and {oi} name the same file '{}': one would overwrite the other; give each output its \
-                         own",
-                        pi.display()
-                    ),
-                ));
-            }
-        }
-        for (what, input) in inputs {
-            if input.exists() && same_file(ci, &canonical(input)) {
-                return Err(Error::option(
-                    *oi,
-                    format!(
-                        "{oi} '{}' is the {what} ('{}'): writing it would overwrite the input; give another path",
-                        pi.display(),
-                        input.display()
-                    ),
-                ));
-            }
-        }
-    }
-    for f in files.iter().filter_map(|f| f.1) {
-        crate::io::check_writable_file(f)?;
-    }
-    if let Some((_, d)) = dir {
-        crate::io::check_writable_dir(d)?;
-    }
-    Ok(())
-}
-
-/// `p` made absolute with its longest existing ancestor canonicalised (symbolic links resolved)
-/// and the rest appended with `.` and `..` applied.
-fn canonical(p: &Path) -> PathBuf {
-    use std::path::Component;
-    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    let comps: Vec<Component> = abs.components().collect();
-    for k in (1..=comps.len()).rev() {
-        let head: PathBuf = comps[..k].iter().collect();
-        if let Ok(mut out) = std::fs::canonicalize(&head) {
-            for c in &comps[k..] {
-                match c {
-                    Component::ParentDir => {
-                        out.pop();
-                    }
-                    Component::CurDir => {}
-                    c => out.push(c.as_os_str()),
-                }
-            }
-            return out;
-        }
-    }
-    abs
-}
-
-/// Two canonical paths naming one file: equal, or (Unix) the same device and inode.
-fn same_file(a: &Path, b: &Path) -> bool {
-    if a == b {
-        return true;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
-            return x.dev() == y.dev() && x.ino() == y.ino();
-        }
-    }
-    false
 }
 
 pub(crate) fn parse_bytes(s: &str) -> Result<u64> {

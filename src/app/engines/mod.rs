@@ -11,6 +11,7 @@
 //! - [`export`]: K, M, the DOF map and a model summary for another solver.
 
 pub mod export;
+mod job;
 mod results;
 pub mod slepc;
 

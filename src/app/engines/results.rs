@@ -9,7 +9,7 @@
 //! comes from the job's Sturm counts, and a job holding more pairs than asked for is verified
 //! whole before the asked ones are taken from it.
 
-use super::slepc::{Job, JobTarget, engine_err, fingerprint};
+use super::job::{Job, JobTarget, engine_err, fingerprint};
 use crate::analysis::modal::ModalParams;
 use crate::linalg::eigen::{self, EigenParams, EigenSolution, SturmCheck};
 use crate::linalg::sparse::SymMatrix;

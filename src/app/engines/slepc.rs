@@ -16,6 +16,7 @@
 //! (`bash validation/setup_slepc.sh` installs them). The Debian build needs `PETSC_DIR` and
 //! `SLEPC_DIR`; they default to Debian's paths when unset.
 
+use super::job::{ENGINE, Job, JobTarget, engine_err, fingerprint};
 use super::results;
 use crate::analysis::modal::{self, ModalParams, ModalRun, ModalTarget, Timings};
 use crate::io::matrix;
@@ -35,7 +36,6 @@ pub const DEBIAN_PETSC_DIR: &str = "/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu
 /// See [`DEBIAN_PETSC_DIR`].
 pub const DEBIAN_SLEPC_DIR: &str = "/usr/lib/slepcdir/slepc3.18/x86_64-linux-gnu-real";
 
-const ENGINE: &str = "SLEPc engine";
 const INSTALL: &str = "install Debian's python3-slepc4py and openmpi-bin (as root: `bash validation/setup_slepc.sh`)";
 
 /// How to run SLEPc.
@@ -64,13 +64,6 @@ impl Default for SlepcOptions {
             workdir: None,
             import: None,
         }
-    }
-}
-
-pub(super) fn engine_err(msg: impl Into<String>) -> Error {
-    Error::Engine {
-        engine: ENGINE.into(),
-        msg: msg.into(),
     }
 }
 
@@ -175,40 +168,6 @@ fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
     };
     std::fs::create_dir_all(&path).map_err(|e| Error::io(&path, e))?;
     Ok(WorkDir { path, remove })
-}
-
-/// A fingerprint of K and M (size, entries, Σ|Kij|, Σ|Mij|, Σ Mii, the mass matrix's kind)
-/// that ties SLEPc results to the model they were computed for: importing them for other model
-/// options (supports, couplings, materials, density, lumped mass, point masses) is refused.
-pub(super) fn fingerprint(sys: &System) -> Result<serde_json::Value> {
-    let k = sys.k();
-    let m = sys.m()?;
-    let abs_sum = |v: &[f64]| v.iter().map(|x| x.abs()).sum::<f64>();
-    Ok(serde_json::json!({
-        "n": sys.n_free(),
-        "nnz": k.pattern.nnz(),
-        "abs_sum": abs_sum(&k.values),
-        "m_nnz": m.pattern.nnz(),
-        "m_abs_sum": abs_sum(&m.values),
-        "m_diag_sum": m.diagonal().iter().sum::<f64>(),
-        "mass_matrix": sys.model().spec.lumping.name(),
-    }))
-}
-
-/// What a SLEPc job computes: the pairs nearest σ, or every eigenvalue in a band (λ units).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum JobTarget {
-    /// The `nev` eigenvalues nearest σ.
-    Nearest(usize),
-    /// Every eigenvalue in [lo, hi], rad²/s².
-    Band(f64, f64),
-}
-
-/// A SLEPc job: its target and shift σ (rad²/s²), as `params.json` holds them.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Job {
-    pub target: JobTarget,
-    pub sigma: f64,
 }
 
 /// Check the numbers of a modal request before any work: a shift and a band whose eigenvalues

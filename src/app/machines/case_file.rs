@@ -9,6 +9,7 @@
 
 use serde::de::DeserializeOwned;
 
+use crate::app::toml_file;
 use crate::{Error, Result};
 
 /// A TOML text with its file name, for messages that name the file, line and key.
@@ -29,34 +30,14 @@ impl<'a> Source<'a> {
     }
 
     fn line_of(&self, offset: usize) -> usize {
-        self.text[..offset.min(self.text.len())].matches('\n').count() + 1
+        toml_file::line_of(self.text, offset)
     }
 
     /// Line of `key` in the `index`-th `[table]` / `[[table]]` (0-based), or of the table header
     /// when the key is absent, or None.
     fn key_line(&self, table: &str, index: usize, key: &str) -> Option<usize> {
-        let mut current: Option<(&str, usize)> = None;
-        let mut counts: std::collections::HashMap<&str, usize> = std::collections::HashMap::new();
-        let mut header = None;
-        for (i, raw) in self.text.lines().enumerate() {
-            let l = raw.split('#').next().unwrap_or("").trim();
-            if let Some(name) = l.strip_prefix("[[").and_then(|r| r.strip_suffix("]]")) {
-                let name = name.trim();
-                let c = counts.entry(name).and_modify(|c| *c += 1).or_insert(0);
-                current = Some((name, *c));
-            } else if let Some(name) = l.strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
-                current = Some((name.trim(), 0));
-            } else if let Some((k, _)) = l.split_once('=')
-                && k.trim().trim_matches('"') == key
-                && current == Some((table, index))
-            {
-                return Some(i + 1);
-            }
-            if header.is_none() && current == Some((table, index)) {
-                header = Some(i + 1);
-            }
-        }
-        header
+        let l = toml_file::line_of_table_key(self.text, table, index, key);
+        l.key.or(l.header)
     }
 
     /// An error at `table.key` (`index`: the `[[table]]` number, 0-based).

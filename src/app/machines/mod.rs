@@ -27,6 +27,7 @@ pub mod crank;
 pub mod plot;
 pub mod registry;
 
+use crate::app::output::{check_outputs, emit};
 use std::path::Path;
 
 use serde::Serialize;
@@ -89,20 +90,21 @@ pub struct CommandArgs<'a> {
     pub json: bool,
 }
 
-/// Runs machine `command` as the command line does: refuses an unwritable output folder before
-/// any work, runs, writes `report.md`, `report.html` and `report.json` into the folder and prints
+/// Runs machine `command` as the command line does: refuses an output folder that cannot be
+/// written or is the case file before any work, runs, writes `report.md`, `report.html` and `report.json` into the folder and prints
 /// the summary (or the JSON) through the checked writer. Returns the exit code.
 pub fn run_command(command: &str, a: &CommandArgs) -> Result<i32> {
     let m = machine(command).ok_or_else(|| Error::option(command, format!("no machine '{command}'")))?;
-    crate::io::check_writable_dir(a.out)?;
+    let inputs: Vec<(&str, &Path)> = a.file.iter().map(|f| ("case file", *f)).collect();
+    check_outputs(&[], Some(("--out", a.out)), &inputs)?;
     std::fs::create_dir_all(a.out).map_err(|e| Error::io(a.out, e))?;
     let o = (m.run)(a.file, Some(a.out))?;
     render::write_all(&o.report, a.out)?;
     if a.json {
-        crate::app::cli::emit(&(render::json(&o.report)? + "\n"))?;
+        emit(&(render::json(&o.report)? + "\n"))?;
     } else {
-        crate::app::cli::emit(&summary_text(&o))?;
-        crate::app::cli::emit(&format!(
+        emit(&summary_text(&o))?;
+        emit(&format!(
             "\nreport: {} (plots beside it)\n",
             a.out.join("report.md").display()
         ))?;

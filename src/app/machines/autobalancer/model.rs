@@ -848,3 +848,42 @@ mod tests {
         assert_eq!(wrap_deg(45.0), 45.0);
     }
 }
+
+/// Closed-form figures of the grinder.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AutobalancerFigures {
+    /// J with the balls, kg·m².
+    pub inertia: f64,
+    /// ω_0 at idle, rad/s.
+    pub omega0: f64,
+    /// ω_0 at idle, rpm.
+    pub omega0_rpm: f64,
+    /// ω_0 while cutting, rad/s.
+    pub omega0_cutting: Option<f64>,
+    /// h̃, 1/s.
+    pub h_tilde: f64,
+    /// ε = l m_0 R_0/J.
+    pub epsilon: f64,
+    /// Operating speed, rad/s.
+    pub speed: f64,
+    /// Operating speed, rpm.
+    pub speed_rpm: f64,
+    /// ω/ω_0 at idle.
+    pub ratio: f64,
+    /// N at the operating speed.
+    pub n_factor: f64,
+    /// First-order mean projection of the disc centre on the imbalance l ε N/2 (balls fixed), m.
+    pub mean_projection: f64,
+    /// Linear criterion at idle: ω > ω_0.
+    pub balances_idle: bool,
+    /// Linear criterion while cutting: ω > ω_0 (cutting).
+    pub balances_cutting: Option<bool>,
+    /// c_r bound at the file's contact angle, N/m.
+    pub cr_bound: Option<f64>,
+    /// The seed's closed-form c_r bound (worst contact angle), N/m.
+    pub cr_bound_paper: Option<f64>,
+    /// Ball capacity Σ m_i R_i / (m_0 R_0).
+    pub capacity_ratio: f64,
+    /// Balanced ball angles relative to the imbalance (two equal balls), degrees.
+    pub balanced_angles_deg: Option<[f64; 2]>,
+}

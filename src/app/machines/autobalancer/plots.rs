@@ -4,8 +4,7 @@ use std::f64::consts::TAU;
 use std::path::Path;
 
 use super::case::AutobalancerCase;
-use super::model::{self, BALANCED_RESIDUAL, Simulation, SweepRow};
-use super::run::AutobalancerFigures;
+use super::model::{self, AutobalancerFigures, BALANCED_RESIDUAL, Simulation, SweepRow};
 use crate::Result;
 use crate::app::machines::plot::{Mark, Panel, Series, write_panels_svg};
 use crate::app::report::fmt_sig;
