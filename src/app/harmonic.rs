@@ -785,9 +785,18 @@ impl PointContext<'_> {
             .collect();
         let modal_vs_direct = match (modal, direct) {
             (Some(m), Some(d)) => {
-                let num: f64 = m.iter().zip(d).map(|(a, b)| (a - b).norm_sqr()).sum::<f64>().sqrt();
-                let den: f64 = d.iter().map(|b| b.norm_sqr()).sum::<f64>().sqrt();
-                Some(if den > 0.0 { num / den } else { num })
+                // ‖m − d‖ / ‖d‖ with the norms scaled (a response of 1e-300 m squares to zero),
+                // and 1 (all of it differs) when the direct response is exactly zero and the modal
+                // one is not: never an absolute difference reported as a relative one.
+                let num = scaled_norm(m.iter().zip(d).map(|(a, b)| a - b));
+                let den = scaled_norm(d.iter().copied());
+                Some(if den > 0.0 {
+                    num / den
+                } else if num > 0.0 {
+                    1.0
+                } else {
+                    0.0
+                })
             }
             _ => None,
         };
@@ -1150,4 +1159,14 @@ pub fn write_frf_svg(path: &std::path::Path, r: &HarmonicReport) -> Result<()> {
     }
     root.present().map_err(|e| perr(&e))?;
     Ok(())
+}
+
+/// The 2-norm of complex numbers, scaled by their largest modulus so that neither tiny nor huge
+/// values underflow or overflow in the squares.
+fn scaled_norm(v: impl Iterator<Item = c64> + Clone) -> f64 {
+    let s = v.clone().fold(0.0f64, |a, z| a.max(z.norm()));
+    if s == 0.0 || !s.is_finite() {
+        return s;
+    }
+    s * v.map(|z| (z / s).norm_sqr()).sum::<f64>().sqrt()
 }

@@ -485,3 +485,37 @@ fn outputs_that_collide_are_refused_before_any_work() {
     assert_eq!(code, 0, "{err}");
     assert!(v.exists() && p.exists());
 }
+
+#[test]
+fn the_modal_and_direct_difference_is_relative_at_any_scale() {
+    // Issue 28 item 16: the "modal vs direct" figure fell back to the absolute difference when the
+    // direct response's norm underflowed (its squares are zero below ~1e-162 m), so a tiny
+    // response showed a perfect 0 or a meaningless absolute number. The relative difference of
+    // a linear response does not depend on the force's scale: 10 N and 1e-290 N must give the
+    // same figure (to the rounding of two solves, 1e-6 of it).
+    let diff = |force: &str| {
+        let (code, out, err) = run(&[
+            "harmonic",
+            BAR,
+            "--fix",
+            "xmin",
+            "--force",
+            force,
+            "--freq",
+            "60",
+            "--rayleigh",
+            "1,1e-5",
+            "--method",
+            "both",
+            "--modes",
+            "8",
+            "--json",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        json(&out)["points"][0]["modal_vs_direct"].as_f64().unwrap()
+    };
+    let big = diff("xmax=0,0,10");
+    let tiny = diff("xmax=0,0,1e-290");
+    assert!(big > 0.0 && big < 1.0, "{big}");
+    assert!((tiny - big).abs() <= 1e-6 * big, "10 N: {big:e}, 1e-290 N: {tiny:e}");
+}
