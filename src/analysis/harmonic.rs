@@ -230,10 +230,13 @@ impl<'a> Superposition<'a> {
         let phi = &modes.vectors;
         let k = phi.ncols();
         if phi.nrows() != n {
-            return Err(Error::InvalidInput(format!(
-                "the modes have {} rows, the system {n} free DOFs: they belong to another model",
-                phi.nrows()
-            )));
+            return Err(Error::param(
+                "modes",
+                format!(
+                    "the modes have {} rows, the system {n} free DOFs: they belong to another model",
+                    phi.nrows()
+                ),
+            ));
         }
         let n_rigid = modes.report.n_rigid.min(k);
         let lambda: Vec<f64> = (0..k)
@@ -275,9 +278,10 @@ impl<'a> Superposition<'a> {
     /// The response at angular frequency `w` (rad/s).
     pub fn at(&self, w: f64) -> Result<Vec<c64>> {
         if !(w.is_finite() && w >= 0.0) {
-            return Err(Error::InvalidInput(format!(
-                "harmonic frequency must be finite and ≥ 0, got {w} rad/s"
-            )));
+            return Err(Error::param(
+                "omega",
+                format!("harmonic frequency must be finite and ≥ 0, got {w} rad/s"),
+            ));
         }
         let phi = &self.modes.vectors;
         let n = phi.nrows();
@@ -285,20 +289,23 @@ impl<'a> Superposition<'a> {
         for (j, (&lam, &qj)) in self.lambda.iter().zip(&self.q).enumerate() {
             let den = c64::new(lam - w * w, w * self.damping.modal(lam));
             if den.norm() == 0.0 {
-                return Err(Error::InvalidInput(if j < self.n_rigid {
-                    format!(
-                        "response at 0 Hz of a model with rigid-body modes (mode {}): an unbalanced force has \
+                return Err(Error::param(
+                    if j < self.n_rigid { "omega" } else { "damping" },
+                    if j < self.n_rigid {
+                        format!(
+                            "response at 0 Hz of a model with rigid-body modes (mode {}): an unbalanced force has \
                          no static response on a free body; support the model or give a frequency above 0",
-                        j + 1
-                    )
-                } else {
-                    format!(
-                        "undamped response at {:.6} Hz, the frequency of mode {}: infinite; give --damping or \
+                            j + 1
+                        )
+                    } else {
+                        format!(
+                            "undamped response at {:.6} Hz, the frequency of mode {}: infinite; give --damping or \
                          --rayleigh",
-                        w / (2.0 * std::f64::consts::PI),
-                        j + 1
-                    )
-                }));
+                            w / (2.0 * std::f64::consts::PI),
+                            j + 1
+                        )
+                    },
+                ));
             }
             let c = qj / den;
             for i in 0..n {
@@ -482,17 +489,20 @@ pub fn direct_free(
         return direct(sys, load, omega, damping);
     }
     if rigid.nrows() != n {
-        return Err(Error::InvalidInput(format!(
-            "the rigid-body modes have {} rows, the system {n} free DOFs: they belong to another model",
-            rigid.nrows()
-        )));
+        return Err(Error::param(
+            "rigid",
+            format!(
+                "the rigid-body modes have {} rows, the system {n} free DOFs: they belong to another model",
+                rigid.nrows()
+            ),
+        ));
     }
     let den = c64::new(-omega * omega, omega * damping.modal(0.0));
     if den.norm() == 0.0 {
-        return Err(Error::InvalidInput(
+        return Err(Error::param(
+            "omega",
             "response at 0 Hz of a model with rigid-body modes: an unbalanced force has no static response on \
-             a free body; support the model or give a frequency above 0"
-                .into(),
+             a free body; support the model or give a frequency above 0",
         ));
     }
     let mut mr = faer::Mat::<f64>::zeros(n, r);

@@ -431,8 +431,9 @@ pub fn beam(
         }
         CellKind::Line3 => {
             if nd != 6 {
-                return Err(Error::InvalidInput(
-                    "the warping degree of freedom is available on 2-node beams (line2) only".into(),
+                return Err(Error::param(
+                    "warping",
+                    "the warping degree of freedom is available on 2-node beams (line2) only",
                 ));
             }
             for (q, &(xi, w)) in GAUSS2.iter().enumerate() {
@@ -471,5 +472,5 @@ pub fn beam(
 }
 
 fn not_a_beam(kind: CellKind) -> Error {
-    Error::InvalidInput(format!("{kind} is not a beam cell kind (line2 or line3)"))
+    Error::param("kind", format!("{kind} is not a beam cell kind (line2 or line3)"))
 }

@@ -475,7 +475,7 @@ fn first_shift(k: &SymMatrix, m: &SymMatrix, p: &EigenParams) -> Result<(f64, Op
     Ok(match p.target {
         Target::Band(lo, hi) => {
             if !(lo < hi) || !lo.is_finite() || !hi.is_finite() {
-                return Err(Error::InvalidInput(format!("empty band [{lo}, {hi}]")));
+                return Err(Error::param("band", format!("empty band [{lo}, {hi}]")));
             }
             // Factor just below the band's lower end; its inertia is the lower Sturm count.
             let s = p.shift.unwrap_or(if lo <= 0.0 {

@@ -208,5 +208,8 @@ fn search_lists_are_counted_before_they_are_expanded() {
     );
     let msg = refused("search.toml", &text, "search.top_thickness", 3);
     // 300³ times the default lists' 2 × 2 (webs, spacers).
-    assert!(msg.contains("108000000 combinations") && msg.contains("at most 100000"), "{msg}");
+    assert!(
+        msg.contains("108000000 combinations") && msg.contains("at most 100000"),
+        "{msg}"
+    );
 }

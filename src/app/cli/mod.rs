@@ -101,11 +101,17 @@ pub(crate) fn parse_bytes(s: &str) -> Result<u64> {
         Some('K' | 'k') => (&t[..t.len() - 1], 1u64 << 10),
         _ => (t, 1),
     };
-    let v: f64 = num
-        .parse()
-        .map_err(|_| Error::InvalidInput(format!("--max-memory: cannot read '{s}' (e.g. 8G, 500M)")))?;
+    let v: f64 = num.parse().map_err(|_| {
+        Error::option(
+            "--max-memory",
+            format!("--max-memory: cannot read '{s}' (e.g. 8G, 500M)"),
+        )
+    })?;
     if !(v > 0.0) {
-        return Err(Error::InvalidInput(format!("--max-memory must be positive, got '{s}'")));
+        return Err(Error::option(
+            "--max-memory",
+            format!("--max-memory must be positive, got '{s}'"),
+        ));
     }
     Ok((v * mult as f64) as u64)
 }

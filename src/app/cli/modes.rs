@@ -97,12 +97,12 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
     let target = match (&a.band, a.modes) {
         (Some(b), _) => ModalTarget::Band(b[0], b[1]),
         (None, Some(n)) if n > 0 => ModalTarget::Modes(n),
-        (None, Some(_)) => return Err(Error::InvalidInput("--modes must be at least 1".into())),
+        (None, Some(_)) => return Err(Error::option("--modes", "--modes must be at least 1")),
         (None, None) => ModalTarget::Modes(12),
     };
     let ordering = ordering(&a.ordering)?;
     if a.block == 0 {
-        return Err(Error::InvalidInput("--block must be at least 1".into()));
+        return Err(Error::option("--block", "--block must be at least 1"));
     }
     let opts = ModalOptions {
         spec,

@@ -25,7 +25,10 @@ impl Formats {
             "petsc" => Ok(Formats::Petsc),
             "mtx" | "matrix-market" => Ok(Formats::MatrixMarket),
             "both" => Ok(Formats::Both),
-            _ => Err(Error::InvalidInput(format!("--format '{s}': use petsc, mtx or both"))),
+            _ => Err(Error::option(
+                "--format",
+                format!("--format '{s}': use petsc, mtx or both"),
+            )),
         }
     }
 }
