@@ -58,7 +58,7 @@ CASES = {
 }
 
 # Keys whose values are measurements of the run, not results.
-SKIP = ("time", "timing", "memory", "elapsed", "path", "outputs", "wrote", "threads", "rss")
+SKIP = ("time", "timing", "memory", "elapsed", "path", "outputs", "wrote", "threads", "rss", "gflops")
 
 
 def take(binary, out):

@@ -40,11 +40,10 @@ def test_a_sweep_follows_the_command_lines_rules():
     # Reversed, as the command line refuses it.
     with pytest.raises(vf.InputError, match="F0 < F1"):
         model.harmonic(force=force, sweep=(600.0, 20.0, 5), damping=0.02)
-    # More points than the command line's cap, refused before any work.
-    t = time.perf_counter()
+    # More points than the command line's cap, refused before any work (a billion points would
+    # not return at all).
     with pytest.raises(vf.InputError, match="sweep"):
         model.harmonic(force=force, sweep=(20.0, 600.0, 10**9), damping=0.02)
-    assert time.perf_counter() - t < 5.0
     with pytest.raises(vf.InputError, match="whole number"):
         model.harmonic(force=force, sweep=(20.0, 600.0, 2.5), damping=0.02)
     with pytest.raises(vf.InputError, match="at least 2"):
@@ -91,8 +90,9 @@ print("finished after %.3f s" % (time.perf_counter() - t), flush=True)
 
 
 def test_ctrl_c_stops_a_long_modal_analysis_at_once():
-    """SIGINT during modes(): KeyboardInterrupt within a fraction of a second, not after the solve
-    (which takes several seconds here) and never a PanicException."""
+    """SIGINT during modes(): KeyboardInterrupt, never a PanicException (before, the signal waited
+    for the solve to end and then surfaced as a Rust panic). How soon it comes is printed, not
+    asserted (no timing in tests)."""
     big = "box:0.6,0.6,0.02:60,60,2:hex20"
     p = subprocess.Popen(
         [sys.executable, "-c", CTRL_C, big],
@@ -103,15 +103,13 @@ def test_ctrl_c_stops_a_long_modal_analysis_at_once():
     try:
         assert p.stdout.readline().strip() == "ready"
         time.sleep(1.0)
-        sent = time.perf_counter()
         p.send_signal(signal.SIGINT)
         out, err = p.communicate(timeout=300)
-        waited = time.perf_counter() - sent
     finally:
         if p.poll() is None:
             p.kill()
             p.wait()
     assert "PanicException" not in err, err
     assert p.returncode == 3, (p.returncode, out, err)
-    assert "interrupted" in out, out
-    assert waited < 2.0, f"KeyboardInterrupt came {waited:.1f} s after SIGINT: {out}"
+    assert "interrupted" in out and "finished" not in out, out
+    print(out.strip())
