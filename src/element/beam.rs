@@ -305,11 +305,13 @@ pub fn stiffness(
     }
 }
 
-fn not_a_beam(kind: CellKind) -> Error {
+/// The error for a cell kind that is not a beam (every beam kernel).
+pub(crate) fn not_a_beam(kind: CellKind) -> Error {
     Error::param("kind", format!("{kind} is not a beam cell kind (line2 or line3)"))
 }
 
-fn warping_line3() -> Error {
+/// The error for the warping DOF on a 3-node beam (every beam kernel).
+pub(crate) fn warping_line3() -> Error {
     Error::param(
         "BeamSection::warping",
         "the warping degree of freedom is available on 2-node beams (line2) only; \

@@ -39,7 +39,7 @@ use std::sync::OnceLock;
 use crate::element::beam::{self, NodeTransform, congruence};
 use crate::element::shell;
 use crate::element::solid::{self, Integration};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::fe::geometry::{dot, norm, physical_gradient, plane_jacobian, sub, volume_jacobian};
 use crate::fe::quadrature::{self, GAUSS2, GAUSS4, QUAD_2X2, Rule, TRIANGLE_3};
 use crate::fe::shape::{self, MAX_NODES};
@@ -319,7 +319,7 @@ pub fn beam_axial_forces(
         | CellKind::Hex20
         | CellKind::Hex27
         | CellKind::Wedge6
-        | CellKind::Wedge15 => Err(not_a_beam(kind)),
+        | CellKind::Wedge15 => Err(beam::not_a_beam(kind)),
     }
 }
 
@@ -431,10 +431,7 @@ pub fn beam(
         }
         CellKind::Line3 => {
             if nd != 6 {
-                return Err(Error::param(
-                    "warping",
-                    "the warping degree of freedom is available on 2-node beams (line2) only",
-                ));
+                return Err(beam::warping_line3());
             }
             for (q, &(xi, w)) in GAUSS2.iter().enumerate() {
                 let (tan, jac, dn) = line3_metric(x, xi);
@@ -467,10 +464,6 @@ pub fn beam(
         | CellKind::Hex20
         | CellKind::Hex27
         | CellKind::Wedge6
-        | CellKind::Wedge15 => Err(not_a_beam(kind)),
+        | CellKind::Wedge15 => Err(beam::not_a_beam(kind)),
     }
-}
-
-fn not_a_beam(kind: CellKind) -> Error {
-    Error::param("kind", format!("{kind} is not a beam cell kind (line2 or line3)"))
 }
