@@ -47,34 +47,13 @@ use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::section::{BeamSection, ShellSection};
 
-/// Index of a solid kind in the rule cache.
-fn solid_slot(kind: CellKind) -> Option<usize> {
-    match kind {
-        CellKind::Tet4 => Some(0),
-        CellKind::Tet10 => Some(1),
-        CellKind::Hex8 => Some(2),
-        CellKind::Hex20 => Some(3),
-        CellKind::Hex27 => Some(4),
-        CellKind::Wedge6 => Some(5),
-        CellKind::Wedge15 => Some(6),
-        CellKind::Point1
-        | CellKind::Line2
-        | CellKind::Line3
-        | CellKind::Tri3
-        | CellKind::Tri6
-        | CellKind::Quad4
-        | CellKind::Quad8
-        | CellKind::Quad9 => None,
-    }
-}
-
 static SOLID_RULES: [[OnceLock<Rule>; 2]; 7] = [const { [const { OnceLock::new() }, const { OnceLock::new() }] }; 7];
 
 /// The rule a solid cell's `K_σ` is integrated with: its stiffness rule
 /// ([`solid::stiffness_degree`], or [`solid::curved_stiffness_degree`] for a curved cell).
 /// The stress is wanted at these points. `None` for a kind that is not a solid.
 pub fn solid_rule(kind: CellKind, integration: Integration) -> Option<&'static Rule> {
-    let i = solid_slot(kind)?;
+    let i = solid::solid_index(kind)?;
     let (slot, degree) = match integration {
         Integration::Straight => (0, solid::stiffness_degree(kind)),
         Integration::Curved => (1, solid::curved_stiffness_degree(kind)),

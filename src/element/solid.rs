@@ -143,7 +143,7 @@ impl Table {
 }
 
 /// Index of a solid kind in the table caches; `None` for a kind that is not a solid.
-fn solid_index(kind: CellKind) -> Option<usize> {
+pub(crate) fn solid_index(kind: CellKind) -> Option<usize> {
     match kind {
         CellKind::Tet4 => Some(0),
         CellKind::Tet10 => Some(1),
