@@ -6,22 +6,29 @@
 #      and check it equals the committed validation/reference/*.json (elastic frequencies to
 #      1e-9 relative, same dofs, mass), and the harmonic references (skfem_harmonic.py, complex
 #      displacements to 1e-9 of the largest) -- the committed references are never overwritten;
-#   3. install the Python package (pip install ./python) and run validation/compare.py with it
-#      (every case to 1e-6 relative), then the package's tests (python/tests, pytest).
+#   3. build the package's wheel once (pip wheel ./python), install it into validation/.venv and
+#      into a fresh venv (the wheel its only install there; the third-party packages come from
+#      validation/.venv through a .pth line, as a full install of them takes minutes); with that
+#      fresh venv: validation/compare.py (every case to 1e-6 relative), the package's tests
+#      (python/tests, pytest), mypy --strict on the examples and tests, and every example
+#      (python/examples/run_all.py: each writes its picture).
 #
 #   bash validation/run_live.sh
 #   SKIP_REGEN=1 bash validation/run_live.sh         # step 3 only (skips step 2)
 #   VIBROFEM_REQUIRE_SLEPC=1 bash validation/run_live.sh   # (CI) the package's SLEPc test may not skip
+#   VIBROFEM_REQUIRE_BROWSER=1 …                           # (CI) nor may the report's browser test
 # Extra arguments are passed to compare.py (e.g. --cases s1_plate --verbose).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 
 PY="$(bash validation/python.sh)"   # the one interpreter resolver (sets up the tools if missing)
+WORK="$(mktemp -d)"
+trap 'rm -rf "$WORK"' EXIT
 
 if [ "${SKIP_REGEN:-0}" != 1 ]; then
-    TMP="$(mktemp -d)"
-    trap 'rm -rf "$TMP"' EXIT
+    TMP="$WORK/references"
+    mkdir -p "$TMP"
     echo "== scikit-fem convention self-tests"
     "$PY" validation/skfem_modes.py --selftest
     echo "== regenerating scikit-fem references into $TMP"
@@ -30,9 +37,26 @@ if [ "${SKIP_REGEN:-0}" != 1 ]; then
     "$PY" validation/skfem_harmonic.py --out "$TMP" --check validation/reference
 fi
 
-echo "== installing the Python package (pip install ./python)"
-"$PY" -m pip install --disable-pip-version-check -q ./python
+echo "== building the wheel (pip wheel ./python; abi3, CPython >= 3.9)"
+"$PY" -m pip wheel --disable-pip-version-check -q --no-deps -w "$WORK/wheels" ./python
+WHEEL="$(ls "$WORK"/wheels/vibrofem-*.whl)"
+echo "   $(basename "$WHEEL")"
+"$PY" -m pip install --disable-pip-version-check -q --force-reinstall --no-deps "$WHEEL"
+echo "== installing the wheel into a fresh venv"
+"$PY" -m venv "$WORK/venv"
+FRESH="$WORK/venv/bin/python"
+"$FRESH" -c "import site, sys; print(sys.argv[1], file=open(site.getsitepackages()[0] + '/_validation_deps.pth', 'w'))" \
+    "$("$PY" -c 'import site; print(site.getsitepackages()[0])')"
+"$FRESH" -m pip install --disable-pip-version-check -q --force-reinstall --no-deps "$WHEEL"
+"$FRESH" -m pip check
+"$FRESH" -c "import sys, vibrofem; assert vibrofem.__file__.startswith(sys.prefix), vibrofem.__file__; \
+print('   vibrofem', vibrofem.__version__, 'from', vibrofem.__file__)"
 echo "== comparing the vibrofem package with the references"
-"$PY" validation/compare.py "$@"
-echo "== Python package tests (pytest python/tests)"
-"$PY" -m pytest -q python/tests
+"$FRESH" validation/compare.py "$@"
+echo "== Python package tests (pytest python/tests; the browser test needs chromium: validation/setup_browser.sh)"
+bash validation/setup_browser.sh >/dev/null || echo "   no chromium: the report's browser test will skip (fails with VIBROFEM_REQUIRE_BROWSER=1)"
+"$FRESH" -m pytest -q python/tests
+echo "== mypy --strict on the examples and tests (the package's stubs)"
+"$FRESH" -m mypy --config-file python/mypy.ini --cache-dir "$WORK/mypy_cache" python/examples python/tests
+echo "== examples (python/examples/run_all.py: each writes its picture)"
+"$FRESH" python/examples/run_all.py "$WORK/pictures"

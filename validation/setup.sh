@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Install the Python tools of vibrofem's validation (gmsh, scikit-fem, numpy, scipy; pinned in
-# validation/requirements.txt).
+# Install the Python tools of vibrofem's validation and of its Python package's tests and examples
+# (gmsh, scikit-fem, numpy, scipy, pytest, meshio, PyVista/VTK, matplotlib, mypy, websocket-client,
+# maturin; pinned in validation/requirements.txt).
 #
 #   bash validation/setup.sh          # from anywhere; idempotent
 #
@@ -33,6 +34,16 @@ if ! "$PYBIN" -c "import gmsh" >/dev/null 2>&1; then
         apt-get update -qq
         DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
             libglu1-mesa libgl1 libxcursor1 libxft2 libxinerama1 libxrender1 libgomp1 >/dev/null
+    fi
+fi
+# PyVista (the examples) renders off screen through EGL (Mesa's llvmpipe on a machine without a GPU).
+if ! "$PYBIN" -c "import vtkmodules.vtkRenderingOpenGL2" >/dev/null 2>&1 \
+    || ! ldconfig -p 2>/dev/null | grep -q "libEGL.so.1"; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+        echo "setup.sh: installing the EGL/Mesa libraries of off-screen rendering" >&2
+        apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+            libegl1 libegl-mesa0 libgl1-mesa-dri libgl1 >/dev/null
     fi
 fi
 "$PYBIN" -c "import gmsh, skfem, numpy, scipy; print('validation python:', '$PYBIN', \

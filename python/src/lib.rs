@@ -15,7 +15,7 @@
 //! finishes in the background and its result is dropped). A `Model` may be used from several
 //! threads: its system is built once, under a lock, and shared read-only by the analyses.
 
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
@@ -29,6 +29,8 @@ use vibrofem::input::options::{LoadOptions, ModelOptions, length_scale};
 use vibrofem::mesh::{CellKind, Mesh};
 use vibrofem::model::Model;
 use vibrofem::system::{System, SystemOptions};
+
+mod app;
 
 type Array2 = numpy::ndarray::Array2<f64>;
 type Array3 = numpy::ndarray::Array3<f64>;
@@ -162,6 +164,27 @@ impl PyMesh {
             .collect()
     }
 
+    /// Per group: (name, dimension, tag, [(cell kind, indices in that kind's cells)]).
+    #[getter]
+    #[allow(clippy::type_complexity)]
+    fn group_cells(&self) -> Vec<(String, u8, i32, Vec<(String, Vec<u32>)>)> {
+        let m = &self.mesh;
+        m.groups
+            .iter()
+            .map(|g| {
+                let mut parts: Vec<(String, Vec<u32>)> = Vec::new();
+                for c in &g.cells {
+                    let kind = m.blocks[c.block as usize].kind.name();
+                    match parts.iter_mut().find(|(k, _)| k == kind) {
+                        Some((_, v)) => v.push(c.index),
+                        None => parts.push((kind.to_string(), vec![c.index])),
+                    }
+                }
+                (g.name.clone(), g.dim, g.tag, parts)
+            })
+            .collect()
+    }
+
     /// Cell kinds present and their counts.
     #[getter]
     fn cell_kinds(&self) -> Vec<(String, usize)> {
@@ -231,6 +254,157 @@ fn read_mesh(py: Python<'_>, source: &str, length_unit: &str) -> PyResult<PyMesh
     Ok(PyMesh {
         mesh: Arc::new(mesh),
         source: source.to_string(),
+    })
+}
+
+/// One cell block given from Python: its kind name and its connectivity (c × k, 0-based).
+type BlockIn<'py> = (String, PyReadonlyArray2<'py, i64>);
+/// One group given from Python: name, dimension, tag and its cells as (block index, cell indices).
+type GroupIn = (String, u8, i32, Vec<(usize, Vec<i64>)>);
+
+/// Node coordinates from an n × 3 array, every one finite.
+fn nodes_of(nodes: &PyReadonlyArray2<'_, f64>) -> vibrofem::Result<Vec<[f64; 3]>> {
+    let a = nodes.as_array();
+    if a.ncols() != 3 {
+        return Err(vibrofem::Error::param(
+            "points",
+            format!("expected n × 3 coordinates, got {} columns", a.ncols()),
+        ));
+    }
+    let mut out = Vec::with_capacity(a.nrows());
+    for (i, r) in a.rows().into_iter().enumerate() {
+        let x = [r[0], r[1], r[2]];
+        if !x.iter().all(|v| v.is_finite()) {
+            return Err(vibrofem::Error::node(
+                i as u64 + 1,
+                format!("coordinates {x:?} are not finite"),
+            ));
+        }
+        out.push(x);
+    }
+    Ok(out)
+}
+
+/// A mesh from arrays: blocks of one kind each (no kind twice), node indices in range, group
+/// cells in range and of the group's dimension. Node tags are 1..n, cell tags 1.. through the
+/// blocks in order (what messages name).
+fn mesh_of(
+    nodes: Vec<[f64; 3]>,
+    blocks: Vec<(String, Vec<u32>, usize)>,
+    groups: Vec<GroupIn>,
+) -> vibrofem::Result<Mesh> {
+    use vibrofem::Error;
+    use vibrofem::mesh::{CellBlock, CellRef, Group};
+    let n = nodes.len();
+    let mut mesh = Mesh {
+        node_tags: (1..=n as u64).collect(),
+        nodes,
+        ..Default::default()
+    };
+    let mut next_tag = 1u64;
+    for (name, conn, k) in blocks {
+        let Some(kind) = CellKind::ALL.iter().copied().find(|c| c.name() == name) else {
+            let known: Vec<&str> = CellKind::ALL.iter().map(|c| c.name()).collect();
+            return Err(Error::param(
+                "cells",
+                format!("unknown cell kind '{name}' (known: {})", known.join(", ")),
+            ));
+        };
+        if k != kind.n_nodes() {
+            return Err(Error::param(
+                "cells",
+                format!("{name} cells have {} nodes, got {k} columns", kind.n_nodes()),
+            ));
+        }
+        if mesh.blocks.iter().any(|b| b.kind == kind) {
+            return Err(Error::param(
+                "cells",
+                format!("two blocks of {name} cells: give each kind once"),
+            ));
+        }
+        let mut b = CellBlock::new(kind);
+        for cell in conn.chunks(k.max(1)) {
+            if let Some(&a) = cell.iter().find(|&&a| a as usize >= n) {
+                return Err(Error::element(
+                    next_tag,
+                    format!("{name} cell refers to node index {a}, the mesh has {n} nodes"),
+                ));
+            }
+            b.push(cell, next_tag);
+            next_tag += 1;
+        }
+        mesh.blocks.push(b);
+    }
+    for (name, dim, tag, parts) in groups {
+        let mut cells = Vec::new();
+        for (bi, idx) in parts {
+            let Some(b) = mesh.blocks.get(bi) else {
+                return Err(Error::group(
+                    &name,
+                    format!("block {bi} does not exist ({} blocks)", mesh.blocks.len()),
+                ));
+            };
+            if b.kind.dim() != dim as usize {
+                return Err(Error::group(
+                    &name,
+                    format!("a group of dimension {dim} cannot hold {} cells", b.kind.name()),
+                ));
+            }
+            for i in idx {
+                if i < 0 || i as usize >= b.len() {
+                    return Err(Error::group(
+                        &name,
+                        format!(
+                            "cell {i} of the {} block is out of range (0..{})",
+                            b.kind.name(),
+                            b.len()
+                        ),
+                    ));
+                }
+                cells.push(CellRef {
+                    block: bi as u32,
+                    index: i as u32,
+                });
+            }
+        }
+        cells.sort_unstable();
+        cells.dedup();
+        mesh.groups.push(Group { name, dim, tag, cells });
+    }
+    Ok(mesh)
+}
+
+/// A mesh from arrays in metres (what `Mesh.from_arrays` and a meshio mesh give): `points` n × 3,
+/// `blocks` [(kind, connectivity c × k, 0-based, gmsh node order)], `groups` [(name, dimension,
+/// tag, [(block index, cell indices)])]. Bad input names the block, the cell or the group.
+#[pyfunction]
+#[pyo3(signature = (points, blocks, groups = vec![], source = "<arrays>".to_string()))]
+fn mesh_from_arrays(
+    points: PyReadonlyArray2<'_, f64>,
+    blocks: Vec<BlockIn<'_>>,
+    groups: Vec<GroupIn>,
+    source: String,
+) -> PyResult<PyMesh> {
+    let nodes = nodes_of(&points).map_err(err)?;
+    let mut flat = Vec::with_capacity(blocks.len());
+    for (name, conn) in &blocks {
+        let a = conn.as_array();
+        let mut v = Vec::with_capacity(a.len());
+        for &x in a.iter() {
+            if x < 0 || x > u32::MAX as i64 {
+                return Err(err(vibrofem::Error::param(
+                    "cells",
+                    format!("{name} cells: node index {x} is out of range"),
+                )));
+            }
+            v.push(x as u32);
+        }
+        flat.push((name.clone(), v, a.ncols()));
+    }
+    let mesh = mesh_of(nodes, flat, groups).map_err(err)?;
+    Ok(PyMesh {
+        mesh: Arc::new(mesh),
+        source,
     })
 }
 
@@ -662,6 +836,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyMesh>()?;
     m.add_class::<PyModel>()?;
     m.add_function(wrap_pyfunction!(read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(mesh_from_arrays, m)?)?;
+    m.add_function(wrap_pyfunction!(app::run_design, m)?)?;
+    m.add_function(wrap_pyfunction!(app::run_machine, m)?)?;
+    m.add_function(wrap_pyfunction!(app::machine_list, m)?)?;
     m.add_function(wrap_pyfunction!(run_scene, m)?)?;
     m.add_function(wrap_pyfunction!(component_names, m)?)?;
     m.add_function(wrap_pyfunction!(cell_kind_names, m)?)?;

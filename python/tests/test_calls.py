@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ TET10 = os.path.join(ROOT, "meshes", "s1_plate_tet10_h30.msh")
 BAR = "box:0.3,0.05,0.02:12,2,2:hex20"
 
 
-def test_paths_as_bytes_and_path_objects(tmp_path):
+def test_paths_as_bytes_and_path_objects(tmp_path: pathlib.Path) -> None:
     for p in (os.fsencode(TET10), pathlib.Path(TET10)):
         mesh = vf.read_mesh(p)
         assert mesh.source == TET10, mesh.source
@@ -28,13 +29,13 @@ def test_paths_as_bytes_and_path_objects(tmp_path):
     assert vf.Model(os.fsencode(TET10)).mesh.source == TET10
     assert vf.Model(pathlib.Path(TET10)).mesh.source == TET10
     with pytest.raises(TypeError, match="read_mesh"):
-        vf.read_mesh(42)
+        vf.read_mesh(42)  # type: ignore[arg-type]
     model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
     files = model.export(os.fsencode(str(tmp_path / "k")), format="mtx")
     assert all(f.startswith(str(tmp_path / "k")) for f in files), files
 
 
-def test_a_sweep_follows_the_command_lines_rules():
+def test_a_sweep_follows_the_command_lines_rules() -> None:
     model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
     force = {"xmax": (0, 0, 10)}
     # Reversed, as the command line refuses it.
@@ -53,12 +54,12 @@ def test_a_sweep_follows_the_command_lines_rules():
     assert h.displacement.shape[0] == 3
 
 
-def test_one_model_is_shared_by_threads():
+def test_one_model_is_shared_by_threads() -> None:
     """Several threads on one model: one assembly, the same answers, no 'Already borrowed'."""
     model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
     ref = vf.Model(vf.read_mesh(BAR), fix=["xmin"]).modes(6).frequencies_hz
 
-    def work(i):
+    def work(i: int) -> Any:
         if i % 3 == 0:
             return model.modes(6).frequencies_hz
         if i % 3 == 1:
@@ -89,7 +90,7 @@ print("finished after %.3f s" % (time.perf_counter() - t), flush=True)
 """
 
 
-def test_ctrl_c_stops_a_long_modal_analysis_at_once():
+def test_ctrl_c_stops_a_long_modal_analysis_at_once() -> None:
     """SIGINT during modes(): KeyboardInterrupt, never a PanicException (before, the signal waited
     for the solve to end and then surfaced as a Rust panic). How soon it comes is printed, not
     asserted (no timing in tests)."""
@@ -101,6 +102,7 @@ def test_ctrl_c_stops_a_long_modal_analysis_at_once():
         text=True,
     )
     try:
+        assert p.stdout is not None
         assert p.stdout.readline().strip() == "ready"
         time.sleep(1.0)
         p.send_signal(signal.SIGINT)

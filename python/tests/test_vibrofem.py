@@ -11,8 +11,11 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
+from typing import Any, Tuple
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 import scipy.io
 import scipy.sparse as sp
@@ -28,18 +31,22 @@ STEEL = {"young": 2.1e11, "poisson": 0.3, "density": 7850.0}
 TET10 = os.path.join(ROOT, "meshes", "s1_plate_tet10_h30.msh")
 
 
+Plate = Tuple[vf.Mesh, vf.Model, sp.csr_array, sp.csr_array]
+
+
 @pytest.fixture(scope="module")
-def plate():
+def plate() -> Plate:
     mesh = vf.read_mesh(TET10)
     model = vf.Model(mesh, material=(STEEL["young"], STEEL["poisson"], STEEL["density"]))
     K, M = model.assemble()
     return mesh, model, K, M
 
 
-def skfem_permutation(mesh, dofs, basis):
+def skfem_permutation(mesh: vf.Mesh, dofs: vf.Dofs, basis: Any) -> npt.NDArray[np.int64]:
     """skfem DOF of each vibrofem free DOF: same node (by position) and component."""
     locs = basis.doflocs[:, 0::3].T  # ElementVector interleaves the three components
-    dist, k = cKDTree(locs).query(mesh.nodes[dofs.node])
+    dist_, k = cKDTree(locs).query(mesh.nodes[dofs.node])
+    dist = np.asarray(dist_)
     scale = np.ptp(mesh.nodes, axis=0).max()
     assert dist.max() <= 1e-9 * scale, f"a vibrofem node has no skfem DOF ({dist.max():.2e} m away)"
     perm = 3 * k + dofs.component
@@ -47,7 +54,7 @@ def skfem_permutation(mesh, dofs, basis):
     return perm
 
 
-def test_assemble_equals_scikit_fem_entry_by_entry(plate):
+def test_assemble_equals_scikit_fem_entry_by_entry(plate: Plate) -> None:
     import skfem_modes
 
     mesh, model, K, M = plate
@@ -69,7 +76,7 @@ def test_assemble_equals_scikit_fem_entry_by_entry(plate):
     assert abs(K - K.T).max() == 0.0 and abs(M - M.T).max() == 0.0
 
 
-def test_modes_equal_eigsh_on_the_same_matrices(plate):
+def test_modes_equal_eigsh_on_the_same_matrices(plate: Plate) -> None:
     _, model, K, M = plate
     modes = model.modes(12)
     assert modes.complete and modes.accurate, modes.notes
@@ -92,7 +99,7 @@ def test_modes_equal_eigsh_on_the_same_matrices(plate):
     assert modes.participation.shape == (12, 6) and modes.effective_mass.shape == (12, 6)
 
 
-def test_export_round_trips(plate, tmp_path):
+def test_export_round_trips(plate: Plate, tmp_path: Path) -> None:
     _, model, K, M = plate
     files = model.export(tmp_path)
     assert {os.path.basename(f) for f in files} >= {"K.mtx", "M.mtx", "K.petsc", "M.petsc", "dofs.csv", "model.json"}
@@ -116,7 +123,7 @@ def test_export_round_trips(plate, tmp_path):
     assert rows[0] == "equation,node,node_tag,component,x,y,z" and len(rows) == K.shape[0] + 1
 
 
-def test_leaf_spring_stiffness_between_beam_and_plate_theory():
+def test_leaf_spring_stiffness_between_beam_and_plate_theory() -> None:
     # S3 leaf 169 × 146 × 9 mm, clamped at x = 0, the far face guided along z: a fixed-guided
     # strip lies between beam theory (k = E b h³/l³) and plate theory (E/(1 − ν²)).
     E, nu, l, b, h = 2.1e11, 0.3, 0.169, 0.146, 0.009
@@ -131,7 +138,7 @@ def test_leaf_spring_stiffness_between_beam_and_plate_theory():
     assert st.displacement.shape == (len(mesh.nodes), 6) and st.von_mises.max() > 0
 
 
-def test_run_scene_returns_the_cli_report(tmp_path):
+def test_run_scene_returns_the_cli_report(tmp_path: Path) -> None:
     scene = os.path.join(ROOT, "scenes", "s3_leaf_stiffness.toml")
     r = vf.run_scene(scene)
     binary = os.path.join(ROOT, "target", "release", "vibrofem")
@@ -141,7 +148,7 @@ def test_run_scene_returns_the_cli_report(tmp_path):
                          text=True, cwd=ROOT, check=True).stdout
     cli = json.loads(out)
 
-    def strip(d):  # timings and peak memory differ from run to run
+    def strip(d: Any) -> Any:  # timings and peak memory differ from run to run
         if isinstance(d, dict):
             return {k: strip(v) for k, v in d.items() if not k.startswith("tim") and "memory" not in k and k != "outputs"}
         if isinstance(d, list):
@@ -151,7 +158,7 @@ def test_run_scene_returns_the_cli_report(tmp_path):
     assert strip(r) == strip(cli)
 
 
-def test_errors_raise_with_the_command_line_messages(tmp_path):
+def test_errors_raise_with_the_command_line_messages(tmp_path: Path) -> None:
     with pytest.raises(vf.InputError, match="nope.msh"):
         vf.read_mesh(str(tmp_path / "nope.msh"))
     mesh = vf.read_mesh("box:0.1,0.1,0.1:2,2,2:hex8")
@@ -165,7 +172,7 @@ def test_errors_raise_with_the_command_line_messages(tmp_path):
         vf.Model(mesh).modes(n=0)
 
 
-def test_length_unit_and_groups():
+def test_length_unit_and_groups() -> None:
     mm = vf.read_mesh(os.path.join(ROOT, "meshes", "s1_plate_tet10_h30_mm.msh"), length_unit="mm")
     m = vf.read_mesh(TET10)
     assert np.allclose(np.ptp(mm.nodes, axis=0), np.ptp(m.nodes, axis=0), rtol=1e-12)
@@ -176,7 +183,7 @@ def test_length_unit_and_groups():
     assert vf.Model(m).mass == pytest.approx(0.3 * 0.3 * 0.02 * 7850, rel=1e-9)
 
 
-def slepc_available():
+def slepc_available() -> bool:
     import shutil
 
     env = dict(os.environ)
@@ -186,7 +193,7 @@ def slepc_available():
     return ok and shutil.which("mpirun") is not None
 
 
-def test_slepc_engine_equals_the_native_solver(plate):
+def test_slepc_engine_equals_the_native_solver(plate: Plate) -> None:
     # CI installs SLEPc (validation/setup_slepc.sh) and sets VIBROFEM_REQUIRE_SLEPC=1, so this
     # cannot pass by skipping there.
     if not slepc_available():
@@ -203,7 +210,7 @@ def test_slepc_engine_equals_the_native_solver(plate):
     assert rel.max() <= 1e-8, rel
 
 
-def test_harmonic_equals_a_scipy_complex_solve_on_the_same_matrices():
+def test_harmonic_equals_a_scipy_complex_solve_on_the_same_matrices() -> None:
     """model.harmonic against scipy's direct complex solve of ((1 + iωβ)K − (ω² − iωα)M) u = F on
     the matrices model.assemble() returns: the force acts on the reference node of a guided
     coupling, so F is one unit entry and the coupled face moves with that node. Both methods of

@@ -5,11 +5,14 @@ numpy and scipy native::
     import vibrofem as vf
     mesh = vf.read_mesh("plate.msh", length_unit="mm")     # or "box:0.3,0.3,0.02:10,10,2:hex20"
     model = vf.Model(mesh, material=(2.1e11, 0.3, 7850), fix=["clamp"])
-    K, M = model.assemble()             # scipy.sparse.csr_matrix over the free DOFs
+    K, M = model.assemble()             # scipy.sparse.csr_array over the free DOFs
     model.dofs.node, model.dofs.component   # the node and component of each row
     modes = model.modes(12)             # .frequencies_hz, .shapes (n_nodes × 6 × k), .complete …
     st = model.static(force={"top": (0, 0, 1000)})   # .displacement, .reactions, .von_mises …
     vf.run_scene("scenes/s3_leaf_stiffness.toml")     # the scene report as a dict
+    modes.to_meshio(), modes.to_pyvista()             # point arrays per mode, for meshio/PyVista
+    vf.Model(meshio.read("part.vtu"), fix=["base"])   # a meshio mesh, its cell sets as groups
+    vf.design().data["checks"]                        # the application's reports (vibrofem design)
 
 Units are SI throughout (m, kg, s, N, Pa); a mesh drawn in millimetres is scaled on reading.
 Model options take the command line's grammar as strings, or Python values:
@@ -47,7 +50,8 @@ from dataclasses import dataclass as _dataclass, field as _field
 
 import numpy as _np
 
-from . import _core
+from . import _core, _html, _meshio
+from ._app import AppReport, autobalancer, balancer_data, crank_drive, design
 from ._core import (  # noqa: F401
     EngineError,
     InputError,
@@ -59,6 +63,7 @@ from ._core import (  # noqa: F401
 
 __all__ = [
     "read_mesh",
+    "from_meshio",
     "Mesh",
     "Model",
     "Dofs",
@@ -66,6 +71,11 @@ __all__ = [
     "Static",
     "Harmonic",
     "run_scene",
+    "design",
+    "crank_drive",
+    "autobalancer",
+    "balancer_data",
+    "AppReport",
     "COMPONENTS",
     "VibrofemError",
     "InputError",
@@ -167,6 +177,12 @@ def _sweep(sweep):
     return float(f0), float(f1), n
 
 
+def _mesh_of(result):
+    if result.mesh is None:
+        raise ValueError("this result carries no mesh (it was not made by a Model)")
+    return result.mesh
+
+
 def _names(d):
     if d is None:
         return []
@@ -219,8 +235,60 @@ class Mesh:
         """0-based indices of a group's nodes, sorted."""
         return self._core.group_nodes(name)
 
+    def group_cells(self, name):
+        """{kind: 0-based indices into :meth:`cells` of that kind} of a group's cells."""
+        hits = [parts for g, _, _, parts in self._core.group_cells if g == name]
+        if not hits:
+            raise InputError(f"unknown group '{name}' (the mesh has: {', '.join(self.groups)})")
+        out = {}
+        for parts in hits:
+            for kind, idx in parts:
+                out[kind] = _np.asarray(idx, dtype=_np.int64)
+        return out
+
+    @classmethod
+    def from_arrays(cls, points, cells, groups=None, source="<arrays>"):
+        """A mesh from arrays in metres: ``points`` (n × 3), ``cells`` {kind: connectivity
+        (c × k, 0-based, gmsh node order)}, ``groups`` {name: {kind: cell indices}} (each group
+        of one dimension)."""
+        kinds = list(cells)
+        blocks = [(k, _np.ascontiguousarray(_np.asarray(cells[k], dtype=_np.int64))) for k in kinds]
+        gs = []
+        for tag, (name, parts) in enumerate((groups or {}).items(), start=1):
+            ref = []
+            dims = set()
+            for kind, idx in parts.items():
+                if kind not in kinds:
+                    raise InputError(f"group '{name}': no {kind} cells in the mesh (it has: {', '.join(kinds)})")
+                ref.append((kinds.index(kind), [int(i) for i in _np.asarray(idx).ravel()]))
+                dims.add(_meshio._dim_of(kind))
+            if len(dims) != 1:
+                raise InputError(f"group '{name}': give cells of one dimension, got {sorted(dims) or 'none'}")
+            gs.append((str(name), dims.pop(), tag, ref))
+        pts = _np.ascontiguousarray(_np.asarray(points, dtype=float))
+        return cls(_core.mesh_from_arrays(pts, blocks, gs, source))
+
+    def to_meshio(self):
+        """The mesh as a ``meshio.Mesh`` (VTK node order; groups as ``cell_sets``, as
+        ``gmsh:physical`` cell data and ``field_data`` {name: [tag, dim]})."""
+        return _meshio.mesh_to_meshio(self)
+
+    def to_pyvista(self):
+        """The mesh as a ``pyvista.UnstructuredGrid`` (needs PyVista)."""
+        return _meshio.to_pyvista(self.to_meshio())
+
+    def _repr_html_(self):
+        return _html.mesh_html(self)
+
     def __repr__(self):
         return repr(self._core)
+
+
+def from_meshio(mesh, length_unit="m"):
+    """A :class:`Mesh` from a ``meshio.Mesh``: cell blocks merged per kind, groups from its
+    ``cell_sets`` or else its ``gmsh:physical`` cell data (named by ``field_data``);
+    coordinates scaled from ``length_unit`` (m, cm, mm) to metres."""
+    return _meshio.mesh_from_meshio(mesh, length_unit)
 
 
 def read_mesh(source, length_unit="m"):
@@ -280,10 +348,25 @@ class Modes:
     kinds: list
     #: The whole report (what ``vibrofem modes --json`` prints).
     report: dict = _field(repr=False)
+    #: The mesh the shapes live on.
+    mesh: "Mesh | None" = _field(default=None, repr=False)
 
     @property
     def notes(self):
         return self.report.get("notes", [])
+
+    def to_meshio(self):
+        """The mesh with a point array per mode (``mode_1`` … translations n × 3, and
+        ``mode_1_rotation`` … where rotations are nonzero); ``field_data``: ``frequencies_hz``,
+        ``rigid`` (1 per rigid mode), ``rel_residuals``, ``complete`` and ``accurate``."""
+        return _meshio.modes_to_meshio(self, _mesh_of(self))
+
+    def to_pyvista(self):
+        """:meth:`to_meshio` as a ``pyvista.UnstructuredGrid`` (``grid.warp_by_vector("mode_7")``)."""
+        return _meshio.to_pyvista(self.to_meshio())
+
+    def _repr_html_(self):
+        return _html.modes_html(self)
 
 
 @_dataclass
@@ -300,6 +383,19 @@ class Static:
     stiffness: dict
     #: The whole report (what ``vibrofem static --json`` prints).
     report: dict = _field(repr=False)
+    #: The mesh the fields live on.
+    mesh: "Mesh | None" = _field(default=None, repr=False)
+
+    def to_meshio(self):
+        """The mesh with point arrays ``displacement`` (n × 3), ``rotation`` (where nonzero) and
+        ``von_mises``; ``field_data`` ``stiffness:GROUP`` (N/m) per coupled group."""
+        return _meshio.static_to_meshio(self, _mesh_of(self))
+
+    def to_pyvista(self):
+        return _meshio.to_pyvista(self.to_meshio())
+
+    def _repr_html_(self):
+        return _html.static_html(self)
 
 
 class Model:
@@ -323,6 +419,10 @@ class Model:
     ):
         if isinstance(mesh, (str, bytes, _os.PathLike)):
             mesh = read_mesh(mesh)
+        elif not isinstance(mesh, Mesh) and hasattr(mesh, "points") and hasattr(mesh, "cells"):
+            mesh = from_meshio(mesh)  # a meshio.Mesh
+        elif not isinstance(mesh, Mesh):
+            raise TypeError(f"Model: expected a Mesh, a meshio.Mesh or a path, got {type(mesh).__name__}")
         self.mesh = mesh
         gm = group_material
         if isinstance(gm, dict):
@@ -356,14 +456,15 @@ class Model:
         )
 
     def assemble(self):
-        """K and M over the free DOFs as ``scipy.sparse.csr_matrix`` (symmetric, both triangles
-        stored; N/m and kg, N·m/rad and kg·m² on rotations)."""
+        """K and M over the free DOFs as ``scipy.sparse.csr_array`` (symmetric, both triangles
+        stored; N/m and kg, N·m/rad and kg·m² on rotations). They used to be
+        ``csr_matrix``: ``A * x`` is now element-wise, use ``A @ x``."""
         import scipy.sparse as sp
 
         (kd, ki, kp), (md, mi, mp), n = self._core.assemble()
         return (
-            sp.csr_matrix((kd, ki, kp), shape=(n, n)),
-            sp.csr_matrix((md, mi, mp), shape=(n, n)),
+            sp.csr_array((kd, ki, kp), shape=(n, n)),
+            sp.csr_array((md, mi, mp), shape=(n, n)),
         )
 
     @property
@@ -410,6 +511,7 @@ class Model:
             effective_mass=_np.array([m["effective_mass"] for m in rows]).reshape(-1, 6),
             kinds=[m["kind"] for m in rows],
             report=r,
+            mesh=self.mesh,
         )
 
     def harmonic(self, force, freq=None, sweep=None, damping=None, rayleigh=None, method="modal", modes=None,
@@ -440,7 +542,7 @@ class Model:
             modes=modes,
             probe=[] if probe is None else _names(probe),
         )
-        return Harmonic(frequencies_hz=freqs, displacement=re + 1j * im, report=_json.loads(rep))
+        return Harmonic(frequencies_hz=freqs, displacement=re + 1j * im, report=_json.loads(rep), mesh=self.mesh)
 
     def static(self, force=None, pressure=None, gravity=None, displace=None):
         """Linear statics, one load case: ``force={group: (Fx, Fy, Fz)}`` (N; on a coupled group
@@ -466,7 +568,8 @@ class Model:
             for x in case["reactions"]
         }
         stiffness = {x["group"]: x["stiffness"] for x in case["references"] if x.get("stiffness") is not None}
-        return Static(displacement=u, von_mises=vm, reactions=reactions, stiffness=stiffness, report=r)
+        return Static(displacement=u, von_mises=vm, reactions=reactions, stiffness=stiffness, report=r,
+                      mesh=self.mesh)
 
     def export(self, dir, format="both"):
         """Write K, M (PETSc binary, Matrix Market), dofs.csv and model.json into ``dir``."""
@@ -483,9 +586,22 @@ class Harmonic:
     ``frequencies_hz`` (k,), ``displacement`` (k × n_nodes × 3, complex, m), and the report as a
     dict (per-group amplitude and phase per frequency, modes used, notes)."""
 
-    frequencies_hz: object
-    displacement: object
+    frequencies_hz: _np.ndarray
+    displacement: _np.ndarray
     report: dict = _field(repr=False)
+    #: The mesh the displacements live on.
+    mesh: "Mesh | None" = _field(default=None, repr=False)
+
+    def to_meshio(self):
+        """The mesh with point arrays per frequency: ``real_1``, ``imag_1`` (n × 3, m) and
+        ``amplitude_1`` (|û|, n) …; ``field_data`` ``frequencies_hz``."""
+        return _meshio.harmonic_to_meshio(self, _mesh_of(self))
+
+    def to_pyvista(self):
+        return _meshio.to_pyvista(self.to_meshio())
+
+    def _repr_html_(self):
+        return _html.harmonic_html(self)
 
 
 def run_scene(path, out=None):

@@ -1,0 +1,190 @@
+# Type stubs of the public API of vibrofem (checked by python/tests/test_stubs.py and, through the
+# examples and tests, by mypy --strict in validation/run_live.sh).
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+import scipy.sparse
+
+__version__: str
+__all__: List[str]
+
+#: DOF component names in component order (ux, uy, uz, rx, ry, rz, w).
+COMPONENTS: Tuple[str, ...]
+
+PathArg = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+ComplexArray = npt.NDArray[np.complex128]
+Numbers = Union[float, Sequence[float], npt.NDArray[np.floating[Any]]]
+#: A material: "steel" (a name the command line knows) or (E Pa, nu, rho kg/m³).
+MaterialArg = Union[str, Sequence[float]]
+#: {group: value} or ["GROUP=VALUE", …] in the command line's grammar.
+GroupValues = Union[Mapping[str, Union[str, Numbers]], Sequence[str], str, None]
+
+class VibrofemError(Exception): ...
+class InputError(VibrofemError): ...
+class NumericalError(VibrofemError): ...
+class OutputError(VibrofemError): ...
+class EngineError(VibrofemError): ...
+
+class Mesh:
+    def __init__(self, core: Any) -> None: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def nodes(self) -> FloatArray: ...
+    @property
+    def node_tags(self) -> npt.NDArray[np.uint64]: ...
+    @property
+    def groups(self) -> Dict[str, Dict[str, int]]: ...
+    @property
+    def cell_kinds(self) -> Dict[str, int]: ...
+    def cells(self, kind: str) -> npt.NDArray[np.uint32]: ...
+    def cell_tags(self, kind: str) -> npt.NDArray[np.uint64]: ...
+    def group_nodes(self, name: str) -> npt.NDArray[np.uint32]: ...
+    def group_cells(self, name: str) -> Dict[str, IntArray]: ...
+    @classmethod
+    def from_arrays(
+        cls,
+        points: npt.ArrayLike,
+        cells: Mapping[str, npt.ArrayLike],
+        groups: Optional[Mapping[str, Mapping[str, npt.ArrayLike]]] = None,
+        source: str = "<arrays>",
+    ) -> Mesh: ...
+    def to_meshio(self) -> Any: ...
+    def to_pyvista(self) -> Any: ...
+    def _repr_html_(self) -> str: ...
+
+def read_mesh(source: PathArg, length_unit: str = "m") -> Mesh: ...
+def from_meshio(mesh: Any, length_unit: str = "m") -> Mesh: ...
+
+@dataclass
+class Dofs:
+    node: IntArray
+    component: IntArray
+    n_mesh_nodes: int
+    @property
+    def names(self) -> List[str]: ...
+    def index(self, node: int, component: Union[int, str]) -> int: ...
+    def __len__(self) -> int: ...
+
+@dataclass
+class Modes:
+    frequencies_hz: FloatArray
+    eigenvalues: FloatArray
+    shapes: FloatArray
+    vectors: FloatArray
+    complete: bool
+    accurate: bool
+    residuals: FloatArray
+    backward_errors: FloatArray
+    participation: FloatArray
+    effective_mass: FloatArray
+    kinds: List[str]
+    report: Dict[str, Any]
+    mesh: Optional[Mesh] = None
+    @property
+    def notes(self) -> List[str]: ...
+    def to_meshio(self) -> Any: ...
+    def to_pyvista(self) -> Any: ...
+    def _repr_html_(self) -> str: ...
+
+@dataclass
+class Static:
+    displacement: FloatArray
+    von_mises: FloatArray
+    reactions: Dict[str, Dict[str, Tuple[float, float, float]]]
+    stiffness: Dict[str, float]
+    report: Dict[str, Any]
+    mesh: Optional[Mesh] = None
+    def to_meshio(self) -> Any: ...
+    def to_pyvista(self) -> Any: ...
+    def _repr_html_(self) -> str: ...
+
+@dataclass
+class Harmonic:
+    frequencies_hz: FloatArray
+    displacement: ComplexArray
+    report: Dict[str, Any]
+    mesh: Optional[Mesh] = None
+    def to_meshio(self) -> Any: ...
+    def to_pyvista(self) -> Any: ...
+    def _repr_html_(self) -> str: ...
+
+class Model:
+    mesh: Mesh
+    def __init__(
+        self,
+        mesh: Union[Mesh, PathArg, Any],
+        material: MaterialArg = "steel",
+        group_material: Union[Mapping[str, MaterialArg], Sequence[str], None] = None,
+        fix: Union[str, Sequence[str], Mapping[str, Union[str, Sequence[str], bool, None]], None] = None,
+        couple: Union[str, Sequence[str], Mapping[str, Union[str, Numbers, bool, None]], None] = None,
+        point_mass: GroupValues = None,
+        spring: GroupValues = None,
+        mass: str = "consistent",
+        solid: Union[str, Sequence[str], None] = None,
+        shell: GroupValues = None,
+        beam: GroupValues = None,
+        hex8: str = "standard",
+    ) -> None: ...
+    def assemble(self) -> Tuple[scipy.sparse.csr_array, scipy.sparse.csr_array]: ...
+    @property
+    def dofs(self) -> Dofs: ...
+    @property
+    def volume(self) -> float: ...
+    @property
+    def mass(self) -> float: ...
+    @property
+    def notes(self) -> List[str]: ...
+    def modes(
+        self,
+        n: Optional[int] = None,
+        band: Optional[Tuple[float, float]] = None,
+        shift_hz: Optional[float] = None,
+        block: int = 6,
+        engine: str = "native",
+        ranks: int = 1,
+    ) -> Modes: ...
+    def harmonic(
+        self,
+        force: Union[Mapping[str, Sequence[float]], Sequence[str], str],
+        freq: Optional[float] = None,
+        sweep: Optional[Tuple[float, float, float]] = None,
+        damping: Optional[float] = None,
+        rayleigh: Optional[Tuple[float, float]] = None,
+        method: str = "modal",
+        modes: Optional[int] = None,
+        probe: Union[str, Sequence[str], None] = None,
+    ) -> Harmonic: ...
+    def static(
+        self,
+        force: GroupValues = None,
+        pressure: GroupValues = None,
+        gravity: Union[Numbers, str, None] = None,
+        displace: Union[Mapping[str, Sequence[Optional[float]]], Sequence[str], str, None] = None,
+    ) -> Static: ...
+    def export(self, dir: PathArg, format: str = "both") -> List[str]: ...
+
+def run_scene(path: PathArg, out: Optional[PathArg] = None) -> Dict[str, Any]: ...
+
+@dataclass
+class AppReport:
+    data: Dict[str, Any]
+    out: Path
+    html: Path
+    markdown: Path
+    json: Path
+    files: List[Path]
+    failure: Optional[str] = None
+    passing_variant: Optional[Dict[str, Any]] = None
+    def _repr_html_(self) -> str: ...
+
+def design(path: Optional[PathArg] = None, out: Optional[PathArg] = None, yes: bool = False) -> AppReport: ...
+def crank_drive(path: Optional[PathArg] = None, out: Optional[PathArg] = None) -> AppReport: ...
+def autobalancer(path: Optional[PathArg] = None, out: Optional[PathArg] = None) -> AppReport: ...
+def balancer_data(path: Optional[PathArg] = None, out: Optional[PathArg] = None) -> AppReport: ...
