@@ -63,11 +63,11 @@ def test_to_meshio_equals_meshios_own_gmsh_reader(name: str) -> None:
         # The same cells with the same node order (coordinates of each cell's nodes, in order).
         assert a[t].shape == b[t].shape, t
         assert np.array_equal(a[t], b[t]), t
+    # Groups: meshio's MSH 4.1 reader gives cell sets, its MSH 2.2 reader only field_data.
+    assert {g: list(v) for g, v in ours.field_data.items()} == {g: list(v) for g, v in ref.field_data.items()}
     groups = [k for k in ref.cell_sets if not k.startswith("gmsh:")]
-    assert sorted(groups) == sorted(ours.cell_sets)
     for g in groups:
         assert np.array_equal(set_centroids(ours, g), set_centroids(ref, g)), g
-        assert list(ours.field_data[g]) == list(ref.field_data[g])
 
 
 @pytest.mark.parametrize(
@@ -91,13 +91,15 @@ def test_pyvista_cell_volumes_add_up_to_the_box(spec: str, volume: float) -> Non
     sizes = solid.compute_cell_sizes(length=False, area=False, volume=True)
     v = np.asarray(sizes.cell_data["Volume"])
     # A quadratic cell whose nodes are in a wrong order has mid-edge nodes in the wrong places:
-    # its VTK volume is no longer its share of the box (the box's cells are straight-sided).
+    # its VTK volume is no longer its share of the box (the box's cells are straight-sided). Given
+    # in gmsh's order, the hex20 box's VTK volume sums to −0.27 × the box; VTK's cell-size filter
+    # itself is within 4e-8 of the exact volume here, hence 1e-6.
     assert len(v) == sum(n for k, n in mesh.cell_kinds.items() if k[-2:] in ("10", "20", "27", "15"))
     assert np.all(v > 0)
-    assert v.sum() == pytest.approx(volume, rel=1e-10)
+    assert v.sum() == pytest.approx(volume, rel=1e-6)
 
 
-@pytest.mark.parametrize("name", FILES[:3])
+@pytest.mark.parametrize("name", FILES)
 def test_a_meshio_mesh_makes_the_same_model(name: str) -> None:
     path = os.path.join(ROOT, "meshes", name)
     direct = vf.read_mesh(path)
@@ -128,21 +130,25 @@ def test_round_trip_through_meshio_is_exact() -> None:
         assert np.array_equal(back.group_nodes(g), mesh.group_nodes(g))
 
 
-def test_vtu_file_groups_come_back_from_gmsh_physical(tmp_path: Path) -> None:
-    """A .vtu keeps no cell sets, only cell data: the groups come back from ``gmsh:physical``
-    and ``field_data``."""
+def test_groups_come_back_from_gmsh_physical_cell_data(tmp_path: Path) -> None:
+    """Files that keep no cell sets, only cell data: meshio's MSH 2.2 (groups named by its
+    field_data) and VTU (no field_data read back: unnamed groups are "dim:tag", as read_mesh
+    names them)."""
     mesh = vf.read_mesh("box:0.3,0.05,0.02:6,2,2:hex20")
     m = mesh.to_meshio()
     m.cell_sets = {}
-    f = tmp_path / "bar.vtu"
-    meshio.write(f, m)
-    back = meshio.read(f)
-    model = vf.Model(back, fix=["xmin"])
+    meshio.write(tmp_path / "bar.msh", m, file_format="gmsh22", binary=False)
+    meshio.write(tmp_path / "bar.vtu", m)
     ref = vf.Model(mesh, fix=["xmin"])
-    assert model.mesh.group_nodes("xmin").tolist() == ref.mesh.group_nodes("xmin").tolist()
-    K1, M1 = model.assemble()
     K2, M2 = ref.assemble()
-    assert abs(K1 - K2).max() == 0.0 and abs(M1 - M2).max() == 0.0
+    xmin = mesh.groups["xmin"]
+    for f, name in (("bar.msh", "xmin"), ("bar.vtu", f"{xmin['dim']}:{xmin['tag']}")):
+        back = meshio.read(tmp_path / f)
+        assert not [k for k in back.cell_sets if not k.startswith("gmsh:")]
+        model = vf.Model(back, fix=[name])
+        assert model.mesh.group_nodes(name).tolist() == mesh.group_nodes("xmin").tolist(), f
+        K1, M1 = model.assemble()
+        assert abs(K1 - K2).max() == 0.0 and abs(M1 - M2).max() == 0.0, f
 
 
 def test_results_as_point_arrays() -> None:

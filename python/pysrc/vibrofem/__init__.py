@@ -402,6 +402,8 @@ class Model:
     """A mesh bound to materials, supports, couplings and parts (see the module's table of
     keywords). K and M are assembled once, on first use, and shared by every analysis."""
 
+    mesh: "Mesh"
+
     def __init__(
         self,
         mesh,

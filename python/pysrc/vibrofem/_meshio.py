@@ -53,8 +53,12 @@ _SCALE = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 def _require_meshio() -> Any:
     try:
         import meshio
+        import meshio._mesh
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("to_meshio()/from_meshio() need meshio: pip install meshio") from e
+    # meshio 5.3.5 lacks wedge15 in its table of cell dimensions, so it can neither build nor
+    # read a mesh with them (its issues #1247 and #1505; its VTK/VTU writers know the type).
+    meshio._mesh.topological_dimension.setdefault("wedge15", 3)
     return meshio
 
 
@@ -85,7 +89,9 @@ def mesh_to_meshio(mesh: "Mesh") -> "meshio.Mesh":
     return meshio.Mesh(
         np.asarray(mesh.nodes, dtype=float),
         cells,
-        cell_data={"gmsh:physical": physical},
+        # No geometrical entities: each group's tag stands for its entity (meshio's gmsh writer
+        # wants both).
+        cell_data={"gmsh:physical": physical, "gmsh:geometrical": [p.copy() for p in physical]},
         cell_sets=cell_sets,
         field_data=field_data,
     )
@@ -199,12 +205,50 @@ def mesh_from_meshio(m: "meshio.Mesh", length_unit: str = "m", source: Optional[
     return Mesh(core)
 
 
+#: meshio cell type → VTK cell type id.
+VTK_TYPE: Dict[str, int] = {
+    "vertex": 1,
+    "line": 3,
+    "triangle": 5,
+    "quad": 9,
+    "tetra": 10,
+    "hexahedron": 12,
+    "wedge": 13,
+    "line3": 21,
+    "triangle6": 22,
+    "quad8": 23,
+    "tetra10": 24,
+    "hexahedron20": 25,
+    "wedge15": 26,
+    "quad9": 28,
+    "hexahedron27": 29,
+}
+
+
 def to_pyvista(m: "meshio.Mesh") -> "pyvista.UnstructuredGrid":
+    """A meshio mesh of vibrofem's as a PyVista grid, coordinates kept in double precision
+    (``pyvista.from_meshio`` would store them as float32); point data and field data copied."""
     try:
         import pyvista
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("to_pyvista() needs PyVista: pip install pyvista") from e
-    return pyvista.from_meshio(m)
+    cells = []
+    types = []
+    for b in m.cells:
+        conn = np.asarray(b.data, dtype=np.int64)
+        k = conn.shape[1]
+        cells.append(np.column_stack([np.full(len(conn), k, dtype=np.int64), conn]).ravel())
+        types.append(np.full(len(conn), VTK_TYPE[b.type], dtype=np.uint8))
+    grid = pyvista.UnstructuredGrid(
+        np.concatenate(cells) if cells else np.zeros(0, dtype=np.int64),
+        np.concatenate(types) if types else np.zeros(0, dtype=np.uint8),
+        np.asarray(m.points, dtype=np.float64),
+    )
+    for name, v in m.point_data.items():
+        grid.point_data[name] = np.asarray(v)
+    for name, v in m.field_data.items():
+        grid.field_data[name] = np.asarray(v)
+    return grid
 
 
 def modes_to_meshio(modes: Any, mesh: "Mesh") -> "meshio.Mesh":
