@@ -64,7 +64,7 @@ def main() -> None:
         pl.add_mesh(warped, scalars="|u|", cmap="viridis", show_scalar_bar=False, show_edges=False)
         pl.add_mesh(grid, color="lightgrey", opacity=0.25)
         pl.add_text(f"mode {j + 1}: {modes.frequencies_hz[j]:.1f} Hz", font_size=11)
-        pl.view_isometric()
+        pl.camera_position = "iso"
     png = out / "modes_gmsh_pyvista.png"
     pl.screenshot(str(png))
     pl.close()
