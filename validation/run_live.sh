@@ -25,24 +25,25 @@ cd "$ROOT"
 PY="$(bash validation/python.sh)"   # the one interpreter resolver (sets up the tools if missing)
 WORK="$(mktemp -d)"
 trap 'rm -rf "$WORK"' EXIT
+step() { echo "== [${SECONDS} s] $*"; }   # each step with the time since the start
 
 if [ "${SKIP_REGEN:-0}" != 1 ]; then
     TMP="$WORK/references"
     mkdir -p "$TMP"
-    echo "== scikit-fem convention self-tests"
+    step "scikit-fem convention self-tests"
     "$PY" validation/skfem_modes.py --selftest
-    echo "== regenerating scikit-fem references into $TMP"
+    step "regenerating scikit-fem references into $TMP"
     "$PY" validation/skfem_modes.py --out "$TMP" --check validation/reference
-    echo "== regenerating the scikit-fem harmonic references (direct complex solves)"
+    step "regenerating the scikit-fem harmonic references (direct complex solves)"
     "$PY" validation/skfem_harmonic.py --out "$TMP" --check validation/reference
 fi
 
-echo "== building the wheel (pip wheel ./python; abi3, CPython >= 3.9)"
+step "building the wheel (pip wheel ./python; abi3, CPython >= 3.9)"
 "$PY" -m pip wheel --disable-pip-version-check -q --no-deps -w "$WORK/wheels" ./python
 WHEEL="$(ls "$WORK"/wheels/vibrofem-*.whl)"
 echo "   $(basename "$WHEEL")"
 "$PY" -m pip install --disable-pip-version-check -q --force-reinstall --no-deps "$WHEEL"
-echo "== installing the wheel into a fresh venv"
+step "installing the wheel into a fresh venv"
 "$PY" -m venv "$WORK/venv"
 FRESH="$WORK/venv/bin/python"
 "$FRESH" -c "import site, sys; print(sys.argv[1], file=open(site.getsitepackages()[0] + '/_validation_deps.pth', 'w'))" \
@@ -51,12 +52,13 @@ FRESH="$WORK/venv/bin/python"
 "$FRESH" -m pip check
 "$FRESH" -c "import sys, vibrofem; assert vibrofem.__file__.startswith(sys.prefix), vibrofem.__file__; \
 print('   vibrofem', vibrofem.__version__, 'from', vibrofem.__file__)"
-echo "== comparing the vibrofem package with the references"
+step "comparing the vibrofem package with the references"
 "$FRESH" validation/compare.py "$@"
-echo "== Python package tests (pytest python/tests; the browser test needs chromium: validation/setup_browser.sh)"
+step "Python package tests (pytest python/tests; the browser test needs chromium: validation/setup_browser.sh)"
 bash validation/setup_browser.sh >/dev/null || echo "   no chromium: the report's browser test will skip (fails with VIBROFEM_REQUIRE_BROWSER=1)"
 "$FRESH" -m pytest -q python/tests
-echo "== mypy --strict on the examples and tests (the package's stubs)"
+step "mypy --strict on the examples and tests (the package's stubs)"
 "$FRESH" -m mypy --config-file python/mypy.ini --cache-dir "$WORK/mypy_cache" python/examples python/tests
-echo "== examples (python/examples/run_all.py: each writes its picture)"
+step "examples (python/examples/run_all.py: each writes its picture)"
 "$FRESH" python/examples/run_all.py "$WORK/pictures"
+step "done"

@@ -9,21 +9,23 @@ import numpy as np
 import numpy.typing as npt
 import scipy.sparse
 
+from . import _core as _core
+
 __version__: str
 __all__: List[str]
 
 #: DOF component names in component order (ux, uy, uz, rx, ry, rz, w).
 COMPONENTS: Tuple[str, ...]
 
-PathArg = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-ComplexArray = npt.NDArray[np.complex128]
-Numbers = Union[float, Sequence[float], npt.NDArray[np.floating[Any]]]
+_PathArg = Union[str, bytes, "os.PathLike[str]", "os.PathLike[bytes]"]
+_FloatArray = npt.NDArray[np.float64]
+_IntArray = npt.NDArray[np.int64]
+_ComplexArray = npt.NDArray[np.complex128]
+_Numbers = Union[float, Sequence[float], npt.NDArray[np.floating[Any]]]
 #: A material: "steel" (a name the command line knows) or (E Pa, nu, rho kg/m³).
-MaterialArg = Union[str, Sequence[float]]
+_MaterialArg = Union[str, Sequence[float]]
 #: {group: value} or ["GROUP=VALUE", …] in the command line's grammar.
-GroupValues = Union[Mapping[str, Union[str, Numbers]], Sequence[str], str, None]
+_GroupValues = Union[Mapping[str, Union[str, _Numbers]], Sequence[str], str, None]
 
 class VibrofemError(Exception): ...
 class InputError(VibrofemError): ...
@@ -32,11 +34,12 @@ class OutputError(VibrofemError): ...
 class EngineError(VibrofemError): ...
 
 class Mesh:
+    _core: Any
     def __init__(self, core: Any) -> None: ...
     @property
     def source(self) -> str: ...
     @property
-    def nodes(self) -> FloatArray: ...
+    def nodes(self) -> _FloatArray: ...
     @property
     def node_tags(self) -> npt.NDArray[np.uint64]: ...
     @property
@@ -46,7 +49,7 @@ class Mesh:
     def cells(self, kind: str) -> npt.NDArray[np.uint32]: ...
     def cell_tags(self, kind: str) -> npt.NDArray[np.uint64]: ...
     def group_nodes(self, name: str) -> npt.NDArray[np.uint32]: ...
-    def group_cells(self, name: str) -> Dict[str, IntArray]: ...
+    def group_cells(self, name: str) -> Dict[str, _IntArray]: ...
     @classmethod
     def from_arrays(
         cls,
@@ -59,13 +62,13 @@ class Mesh:
     def to_pyvista(self) -> Any: ...
     def _repr_html_(self) -> str: ...
 
-def read_mesh(source: PathArg, length_unit: str = "m") -> Mesh: ...
+def read_mesh(source: _PathArg, length_unit: str = "m") -> Mesh: ...
 def from_meshio(mesh: Any, length_unit: str = "m") -> Mesh: ...
 
 @dataclass
 class Dofs:
-    node: IntArray
-    component: IntArray
+    node: _IntArray
+    component: _IntArray
     n_mesh_nodes: int
     @property
     def names(self) -> List[str]: ...
@@ -74,16 +77,16 @@ class Dofs:
 
 @dataclass
 class Modes:
-    frequencies_hz: FloatArray
-    eigenvalues: FloatArray
-    shapes: FloatArray
-    vectors: FloatArray
+    frequencies_hz: _FloatArray
+    eigenvalues: _FloatArray
+    shapes: _FloatArray
+    vectors: _FloatArray
     complete: bool
     accurate: bool
-    residuals: FloatArray
-    backward_errors: FloatArray
-    participation: FloatArray
-    effective_mass: FloatArray
+    residuals: _FloatArray
+    backward_errors: _FloatArray
+    participation: _FloatArray
+    effective_mass: _FloatArray
     kinds: List[str]
     report: Dict[str, Any]
     mesh: Optional[Mesh] = None
@@ -95,8 +98,8 @@ class Modes:
 
 @dataclass
 class Static:
-    displacement: FloatArray
-    von_mises: FloatArray
+    displacement: _FloatArray
+    von_mises: _FloatArray
     reactions: Dict[str, Dict[str, Tuple[float, float, float]]]
     stiffness: Dict[str, float]
     report: Dict[str, Any]
@@ -107,8 +110,8 @@ class Static:
 
 @dataclass
 class Harmonic:
-    frequencies_hz: FloatArray
-    displacement: ComplexArray
+    frequencies_hz: _FloatArray
+    displacement: _ComplexArray
     report: Dict[str, Any]
     mesh: Optional[Mesh] = None
     def to_meshio(self) -> Any: ...
@@ -119,17 +122,17 @@ class Model:
     mesh: Mesh
     def __init__(
         self,
-        mesh: Union[Mesh, PathArg, Any],
-        material: MaterialArg = "steel",
-        group_material: Union[Mapping[str, MaterialArg], Sequence[str], None] = None,
+        mesh: Union[Mesh, _PathArg, Any],
+        material: _MaterialArg = "steel",
+        group_material: Union[Mapping[str, _MaterialArg], Sequence[str], None] = None,
         fix: Union[str, Sequence[str], Mapping[str, Union[str, Sequence[str], bool, None]], None] = None,
-        couple: Union[str, Sequence[str], Mapping[str, Union[str, Numbers, bool, None]], None] = None,
-        point_mass: GroupValues = None,
-        spring: GroupValues = None,
+        couple: Union[str, Sequence[str], Mapping[str, Union[str, _Numbers, bool, None]], None] = None,
+        point_mass: _GroupValues = None,
+        spring: _GroupValues = None,
         mass: str = "consistent",
         solid: Union[str, Sequence[str], None] = None,
-        shell: GroupValues = None,
-        beam: GroupValues = None,
+        shell: _GroupValues = None,
+        beam: _GroupValues = None,
         hex8: str = "standard",
     ) -> None: ...
     def assemble(self) -> Tuple[scipy.sparse.csr_array, scipy.sparse.csr_array]: ...
@@ -163,14 +166,14 @@ class Model:
     ) -> Harmonic: ...
     def static(
         self,
-        force: GroupValues = None,
-        pressure: GroupValues = None,
-        gravity: Union[Numbers, str, None] = None,
+        force: _GroupValues = None,
+        pressure: _GroupValues = None,
+        gravity: Union[_Numbers, str, None] = None,
         displace: Union[Mapping[str, Sequence[Optional[float]]], Sequence[str], str, None] = None,
     ) -> Static: ...
-    def export(self, dir: PathArg, format: str = "both") -> List[str]: ...
+    def export(self, dir: _PathArg, format: str = "both") -> List[str]: ...
 
-def run_scene(path: PathArg, out: Optional[PathArg] = None) -> Dict[str, Any]: ...
+def run_scene(path: _PathArg, out: Optional[_PathArg] = None) -> Dict[str, Any]: ...
 
 @dataclass
 class AppReport:
@@ -184,7 +187,7 @@ class AppReport:
     passing_variant: Optional[Dict[str, Any]] = None
     def _repr_html_(self) -> str: ...
 
-def design(path: Optional[PathArg] = None, out: Optional[PathArg] = None, yes: bool = False) -> AppReport: ...
-def crank_drive(path: Optional[PathArg] = None, out: Optional[PathArg] = None) -> AppReport: ...
-def autobalancer(path: Optional[PathArg] = None, out: Optional[PathArg] = None) -> AppReport: ...
-def balancer_data(path: Optional[PathArg] = None, out: Optional[PathArg] = None) -> AppReport: ...
+def design(path: Optional[_PathArg] = None, out: Optional[_PathArg] = None, yes: bool = False) -> AppReport: ...
+def crank_drive(path: Optional[_PathArg] = None, out: Optional[_PathArg] = None) -> AppReport: ...
+def autobalancer(path: Optional[_PathArg] = None, out: Optional[_PathArg] = None) -> AppReport: ...
+def balancer_data(path: Optional[_PathArg] = None, out: Optional[_PathArg] = None) -> AppReport: ...
