@@ -23,6 +23,10 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 
 PY="$(bash validation/python.sh)"   # the one interpreter resolver (sets up the tools if missing)
+# The package's tests and examples need more than python.sh checks for (an older venv may lack them).
+if ! "$PY" -c "import meshio, pyvista, matplotlib, mypy, websocket, maturin" >/dev/null 2>&1; then
+    bash validation/setup.sh >&2
+fi
 WORK="$(mktemp -d)"
 trap 'rm -rf "$WORK"' EXIT
 step() { echo "== [${SECONDS} s] $*"; }   # each step with the time since the start

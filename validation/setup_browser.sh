@@ -17,5 +17,5 @@ if [ -z "$(find_browser)" ]; then
 fi
 B="$(find_browser)"
 [ -n "$B" ] || { echo "setup_browser.sh: chromium not found after installing it" >&2; exit 1; }
-"$B" --version >&2 || true
+"$B" --version >&2 2>/dev/null || true
 echo "$B"
