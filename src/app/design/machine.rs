@@ -438,6 +438,7 @@ fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
     let reactive = (mesh.nodes.len() - 1) as u32;
     point_group(&mut mesh, &mut block, bp, "reactive", &[reactive]);
     let mut couplings = vec![];
+    let mut shoe_nodes = vec![false; n_table];
     let leaf_ends = if rigid {
         let all: Vec<u32> = (0..n_table as u32).collect();
         point_group(&mut mesh, &mut block, bp, "table_body", &all);
@@ -449,9 +450,9 @@ fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
         vec!["table_body".to_string(); md.leaves.len()]
     } else {
         couplings.extend(links);
-        leaf_shoes(d, &mut mesh, &mut block, bp, &bottom, n_table, &mut couplings)?
+        leaf_shoes(d, &mut mesh, &mut block, bp, &bottom, &mut shoe_nodes, &mut couplings)?
     };
-    let armatures = armature_patches(d, &mut mesh, &mut block, bp, &bottom, n_table, rigid, &mut couplings)?;
+    let armatures = armature_patches(d, &mut mesh, &mut block, bp, &bottom, shoe_nodes, rigid, &mut couplings)?;
     let magnet_ends = (0..armatures.len())
         .map(|i| {
             if rigid {
@@ -484,17 +485,17 @@ fn leaf_shoes(
     block: &mut CellBlock,
     bp: u32,
     bottom: &[u32],
-    n_table: usize,
+    used: &mut [bool],
     couplings: &mut Vec<CouplingSpec>,
 ) -> Result<Vec<String>> {
     let md = &d.machine;
+    let n_table = used.len();
     let mut in_link = vec![false; n_table];
     for g in mesh.groups.iter().filter(|g| g.name.starts_with("web_link_")) {
         for a in mesh.group_nodes(g) {
             in_link[a as usize] = true;
         }
     }
-    let mut used = vec![false; n_table];
     let mut shoes = vec![];
     for (i, l) in md.leaves.iter().enumerate() {
         let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
@@ -541,18 +542,14 @@ fn armature_patches(
     block: &mut CellBlock,
     bp: u32,
     bottom: &[u32],
-    n_table: usize,
+    mut tied: Vec<bool>,
     rigid: bool,
     couplings: &mut Vec<CouplingSpec>,
 ) -> Result<Vec<Vec<u32>>> {
     let md = &d.machine;
-    let mut tied = vec![false; n_table];
+    let n_table = tied.len();
     if !rigid {
-        for g in mesh
-            .groups
-            .iter()
-            .filter(|g| g.name.starts_with("web_link_") || g.name.starts_with("leaf_shoe_"))
-        {
+        for g in mesh.groups.iter().filter(|g| g.name.starts_with("web_link_")) {
             for a in mesh.group_nodes(g) {
                 if (a as usize) < n_table {
                     tied[a as usize] = true;
@@ -575,17 +572,6 @@ fn armature_patches(
                 "machine.magnets",
                 format!(
                     "magnet {} at ({}, {}) m: its armature covers no node of the bottom plate",
-                    i + 1,
-                    m[0],
-                    m[1]
-                ),
-            ));
-        }
-        if nodes.iter().any(|&a| tied[a as usize]) {
-            return Err(bad(
-                "machine.magnets",
-                format!(
-                    "magnet {} at ({}, {}) m: its armature overlaps another magnet's",
                     i + 1,
                     m[0],
                     m[1]
