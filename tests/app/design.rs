@@ -43,7 +43,7 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
     ] {
         assert!(dir.join(f).exists() || f == "report.md", "{f} missing");
     }
-    assert_eq!(r.checks.len(), 8);
+    assert_eq!(r.checks.len(), 9);
     assert!(r.table_frequencies_hz.len() == 6 && r.table_frequencies_hz[0] > 50.0);
     report_formats(&r, &dir);
 }
@@ -70,6 +70,36 @@ fn report_formats(r: &vibrofem::app::design::DesignReport, dir: &std::path::Path
         "check ids are unique"
     );
     assert!(json["checks"]["table_f1_vs_excitation"]["ok"].is_boolean());
+    // Issue 29: the floor force per isolator from both models, the gap check with its margin,
+    // the force law and the mains frequency, the machine's modes under unique names, the
+    // inputs with their sources.
+    assert_eq!(
+        json["floor_force"]["machine"][0]["per_isolator"]
+            .as_array()
+            .unwrap()
+            .len(),
+        8
+    );
+    assert!(json["floor_force"]["two_mass"][0]["total"].as_f64().unwrap() > 0.0);
+    assert!(json["checks"]["magnet_gap"]["margin"].is_f64());
+    assert_eq!(json["force_law"], "flux");
+    assert_eq!(json["mains_hz"].as_f64(), Some(50.0));
+    let names: Vec<&str> = json["machine_modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["name"].as_str().unwrap())
+        .collect();
+    let mut unique = names.clone();
+    unique.sort();
+    unique.dedup();
+    assert_eq!(unique.len(), names.len(), "{names:?}");
+    assert!(
+        json["inputs"]["leaf.clamping"]["source"]
+            .as_str()
+            .unwrap()
+            .contains("0.75")
+    );
     // Four significant digits: the active mass m1 as e.g. "206.7", c12 with an exponent.
     let m1 = value(r, "active mass m1");
     let text = verdict_text(r);

@@ -149,12 +149,14 @@ fn general_spring_matrices_are_checked() {
 fn rigid_symmetric_machine_equals_the_two_mass_model() {
     let mut d = Design::paper();
     d.machine.table_model = "rigid".into();
+    // Issue 29: the paper's force law, and the magnets' stiffness −2P̄/δ in both models.
+    d.drive.force_law = "paper".into();
     let h = 0.0099;
     let r = analyse(&d, h).unwrap();
     // The two-mass model of the same parts: m1 = table + active extras, c12 = n·k_c·k_zz,
     // c13 = n·k_axial, the same dashpots and the same first harmonic of the drive.
     let m1 = r.table_mass + d.masses.active_extra;
-    let c12 = d.leaf.count as f64 * d.leaf.clamping * r.leaf_kzz;
+    let c12 = d.leaf.count as f64 * d.leaf.clamping * r.leaf_kzz + d.magnet_stiffness().unwrap();
     let c13 = d.coil.count as f64 * r.coil_axial;
     let tm = TwoMass::new(
         m1,

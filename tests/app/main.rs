@@ -10,6 +10,7 @@ mod cli;
 mod converge_pairing;
 mod design;
 mod design_inputs;
+mod design_machine;
 mod dynamics;
 mod export_engine;
 mod harmonic;

@@ -133,6 +133,19 @@ pub struct DriveDesign {
     pub power_overload_g: f64,
     /// Load share m_pr in eq. (6), kg (the paper: 100 kg, "taken with a margin").
     pub power_load_share: f64,
+    /// How the pull varies over a mains period: `"flux"` (P·sin²ωt, a coil fed from the mains:
+    /// mean P/2, one harmonic at 2ω of amplitude P/2; the default) or `"paper"` (the paper's
+    /// P·|sin ωt|, eq. (8)).
+    pub force_law: String,
+    /// Mains frequency, Hz; the excitation is twice it under both laws. Missing: half of
+    /// `excitation_hz`; given alone in a file, it sets `excitation_hz`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mains_hz: Option<f64>,
+    /// Working air gap between armature and core, m (the magnets' stiffness −2P̄/δ is taken
+    /// there, and the gap check closes against it).
+    pub gap: f64,
+    /// Clearance the gap check keeps beyond sag, amplitude and start-up peak, m.
+    pub gap_margin: f64,
 }
 
 /// Damping coefficients.
@@ -203,6 +216,12 @@ impl Default for DriveDesign {
             transient_s: 0.6,
             power_overload_g: 11.0,
             power_load_share: 100.0,
+            force_law: "flux".into(),
+            mains_hz: None,
+            // The issue's working gap (the paper gives none); the margin covers the plates'
+            // flatness and the assembly tolerance of the gap (an assumption, stated in the report).
+            gap: 1.8e-3,
+            gap_margin: 0.2e-3,
         }
     }
 }
@@ -301,8 +320,14 @@ impl Design {
     pub fn from_toml(path: &std::path::Path) -> Result<Design> {
         use crate::app::toml_file;
         let text = toml_file::read(path)?;
-        let d: Design = toml_file::parse(path, &text)?;
+        let mut d: Design = toml_file::parse(path, &text)?;
         toml_file::check_version(path, &text, "design", d.version as i64)?;
+        // The mains frequency given alone sets the excitation (twice it, under both laws).
+        if let (Some(f), Ok(raw)) = (d.drive.mains_hz, text.parse::<toml::Table>())
+            && !raw.contains_key("excitation_hz")
+        {
+            d.excitation_hz = 2.0 * f;
+        }
         d.validate().map_err(|e| toml_file::locate(path, &text, e))?;
         Ok(d)
     }
@@ -359,6 +384,13 @@ impl Design {
             ("drive.transient_s", dr.transient_s, Positive),
             ("drive.power_overload_g", dr.power_overload_g, Positive),
             ("drive.power_load_share", dr.power_load_share, NonNegative),
+            (
+                "drive.mains_hz",
+                dr.mains_hz.unwrap_or(0.5 * self.excitation_hz),
+                Between(0.0, 0.5 * MAX_EXCITATION_HZ, false),
+            ),
+            ("drive.gap", dr.gap, Positive),
+            ("drive.gap_margin", dr.gap_margin, NonNegative),
             ("damping.mu1", dp.mu1, NonNegative),
             ("damping.mu12", dp.mu12, NonNegative),
             ("damping.mu13", dp.mu13, NonNegative),
@@ -454,6 +486,25 @@ impl Design {
         if !["none", "leaf", "mass"].contains(&self.tune.as_str()) {
             return Err(bad("tune", format!("must be none, leaf or mass, got '{}'", self.tune)));
         }
+        if crate::app::dynamics::electromagnet::ForceLaw::parse(&self.drive.force_law).is_none() {
+            return Err(bad(
+                "drive.force_law",
+                format!("must be flux or paper, got '{}'", self.drive.force_law),
+            ));
+        }
+        if let Some(f) = self.drive.mains_hz
+            && (2.0 * f - self.excitation_hz).abs() > 1e-9 * self.excitation_hz
+        {
+            return Err(bad(
+                "drive.mains_hz",
+                format!(
+                    "= {f} Hz drives the magnets at twice it, {} Hz, but 'excitation_hz' is {} Hz: give one of \
+                     them, or make excitation_hz twice the mains frequency",
+                    2.0 * f,
+                    self.excitation_hz
+                ),
+            ));
+        }
         if !["plates", "channel10"].contains(&self.spacers.as_str()) {
             return Err(bad(
                 "spacers",
@@ -477,6 +528,38 @@ impl Design {
         self.sandwich()
             .validate()
             .map_err(|e| crate::app::toml_file::bad_value("table", e))
+    }
+
+    /// The mains frequency, Hz: given, or half the excitation.
+    pub fn mains_hz(&self) -> f64 {
+        self.drive.mains_hz.unwrap_or(0.5 * self.excitation_hz)
+    }
+
+    /// The force law (`drive.force_law`; flux if unreadable, which validation refuses first).
+    pub fn force_law(&self) -> crate::app::dynamics::electromagnet::ForceLaw {
+        crate::app::dynamics::electromagnet::ForceLaw::parse(&self.drive.force_law).unwrap_or_default()
+    }
+
+    /// The magnets' pull under the design's force law, on its mains frequency.
+    pub fn magnet_drive(&self) -> Result<crate::app::dynamics::electromagnet::MagnetDrive> {
+        crate::app::dynamics::electromagnet::MagnetDrive::from_magnets(
+            self.force_law(),
+            self.drive.magnets,
+            self.drive.pull,
+            std::f64::consts::TAU * self.mains_hz(),
+        )
+    }
+
+    /// The magnets' stiffness at the working gap, all together (N/m, negative): −2P̄/δ with the
+    /// mean pull of the design's force law.
+    pub fn magnet_stiffness(&self) -> Result<f64> {
+        crate::app::dynamics::electromagnet::magnet_stiffness(self.magnet_drive()?.mean(), self.drive.gap)
+    }
+
+    /// Whether this is the built-in paper design (every input as [`Design::paper`]): only it is
+    /// compared with the paper's published numbers.
+    pub fn is_builtin(&self) -> bool {
+        serde_json::to_value(self).ok() == serde_json::to_value(Design::paper()).ok()
     }
 
     /// The table generator's parameters (quad4 shells).

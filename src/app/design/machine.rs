@@ -36,7 +36,6 @@ use super::file::{Design, bad};
 use super::parts::{coil_stiffness, leaf_end_stiffness, leaf_matrix, table_parts};
 use crate::analysis::harmonic;
 use crate::analysis::modal::{ModalParams, ModalRun, ModalTarget};
-use crate::app::dynamics::electromagnet::RectifiedDrive;
 use crate::mesh::{CellBlock, CellKind, CellRef, Group, Mesh};
 use crate::model::{
     CouplingSpec, Model, ModelSpec, PointMassSpec, ShellPart, SpringMatrixSpec, rigid_offset, transform_blocks,
@@ -109,6 +108,35 @@ pub struct MachineResult {
     /// Complex displacement per mesh node `[ux, uy, uz]` (real and imaginary parts), for output.
     #[serde(skip)]
     pub response: Vec<[Complex<f64>; 3]>,
+    /// Vertical amplitude of the relative motion across each leaf (its table end against its
+    /// clamp on the reactive mass), m, in the order of `machine.leaves`.
+    pub leaf_relative: Vec<f64>,
+    /// Vertical amplitude of the relative motion across each magnet's gap (armature centre
+    /// against the core), m, in the order of `machine.magnets`.
+    pub magnet_relative: Vec<f64>,
+    /// The force on the floor through the isolators at the excitation and at each harmonic of
+    /// the force law that is not zero (the flux law has none above the first).
+    pub floor: Vec<FloorForce>,
+    /// Power dissipated by the machine's dashpots at the excitation, Ω²/2·Σ uᴴ C u, W.
+    pub dissipated_power: f64,
+    /// The magnets' stiffness at the working gap, all together, N/m (negative).
+    pub magnet_stiffness: f64,
+    /// Where the leaves' table ends, the magnets and the isolators are (plan, m), for the maps.
+    #[serde(skip)]
+    pub positions: [Vec<[f64; 2]>; 3],
+}
+
+/// The force the isolators put on the floor at one harmonic kΩ of the drive.
+#[derive(Clone, Debug, Serialize)]
+pub struct FloorForce {
+    /// k (1: the excitation).
+    pub harmonic: u32,
+    /// kΩ/2π, Hz.
+    pub frequency_hz: f64,
+    /// Amplitude of each isolator's vertical force on the floor, N (order of `machine.isolators`).
+    pub per_isolator: Vec<f64>,
+    /// Amplitude of their sum (the phases taken into account), N.
+    pub total: f64,
 }
 
 /// A dashpot on one or two nodes (model indices) with its 6n×6n matrix.
@@ -193,6 +221,8 @@ struct Layout {
     leaf_ends: Vec<String>,
     /// Nodes of each magnet's armature patch.
     armatures: Vec<Vec<u32>>,
+    /// Group of each magnet's armature end (its rigid armature, or the rigid table).
+    magnet_ends: Vec<String>,
 }
 
 /// The spring matrices of the machine, in global axes on their nodes.
@@ -215,7 +245,8 @@ struct Masses {
 }
 
 /// Build and analyse the 3D machine for design `d` with leaves of thickness `h` (m): assemble
-/// it, find its modes, solve the forced response at the excitation and name the modes.
+/// it, find its modes, solve the forced response at the excitation (and at the force law's
+/// harmonics, for the floor force) and name the modes.
 pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     d.machine.validate(d)?;
     let rigid = d.machine.table_model == "rigid";
@@ -223,8 +254,8 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let layout = machine_layout(d, rigid)?;
     let masses = machine_masses(d, layout.armatures.len());
     let springs = machine_springs(d, &parts, &layout, rigid);
-    let (sys, run, leaf_nodes, table_ref) = machine_modes(d, &layout, &springs, &masses, rigid)?;
-    let dofs = sys.n_free();
+    let (sys, run, leaf_nodes, table_ref, magnet_nodes) = machine_modes(d, &layout, &springs, &masses, rigid)?;
+    let dofs = sys.dofs().n_free;
     let f_resp = d.machine.response_range * d.excitation_hz;
     let n_use = run
         .lambda
@@ -235,8 +266,13 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let shapes: Vec<Vec<f64>> = (0..n_use)
         .map(|k| dm.expand(&crate::linalg::eigen::column(&run.vectors, k), 6))
         .collect();
-    let cr = modal_damping(d, &parts, &layout, &springs, &leaf_nodes, &shapes);
-    let response = forced_response(d, &layout, &sys, &run, &cr)?;
+    let pots = dashpots(d, &parts, &layout, &springs, &leaf_nodes);
+    let cr = modal_damping(&pots, &shapes);
+    let omega = TAU * d.excitation_hz;
+    let full = forced_response(d, &layout, &sys, &run, &cr, 1)?;
+    let response: Vec<[Complex<f64>; 3]> = (0..layout.mesh.n_nodes())
+        .map(|a| std::array::from_fn(|c| full[a][c]))
+        .collect();
     let surface: Vec<(u32, f64)> = layout
         .top
         .iter()
@@ -248,14 +284,17 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let max = amps.iter().copied().fold(0.0, f64::max);
     let modes = name_modes(d, &layout, &springs, &masses, &run, &shapes, &leaf_nodes, table_ref);
     let (working, nearest_other) = working_mode(d, modes.as_slice());
-    let mut modes = modes;
-    for (i, m) in modes.iter_mut().enumerate() {
-        if m.name.starts_with("working") && Some(i) != working {
-            m.name = "vertical antiphase (second)".into();
-        }
-    }
     let reactive_amplitude = response[layout.reactive as usize][2].norm();
     let table_mass = run.report.mass_kg - d.masses.reactive - d.masses.active_extra - masses.load_mass;
+    let (leaf_relative, magnet_relative) = relative_motions(d, &layout, &full, &leaf_nodes, &magnet_nodes, rigid);
+    let mut floor = vec![floor_force(d, &parts, &layout, &full, 1)];
+    for k in 2..=3u32 {
+        if d.magnet_drive()?.cos_coefficient(k) != 0.0 {
+            let uk = forced_response(d, &layout, &sys, &run, &cr, k)?;
+            floor.push(floor_force(d, &parts, &layout, &uk, k));
+        }
+    }
+    let dissipated_power = 0.5 * omega * omega * pots.iter().map(|p| dissipation(p, &full)).sum::<f64>();
     Ok(MachineResult {
         modes,
         working,
@@ -274,7 +313,98 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
         surface,
         mesh: layout.mesh,
         response,
+        leaf_relative,
+        magnet_relative,
+        floor,
+        dissipated_power,
+        magnet_stiffness: d.magnet_stiffness()?,
+        positions: [
+            d.machine.leaves.iter().map(|l| [l[0], l[1]]).collect(),
+            d.machine.magnets.clone(),
+            d.machine.isolators.iter().map(|i| [i[0], i[1]]).collect(),
+        ],
     })
+}
+
+/// Vertical displacement at plan point `p` of a body whose reference node at `r` moves by `u`
+/// (6 components): u_z + θ_x·(p_y − r_y) − θ_y·(p_x − r_x).
+fn uz_at(u: &[Complex<f64>; 6], r: [f64; 3], p: [f64; 2]) -> Complex<f64> {
+    u[2] + u[3] * (p[1] - r[1]) - u[4] * (p[0] - r[0])
+}
+
+/// The vertical amplitude across each leaf (table end against clamp) and across each magnet's
+/// gap (armature centre against the core below it).
+fn relative_motions(
+    d: &Design,
+    layout: &Layout,
+    full: &[[Complex<f64>; 6]],
+    leaf_nodes: &[usize],
+    magnet_nodes: &[usize],
+    rigid: bool,
+) -> (Vec<f64>, Vec<f64>) {
+    let md = &d.machine;
+    let rc = md.reactive_centre;
+    let ur = &full[layout.reactive as usize];
+    let leaves = md
+        .leaves
+        .iter()
+        .zip(leaf_nodes)
+        .map(|(l, &a)| {
+            let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
+            let clamp = [l[0] + d.leaf.length * l[2] / n, l[1] + d.leaf.length * l[3] / n];
+            let a_ref = if rigid {
+                layout.table_centre
+            } else {
+                [l[0], l[1], md.leaf_level]
+            };
+            (uz_at(&full[a], a_ref, [l[0], l[1]]) - uz_at(ur, rc, clamp)).norm()
+        })
+        .collect();
+    let magnets = md
+        .magnets
+        .iter()
+        .zip(magnet_nodes)
+        .map(|(m, &a)| {
+            let a_ref = if rigid { layout.table_centre } else { [m[0], m[1], 0.0] };
+            (uz_at(&full[a], a_ref, *m) - uz_at(ur, rc, *m)).norm()
+        })
+        .collect();
+    (leaves, magnets)
+}
+
+/// The isolators' vertical forces on the floor at harmonic `k`: (k_axial + ikΩ·μ13/n)·u_z at
+/// each isolator (the reactive mass's motion there), and their sum.
+fn floor_force(d: &Design, parts: &Condensed, layout: &Layout, full: &[[Complex<f64>; 6]], k: u32) -> FloorForce {
+    let w = k as f64 * TAU * d.excitation_hz;
+    let n = d.coil.count as f64;
+    let kz = Complex::new(parts.k_ax, w * d.damping.mu13 / n);
+    let ur = &full[layout.reactive as usize];
+    let rc = d.machine.reactive_centre;
+    let f: Vec<Complex<f64>> = d
+        .machine
+        .isolators
+        .iter()
+        .map(|p| kz * uz_at(ur, rc, [p[0], p[1]]))
+        .collect();
+    FloorForce {
+        harmonic: k,
+        frequency_hz: k as f64 * d.excitation_hz,
+        per_isolator: f.iter().map(|x| x.norm()).collect(),
+        total: f.iter().sum::<Complex<f64>>().norm(),
+    }
+}
+
+/// uᴴ C u over a dashpot's nodes (the mean dissipation is Ω²/2 of it).
+fn dissipation(p: &Dashpot, full: &[[Complex<f64>; 6]]) -> f64 {
+    let u: Vec<Complex<f64>> = p.nodes.iter().flat_map(|&a| full[a]).collect();
+    let n = u.len();
+    let mut s = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            s += (u[i].conj() * p.c[i * n + j] * u[j]).re;
+        }
+    }
+    s
 }
 
 /// The leaf and the coil condensed from their FE models.
@@ -308,6 +438,7 @@ fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
     let reactive = (mesh.nodes.len() - 1) as u32;
     point_group(&mut mesh, &mut block, bp, "reactive", &[reactive]);
     let mut couplings = vec![];
+    let mut shoe_nodes = vec![false; n_table];
     let leaf_ends = if rigid {
         let all: Vec<u32> = (0..n_table as u32).collect();
         point_group(&mut mesh, &mut block, bp, "table_body", &all);
@@ -319,9 +450,18 @@ fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
         vec!["table_body".to_string(); md.leaves.len()]
     } else {
         couplings.extend(links);
-        leaf_shoes(d, &mut mesh, &mut block, bp, &bottom, n_table, &mut couplings)?
+        leaf_shoes(d, &mut mesh, &mut block, bp, &bottom, &mut shoe_nodes, &mut couplings)?
     };
-    let armatures = armature_patches(d, &mut mesh, &mut block, bp, &bottom, n_table)?;
+    let armatures = armature_patches(d, &mut mesh, &mut block, bp, &bottom, shoe_nodes, rigid, &mut couplings)?;
+    let magnet_ends = (0..armatures.len())
+        .map(|i| {
+            if rigid {
+                "table_body".to_string()
+            } else {
+                format!("armature_{}", i + 1)
+            }
+        })
+        .collect();
     mesh.blocks.push(block);
     Ok(Layout {
         mesh,
@@ -333,6 +473,7 @@ fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
         top,
         leaf_ends,
         armatures,
+        magnet_ends,
     })
 }
 
@@ -344,17 +485,17 @@ fn leaf_shoes(
     block: &mut CellBlock,
     bp: u32,
     bottom: &[u32],
-    n_table: usize,
+    used: &mut [bool],
     couplings: &mut Vec<CouplingSpec>,
 ) -> Result<Vec<String>> {
     let md = &d.machine;
+    let n_table = used.len();
     let mut in_link = vec![false; n_table];
     for g in mesh.groups.iter().filter(|g| g.name.starts_with("web_link_")) {
         for a in mesh.group_nodes(g) {
             in_link[a as usize] = true;
         }
     }
-    let mut used = vec![false; n_table];
     let mut shoes = vec![];
     for (i, l) in md.leaves.iter().enumerate() {
         let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
@@ -390,16 +531,32 @@ fn leaf_shoes(
     Ok(shoes)
 }
 
-/// Each magnet's armature: the bottom-plate nodes of its patch (group `armature_i`).
+/// Each magnet's armature: the bottom-plate nodes of its patch (group `armature_i`). With the
+/// shell table the armature is a rigid block on them (a coupling with its reference at the
+/// magnet's centre, where the magnet's stiffness acts); nodes already tied to a web link or a
+/// leaf's shoe stay with those.
+#[allow(clippy::too_many_arguments)]
 fn armature_patches(
     d: &Design,
     mesh: &mut Mesh,
     block: &mut CellBlock,
     bp: u32,
     bottom: &[u32],
-    n_table: usize,
+    mut tied: Vec<bool>,
+    rigid: bool,
+    couplings: &mut Vec<CouplingSpec>,
 ) -> Result<Vec<Vec<u32>>> {
     let md = &d.machine;
+    let n_table = tied.len();
+    if !rigid {
+        for g in mesh.groups.iter().filter(|g| g.name.starts_with("web_link_")) {
+            for a in mesh.group_nodes(g) {
+                if (a as usize) < n_table {
+                    tied[a as usize] = true;
+                }
+            }
+        }
+    }
     let mut armatures = vec![];
     for (i, m) in md.magnets.iter().enumerate() {
         let nodes = patch(
@@ -408,7 +565,7 @@ fn armature_patches(
             *m,
             [1.0, 0.0],
             [0.5 * md.armature[0], 0.5 * md.armature[1]],
-            &vec![false; n_table],
+            &tied,
         );
         if nodes.is_empty() {
             return Err(bad(
@@ -421,7 +578,16 @@ fn armature_patches(
                 ),
             ));
         }
-        point_group(mesh, block, bp, &format!("armature_{}", i + 1), &nodes);
+        let name = format!("armature_{}", i + 1);
+        point_group(mesh, block, bp, &name, &nodes);
+        if !rigid {
+            nodes.iter().for_each(|&a| tied[a as usize] = true);
+            couplings.push(CouplingSpec {
+                group: name,
+                guided: None,
+                reference: Some([m[0], m[1], 0.0]),
+            });
+        }
         armatures.push(nodes);
     }
     Ok(armatures)
@@ -484,6 +650,16 @@ fn machine_springs(d: &Design, parts: &Condensed, layout: &Layout, rigid: bool) 
             label: format!("leaf {}", i + 1),
         });
         leaves.push((a_group, kf));
+    }
+    // Each magnet's stiffness is negative, which a spring element refuses: an empty spring puts
+    // the pair of points in K's pattern, and the stiffness is added to K ([`add_magnet_stiffness`]).
+    for (i, g) in layout.magnet_ends.iter().enumerate() {
+        specs.push(SpringMatrixSpec {
+            a: g.clone(),
+            b: Some("reactive".into()),
+            k: vec![0.0; 144],
+            label: format!("magnet {} (gap stiffness added to K)", i + 1),
+        });
     }
     let mut isolators = vec![];
     for (i, pt) in md.isolators.iter().enumerate() {
@@ -558,8 +734,57 @@ fn leaf_global(d: &Design, leaf_local: &[f64], l: &[f64; 4], table_centre: [f64;
     kf
 }
 
+/// One magnet's stiffness `k` (N/m, negative) as a 12×12 matrix between its armature end
+/// (`a_ref`: the armature's centre, or the rigid table's) and the reactive mass's centre: a
+/// vertical spring between the armature's centre and the core below it.
+fn magnet_matrix(d: &Design, m: [f64; 2], a_ref: [f64; 3], k: f64) -> Vec<f64> {
+    let rc = d.machine.reactive_centre;
+    let mut kp = vec![0.0; 144];
+    kp[2 * 12 + 2] = k;
+    kp[8 * 12 + 8] = k;
+    kp[2 * 12 + 8] = -k;
+    kp[8 * 12 + 2] = -k;
+    let ta = rigid_offset([m[0] - a_ref[0], m[1] - a_ref[1], 0.0 - a_ref[2]]);
+    let tc = rigid_offset([m[0] - rc[0], m[1] - rc[1], 0.0]);
+    transform_blocks(&kp, &[ta, tc])
+}
+
+/// Add the magnets' (negative) stiffness at the working gap to the system's K, between each
+/// armature end node and the reactive mass's node (their pair is in K's pattern through the
+/// empty springs of [`machine_springs`]).
+fn add_magnet_stiffness(d: &Design, layout: &Layout, sys: &mut System, ends: &[usize], rigid: bool) -> Result<()> {
+    let k_each = d.magnet_stiffness()? / d.machine.magnets.len() as f64;
+    if k_each == 0.0 {
+        return Ok(());
+    }
+    let mut k = sys.k().clone();
+    let dofs = sys.dofs().clone();
+    for (i, m) in d.machine.magnets.iter().enumerate() {
+        let a_ref = if rigid { layout.table_centre } else { [m[0], m[1], 0.0] };
+        let km = magnet_matrix(d, *m, a_ref, k_each);
+        let nodes = [ends[i], layout.reactive as usize];
+        for r in 0..12 {
+            for c in 0..12 {
+                let v = km[r * 12 + c];
+                if v == 0.0 {
+                    continue;
+                }
+                let (Some(er), Some(ec)) = (dofs.eq_of(nodes[r / 6], r % 6), dofs.eq_of(nodes[c / 6], c % 6)) else {
+                    continue;
+                };
+                let pos = k.pattern.position(er, ec).ok_or_else(|| {
+                    Error::Verification(format!("machine: magnet {} is not in the stiffness pattern", i + 1))
+                })?;
+                k.values[pos] += v;
+            }
+        }
+    }
+    sys.replace_stiffness(k)?;
+    Ok(())
+}
+
 /// The machine's model, system and verified modes (24 with the shell table, 12 rigid); the model
-/// node of each leaf's table end and of the rigid table's centre.
+/// node of each leaf's table end, of the rigid table's centre and of each magnet's armature end.
 #[allow(clippy::type_complexity)]
 fn machine_modes(
     d: &Design,
@@ -567,7 +792,7 @@ fn machine_modes(
     springs: &Springs,
     masses: &Masses,
     rigid: bool,
-) -> Result<(System, ModalRun, Vec<usize>, Option<usize>)> {
+) -> Result<(System, ModalRun, Vec<usize>, Option<usize>, Vec<usize>)> {
     let shells = layout
         .thick
         .iter()
@@ -603,7 +828,9 @@ fn machine_modes(
     };
     let leaf_nodes: Vec<usize> = springs.leaves.iter().map(|(g, _)| node_of(g)).collect::<Result<_>>()?;
     let table_ref = if rigid { Some(node_of("table_body")?) } else { None };
-    let sys = System::build(model, &SystemOptions::default(), "machine")?;
+    let magnet_nodes: Vec<usize> = layout.magnet_ends.iter().map(|g| node_of(g)).collect::<Result<_>>()?;
+    let mut sys = System::build(model, &SystemOptions::default(), "machine")?;
+    add_magnet_stiffness(d, layout, &mut sys, &magnet_nodes, rigid)?;
     let want = sys.n_free().min(if rigid { 12 } else { 24 });
     let run = crate::analysis::modal::solve(
         &sys,
@@ -615,7 +842,7 @@ fn machine_modes(
     if !run.report.complete {
         return Err(Error::Verification("machine modal analysis: a mode was missed".into()));
     }
-    Ok((sys, run, leaf_nodes, table_ref))
+    Ok((sys, run, leaf_nodes, table_ref, magnet_nodes))
 }
 
 /// Node `a`'s six components of shape `s`.
@@ -636,17 +863,9 @@ fn quad(x: &[f64], c: &[f64], y: &[f64]) -> f64 {
     mat6_mul_vec(c, n, y).iter().zip(x).map(|(a, b)| a * b).sum()
 }
 
-/// The modal damping matrix Φᵀ C Φ over `shapes` of the two-mass model's dashpots placed where
-/// they act: μ12 proportional to each leaf's matrix, μ13 to each isolator's, μ1 shared by the
-/// work-surface nodes vertically.
-fn modal_damping(
-    d: &Design,
-    parts: &Condensed,
-    layout: &Layout,
-    springs: &Springs,
-    leaf_nodes: &[usize],
-    shapes: &[Vec<f64>],
-) -> DMatrix<f64> {
+/// The two-mass model's dashpots placed where they act: μ12 proportional to each leaf's
+/// matrix, μ13 to each isolator's, μ1 shared by the work-surface nodes vertically.
+fn dashpots(d: &Design, parts: &Condensed, layout: &Layout, springs: &Springs, leaf_nodes: &[usize]) -> Vec<Dashpot> {
     let reactive = layout.reactive as usize;
     let c12 = d.leaf.count as f64 * d.leaf.clamping * parts.kbb[2][2];
     let c13 = d.coil.count as f64 * parts.k_ax;
@@ -671,9 +890,14 @@ fn modal_damping(
             c,
         });
     }
+    dashpots
+}
+
+/// The modal damping matrix Φᵀ C Φ of the dashpots over `shapes`.
+fn modal_damping(dashpots: &[Dashpot], shapes: &[Vec<f64>]) -> DMatrix<f64> {
     let n_use = shapes.len();
     let mut cr = DMatrix::<f64>::zeros(n_use, n_use);
-    for dp in &dashpots {
+    for dp in dashpots {
         let loc: Vec<Vec<f64>> = shapes.iter().map(|s| gather(s, &dp.nodes)).collect();
         for i in 0..n_use {
             let ci = mat6_mul_vec(&dp.c, loc[i].len(), &loc[i]);
@@ -685,14 +909,13 @@ fn modal_damping(
     cr
 }
 
-/// The magnets' forces: −F/n on each armature (shared by its nodes), +F/n at each core on the
-/// reactive mass (a force and a moment at its centre).
-fn magnet_forces(d: &Design, layout: &Layout) -> Result<Vec<(usize, [c64; 6])>> {
+/// The magnets' forces at harmonic `k` of the force law: −F_k/n on each armature (shared by its
+/// nodes), +F_k/n at each core on the reactive mass (a force and a moment at its centre); F_k
+/// the amplitude of the law's cos(kΩt) term.
+fn magnet_forces(d: &Design, layout: &Layout, k: u32) -> Result<Vec<(usize, [c64; 6])>> {
     let md = &d.machine;
     let rc = md.reactive_centre;
-    let omega = TAU * d.excitation_hz;
-    let drive = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?;
-    let f_mag = drive.harmonic_amplitude() / md.magnets.len() as f64;
+    let f_mag = d.magnet_drive()?.cos_coefficient(k).abs() / md.magnets.len() as f64;
     let c0 = c64::new(0.0, 0.0);
     let mut forces: Vec<(usize, [c64; 6])> = vec![];
     for nodes in &layout.armatures {
@@ -714,28 +937,31 @@ fn magnet_forces(d: &Design, layout: &Layout) -> Result<Vec<(usize, [c64; 6])>> 
     Ok(forces)
 }
 
-/// The steady response at the excitation per mesh node `[ux, uy, uz]`: modal superposition
-/// over the modes with the full modal damping matrix `cr`, plus the static correction for the
-/// modes left out (it carries the local bending of the plates under the armatures), by the
-/// shared [`crate::analysis::harmonic::superpose_coupled`].
+/// The steady response at harmonic `k` of the excitation (kΩ) per model node (six
+/// components): modal superposition over the modes with the full modal damping matrix `cr`,
+/// plus the static correction for the modes left out (it carries the local bending of the
+/// plates under the armatures), by the shared
+/// [`crate::analysis::harmonic::superpose_coupled`].
 fn forced_response(
     d: &Design,
     layout: &Layout,
     sys: &System,
     run: &ModalRun,
     cr: &DMatrix<f64>,
-) -> Result<Vec<[Complex<f64>; 3]>> {
-    let omega = TAU * d.excitation_hz;
-    let load = harmonic::load_vector(sys, &magnet_forces(d, layout)?)?;
+    k: u32,
+) -> Result<Vec<[Complex<f64>; 6]>> {
+    let omega = k as f64 * TAU * d.excitation_hz;
+    let load = harmonic::load_vector(sys, &magnet_forces(d, layout, k)?)?;
     let u = harmonic::superpose_coupled(sys, run, &load, omega, cr, true)?;
     let nodes = harmonic::expand(sys, &u);
-    Ok((0..layout.mesh.n_nodes())
-        .map(|a| std::array::from_fn(|c| Complex::new(nodes[a][c].re, nodes[a][c].im)))
+    Ok(nodes
+        .iter()
+        .map(|n| std::array::from_fn(|c| Complex::new(n[c].re, n[c].im)))
         .collect())
 }
 
 /// The modes up to `mode_range` × the excitation, each with its strain-energy split and a name
-/// from where that energy sits and how the two bodies move.
+/// from where that energy sits and how the two bodies move ([`unique_names`]).
 #[allow(clippy::too_many_arguments)]
 fn name_modes(
     d: &Design,
@@ -754,6 +980,7 @@ fn name_modes(
     let f_list = d.machine.mode_range * d.excitation_hz;
     let table_nodes: Vec<usize> = (0..layout.n_table).collect();
     let mut modes = vec![];
+    let mut motion = vec![];
     for (k, s) in shapes.iter().enumerate() {
         let lam = run.lambda[k].max(0.0);
         let f = lam.sqrt() / TAU;
@@ -776,10 +1003,10 @@ fn name_modes(
             Some(a) => (at(s, a), 0.0),
             None => rigid_fit(&layout.mesh, &table_nodes, s, layout.table_centre),
         };
-        let name = mode_name(d, layout.table_centre, [e_leaf, e_iso, e_table], deform, &pt, &ur);
+        motion.push(mode_motion(d, layout.table_centre, [e_leaf, e_iso, e_table], &pt, &ur));
         modes.push(MachineMode {
             frequency_hz: f,
-            name,
+            name: String::new(),
             energy_leaves: e_leaf,
             energy_isolators: e_iso,
             energy_table: e_table,
@@ -787,43 +1014,63 @@ fn name_modes(
             table_deformation: deform,
         });
     }
+    let names = unique_names(&motion, &modes);
+    for (m, n) in modes.iter_mut().zip(names) {
+        m.name = n;
+    }
     modes
 }
 
-/// A mode's name: an isolation mode (by the reactive mass's dominant motion), a table elastic
-/// mode, or a motion of the table on the leaves (by the dominant relative motion at the table's
-/// centre). `energy` is the strain-energy share in leaves, isolators and table.
-fn mode_name(
+/// Names of the isolation modes (the machine as one body on the isolators), by the reactive
+/// mass's motion: x, y, z, about x, about y, about z.
+pub const ISOLATION_NAMES: [&str; 6] = [
+    "isolation: sway x",
+    "isolation: sway y",
+    "isolation: bounce",
+    "isolation: rocking about x",
+    "isolation: rocking about y",
+    "isolation: yaw",
+];
+
+/// Names of the table's modes on the leaves, by its motion against the reactive mass.
+pub const LEAF_NAMES: [&str; 6] = [
+    "table surge x on the leaves",
+    "table sway y on the leaves",
+    "working mode (masses in vertical antiphase)",
+    "table roll on the leaves (about x)",
+    "table pitch on the leaves (about y)",
+    "table yaw on the leaves",
+];
+
+/// Which family a mode belongs to (0: isolation, 1: on the leaves, 2: table elastic) and the
+/// share of each of the six motions in it (the reactive mass's for an isolation mode, the table's
+/// relative to the reactive mass for a mode on the leaves; rotations weighted as the motion they
+/// give 0.3 m from the centre).
+fn mode_motion(
     d: &Design,
     table_centre: [f64; 3],
     energy: [f64; 3],
-    deform: f64,
     pt: &[f64; 6],
     ur: &[f64; 6],
-) -> String {
+) -> (usize, [f64; 6]) {
     let [e_leaf, e_iso, e_table] = energy;
     let rc = d.machine.reactive_centre;
-    let scale = 0.3; // m: rotations as the motion they give this far from the centre
-    let dominant = |v: &[f64; 6]| -> usize {
-        (0..6)
-            .max_by(|&i, &j| {
-                let w = |c: usize| if c < 3 { v[c].abs() } else { scale * v[c].abs() };
-                w(i).total_cmp(&w(j))
-            })
-            .unwrap_or(2)
+    let scale = 0.3;
+    let weights = |v: &[f64; 6]| -> [f64; 6] {
+        let w: [f64; 6] = std::array::from_fn(|c| {
+            if c < 3 {
+                v[c] * v[c]
+            } else {
+                scale * scale * v[c] * v[c]
+            }
+        });
+        let sum: f64 = w.iter().sum::<f64>().max(1e-300);
+        w.map(|x| x / sum)
     };
     if e_iso >= e_leaf && e_iso >= e_table {
-        [
-            "isolation: sway along x",
-            "isolation: sway along y",
-            "isolation: bounce",
-            "isolation: rocking about x",
-            "isolation: rocking about y",
-            "isolation: yaw",
-        ][dominant(ur)]
-        .to_string()
+        (0, weights(ur))
     } else if e_table > e_leaf {
-        format!("table elastic mode ({:.0} % rigid-body motion)", 100.0 * (1.0 - deform))
+        (2, [0.0; 6])
     } else {
         // Relative motion of the table against the reactive mass, at the table centre.
         let t = rigid_offset([
@@ -835,16 +1082,50 @@ fn mode_name(
         for i in 0..6 {
             rel[i] = pt[i] - (0..6).map(|j| t[i][j] * ur[j]).sum::<f64>();
         }
-        [
-            "table surge along x on the leaves",
-            "table sway along y on the leaves",
-            "working mode (masses in vertical antiphase)",
-            "table roll on the leaves (about x)",
-            "table pitch on the leaves (about y)",
-            "table yaw on the leaves",
-        ][dominant(&rel)]
-        .to_string()
+        (1, weights(&rel))
     }
+}
+
+/// One name per mode, none twice: within the isolation modes and within the modes on the
+/// leaves each of the six motions names the mode with the largest share of it (largest share
+/// first); a mode left over is named by its largest motion with "(higher)"; table elastic
+/// modes are numbered.
+fn unique_names(motion: &[(usize, [f64; 6])], modes: &[MachineMode]) -> Vec<String> {
+    let mut names = vec![String::new(); motion.len()];
+    for (family, list) in [(0usize, ISOLATION_NAMES), (1, LEAF_NAMES)] {
+        let members: Vec<usize> = (0..motion.len()).filter(|&i| motion[i].0 == family).collect();
+        let mut pairs: Vec<(f64, usize, usize)> = members
+            .iter()
+            .flat_map(|&i| (0..6).map(move |c| (motion[i].1[c], i, c)))
+            .collect();
+        pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut used = [false; 6];
+        for (_, i, c) in pairs {
+            if names[i].is_empty() && !used[c] {
+                names[i] = list[c].to_string();
+                used[c] = true;
+            }
+        }
+        for &i in &members {
+            if names[i].is_empty() {
+                let c = (0..6)
+                    .max_by(|&a, &b| motion[i].1[a].total_cmp(&motion[i].1[b]))
+                    .unwrap_or(2);
+                names[i] = format!("{} (higher)", list[c]);
+            }
+        }
+    }
+    let mut n_el = 0;
+    for (i, m) in modes.iter().enumerate() {
+        if motion[i].0 == 2 {
+            n_el += 1;
+            names[i] = format!(
+                "table elastic {n_el} ({:.0} % rigid-body motion)",
+                100.0 * (1.0 - m.table_deformation)
+            );
+        }
+    }
+    names
 }
 
 /// The working mode (the "working" one nearest the excitation) and the other mode nearest the
@@ -900,7 +1181,53 @@ fn rigid_fit(mesh: &Mesh, nodes: &[usize], s: &[f64], c: [f64; 3]) -> ([f64; 6],
     (out, if tot > 0.0 { res / tot } else { 0.0 })
 }
 
-/// Plan view of the work surface coloured by the vertical amplitude (SVG).
+/// The colour of `v` in [0, 1] on the maps' scale (blue: low, red: high).
+pub fn map_colour(v: f64) -> plotters::style::RGBColor {
+    let v = v.clamp(0.0, 1.0);
+    plotters::style::RGBColor(
+        (255.0 * v) as u8,
+        (80.0 * (1.0 - (2.0 * v - 1.0).abs())) as u8,
+        (255.0 * (1.0 - v)) as u8,
+    )
+}
+
+/// A vertical colour bar from `lo` to `hi` (labelled in `unit`) on `area`.
+pub fn draw_colour_bar<DB: plotters::prelude::DrawingBackend>(
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    lo: f64,
+    hi: f64,
+    unit: &str,
+) -> std::result::Result<(), String> {
+    use plotters::prelude::*;
+    let mut chart = ChartBuilder::on(area)
+        .margin_top(40)
+        .margin_bottom(50)
+        .margin_right(10)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..1.0, lo..hi.max(lo + 1e-300))
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_x_axis()
+        .y_desc(unit)
+        .y_labels(6)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let n = 60;
+    let span = hi - lo;
+    chart
+        .draw_series((0..n).map(|i| {
+            let (a, b) = (lo + span * i as f64 / n as f64, lo + span * (i + 1) as f64 / n as f64);
+            Rectangle::new([(0.0, a), (1.0, b)], map_colour((i as f64 + 0.5) / n as f64).filled())
+        }))
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// Plan view of the work surface coloured by the vertical amplitude (SVG), with its colour bar
+/// and where the leaves' table ends (squares), the magnets (circles) and the isolators
+/// (triangles) are.
 pub fn write_amplitude_svg(path: &std::path::Path, r: &MachineResult, excitation_hz: f64) -> Result<()> {
     use plotters::prelude::*;
     let mesh = &r.mesh;
@@ -912,10 +1239,11 @@ pub fn write_amplitude_svg(path: &std::path::Path, r: &MachineResult, excitation
             hi[d] = hi[d].max(x[d]);
         }
     }
-    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    let root = SVGBackend::new(path, (1000, 560)).into_drawing_area();
     let err = |e: &dyn std::fmt::Display| Error::output(path.display(), format!("plotting failed: {e}"));
     root.fill(&WHITE).map_err(|e| err(&e))?;
-    let mut chart = ChartBuilder::on(&root)
+    let (left, right) = root.split_horizontally(880);
+    let mut chart = ChartBuilder::on(&left)
         .caption(
             format!(
                 "work-surface amplitude at {excitation_hz} Hz: mean {:.4} mm, min {:.4}, max {:.4}, non-uniformity {:.1} %",
@@ -924,7 +1252,7 @@ pub fn write_amplitude_svg(path: &std::path::Path, r: &MachineResult, excitation
                 r.max * 1e3,
                 100.0 * r.nonuniformity
             ),
-            ("sans-serif", 16),
+            ("sans-serif", 15),
         )
         .margin(15)
         .x_label_area_size(35)
@@ -933,26 +1261,36 @@ pub fn write_amplitude_svg(path: &std::path::Path, r: &MachineResult, excitation
         .map_err(|e| err(&e))?;
     chart
         .configure_mesh()
-        .x_desc("x [m]")
-        .y_desc("y [m]  (colour: blue = min, red = max)")
+        .x_desc("x [m]   (□ leaf table end, ○ magnet, △ isolator)")
+        .y_desc("y [m]")
         .draw()
         .map_err(|e| err(&e))?;
     let span = (r.max - r.min).max(1e-300);
     chart
         .draw_series(r.surface.iter().map(|&(a, amp)| {
             let x = mesh.nodes[a as usize];
-            let v = ((amp - r.min) / span).clamp(0.0, 1.0);
-            let c = RGBColor(
-                (255.0 * v) as u8,
-                (80.0 * (1.0 - (2.0 * v - 1.0).abs())) as u8,
-                (255.0 * (1.0 - v)) as u8,
-            );
             Rectangle::new(
                 [(x[0] - 0.0115, x[1] - 0.0115), (x[0] + 0.0115, x[1] + 0.0115)],
-                c.filled(),
+                map_colour((amp - r.min) / span).filled(),
             )
         }))
         .map_err(|e| err(&e))?;
+    let [leaves, magnets, isolators] = &r.positions;
+    let ink = BLACK.stroke_width(2);
+    chart
+        .draw_series(
+            leaves
+                .iter()
+                .map(|p| Rectangle::new([(p[0] - 0.02, p[1] - 0.02), (p[0] + 0.02, p[1] + 0.02)], ink)),
+        )
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(magnets.iter().map(|p| Circle::new((p[0], p[1]), 9, ink)))
+        .map_err(|e| err(&e))?;
+    chart
+        .draw_series(isolators.iter().map(|p| TriangleMarker::new((p[0], p[1]), 9, ink)))
+        .map_err(|e| err(&e))?;
+    draw_colour_bar(&right, r.min * 1e3, r.max * 1e3, "amplitude [mm]").map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
 }

@@ -15,6 +15,10 @@ pub fn report(r: &DesignReport) -> Report {
     let mut rep = Report::new(format!("design: {}", r.name), data);
     rep.section("checks", "Checks")
         .push(Block::Checks(r.checks.iter().map(check_row).collect()));
+    rep.section("inputs", "Inputs and assumptions")
+        .push(Block::Table(inputs(r)));
+    rep.section("floor", "Force on the floor (isolators)")
+        .push(Block::Table(floor(r)));
     rep.section("quantities", "Quantities")
         .push(Block::Quantities(r.quantities.iter().map(quantity_row).collect()));
     rep.section("table_modes", "Work-table elastic frequencies (shell model)")
@@ -49,17 +53,85 @@ fn check_row(c: &Check) -> CheckRow {
         Some((n, u)) if u.ends_with(']') => (n, u.trim_end_matches(']')),
         _ => (c.name.as_str(), ""),
     };
-    if c.upper {
+    let row = if c.upper {
         CheckRow::upper(&c.id, name, unit, c.value, c.limit)
     } else {
         CheckRow::lower(&c.id, name, unit, c.value, c.limit)
-    }
+    };
+    // Percentages against percentages: the margin in points, not a percentage of a percentage.
+    if unit == "%" { row.in_points() } else { row }
 }
 
 fn quantity_row(q: &Quantity) -> QuantityRow {
     QuantityRow::new(&q.id, &q.name, &q.unit, q.value)
         .published(q.published)
         .note(&q.note)
+}
+
+/// The inputs and assumptions with their sources.
+fn inputs(r: &DesignReport) -> Table {
+    Table {
+        id: "inputs".into(),
+        caption: None,
+        columns: vec![
+            Column::new("input", None),
+            Column::new("value", None),
+            Column::new("source", None),
+        ],
+        rows: r
+            .inputs
+            .iter()
+            .map(|i| {
+                vec![
+                    Cell::text(i.name.clone()),
+                    Cell::text(i.value.clone()),
+                    Cell::text(i.source.clone()),
+                ]
+            })
+            .collect(),
+    }
+}
+
+/// The floor forces: per harmonic, both models' totals and the 3D machine's largest isolator.
+fn floor(r: &DesignReport) -> Table {
+    let f = &r.floor_force;
+    Table {
+        id: "floor_force".into(),
+        caption: Some(format!(
+            "{} force law; the two-mass model shares its force equally among the isolators",
+            r.force_law
+        )),
+        columns: vec![
+            Column::new("harmonic", None),
+            Column::new("f", Some("Hz")),
+            Column::new("two-mass total", Some("N")),
+            Column::new("3D total", Some("N")),
+            Column::new("3D largest isolator", Some("N")),
+            Column::new("3D smallest isolator", Some("N")),
+        ],
+        rows: f
+            .machine
+            .iter()
+            .map(|m| {
+                let two = f
+                    .two_mass
+                    .iter()
+                    .find(|t| t.harmonic == m.harmonic)
+                    .map_or(f64::NAN, |t| t.total);
+                vec![
+                    Cell::Fixed {
+                        value: m.harmonic as f64,
+                        decimals: 0,
+                    },
+                    Cell::num(m.frequency_hz),
+                    Cell::num(two),
+                    Cell::num(m.total),
+                    Cell::num(m.per_isolator.iter().copied().fold(0.0, f64::max)),
+                    Cell::num(m.per_isolator.iter().copied().fold(f64::INFINITY, f64::min)),
+                ]
+            })
+            .collect(),
+    }
 }
 
 /// The work table's first six elastic modes (7 to 12 of the free–free table).

@@ -50,12 +50,51 @@ pub struct ChainValues {
     pub constant_pull: f64,
     /// Static offset of the leaves under the constant pull (m).
     pub offset: f64,
-    /// Amplitudes X1, X2 and |X1 − X2| at the excitation (m).
+    /// The model of record (the 3D machine): the work surface's mean vertical amplitude at the
+    /// excitation (m).
     pub x1: f64,
-    /// Reactive amplitude.
+    /// The 3D machine: the reactive mass's vertical amplitude (m).
     pub x2: f64,
-    /// Relative amplitude.
+    /// The 3D machine: the largest vertical amplitude across a leaf (m).
     pub rel: f64,
+    /// The two-mass model at the same leaves, force law and magnet stiffness: X1 (m).
+    pub x1_two_mass: f64,
+    /// The two-mass X2 (m).
+    pub x2_two_mass: f64,
+    /// The two-mass |X1 − X2| (m).
+    pub rel_two_mass: f64,
+    /// The two-mass leaf stress (Pa).
+    pub sigma_leaf_two_mass: f64,
+    /// The two-mass model in full at the model of record's leaves (design force law, magnet
+    /// stiffness).
+    pub two_mass: LumpedValues,
+    /// The paper's chain: the two-mass model with the leaves tuned on it, the paper's force law
+    /// and no magnet stiffness (what the published numbers are compared with).
+    pub paper: LumpedValues,
+    /// Whether the design is the built-in paper design (only it shows published values).
+    pub builtin: bool,
+    /// The force law (`paper` or `flux`) and the mains frequency (Hz).
+    pub force_law: String,
+    /// Mains frequency, Hz.
+    pub mains_hz: f64,
+    /// The magnets' stiffness at the working gap, all together (N/m, negative).
+    pub k_magnet: f64,
+    /// Detuning of the model of record: excitation / the 3D machine's working mode.
+    pub z_machine: f64,
+    /// The leaf thickness the two-mass tuning gave (the 3D tuning's starting guess), m.
+    pub h_two_mass: f64,
+    /// Leaf thicknesses tried on the 3D machine (m) and the detuning each gave.
+    pub iters_machine: Vec<(f64, f64)>,
+    /// The gap check: static sag under the weight and the mean pull (m).
+    pub gap_sag: f64,
+    /// Relative amplitude across the magnets (3D, largest, m).
+    pub gap_amplitude: f64,
+    /// Start-up overshoot of the relative motion beyond its steady peak (m).
+    pub gap_startup: f64,
+    /// Sag + amplitude + start-up + margin (m), against `drive.gap`.
+    pub gap_closing: f64,
+    /// Why the two-mass model and the 3D machine differ by more than 5 %, if they do.
+    pub model_difference: Option<String>,
     /// Dynamic factors of eq. (7).
     pub gamma1: f64,
     /// Of the reactive mass.
@@ -81,12 +120,90 @@ pub struct ChainValues {
 }
 
 impl ChainValues {
+    /// The two-mass chain the quantity table shows: the paper's (built-in design), else the
+    /// two-mass estimate at the model of record's leaves.
+    pub fn lumped(&self) -> &LumpedValues {
+        if self.builtin { &self.paper } else { &self.two_mass }
+    }
+
     /// Frequency of the 3D machine's working mode (Hz; NaN without one).
     pub fn working_hz(&self) -> f64 {
         self.machine
             .working
             .map_or(f64::NAN, |i| self.machine.modes[i].frequency_hz)
     }
+}
+
+/// The two-mass model's numbers at one set of leaves and one force law.
+#[derive(Clone, Debug, Default)]
+pub struct LumpedValues {
+    /// Force law (`paper`, `flux`).
+    pub law: String,
+    /// Leaf thickness (m), FE leaf stiffness (N/m), c12 (N/m, leaves only).
+    pub h: f64,
+    /// FE leaf stiffness.
+    pub k_leaf: f64,
+    /// Leaves together.
+    pub c12: f64,
+    /// Magnet stiffness included (N/m, ≤ 0).
+    pub k_magnet: f64,
+    /// Detuning Ω/ω0 with ω0² = (c12 + k_magnet)/m_red.
+    pub z: f64,
+    /// Natural frequencies (Hz).
+    pub w1: f64,
+    /// Second.
+    pub w2: f64,
+    /// Drive harmonic amplitude at Ω (N) and mean pull (N).
+    pub force: f64,
+    /// Mean pull.
+    pub constant_pull: f64,
+    /// Static offset of the leaves under the mean pull (m).
+    pub offset: f64,
+    /// |X1|, |X2|, |X1 − X2| (m).
+    pub x1: f64,
+    /// Reactive.
+    pub x2: f64,
+    /// Relative.
+    pub rel: f64,
+    /// Dynamic factors of eq. (7).
+    pub gamma1: f64,
+    /// Of m2.
+    pub gamma2: f64,
+    /// Eq. (6) (W).
+    pub power: f64,
+    /// Power dissipated by the dashpots, Ω²/2·Xᴴ C X (W).
+    pub dissipated: f64,
+    /// Pull per magnet for the target amplitude (N).
+    pub p_req: f64,
+    /// Leaf stress at |X1 − X2| (Pa).
+    pub sigma_leaf: f64,
+    /// Floor force |c13 + ikΩμ13|·|X2(kΩ)| per harmonic k with a non-zero drive term:
+    /// (k, frequency Hz, amplitude N).
+    pub floor: Vec<(u32, f64, f64)>,
+}
+
+/// The floor forces of both models.
+#[derive(Clone, Debug, Serialize)]
+pub struct FloorForces {
+    /// The 3D machine (model of record): per harmonic, per isolator and in total.
+    pub machine: Vec<super::machine::FloorForce>,
+    /// The two-mass model, |c13 + ikΩμ13|·|X2(kΩ)| per harmonic k, shared equally by the
+    /// isolators.
+    pub two_mass: Vec<super::machine::FloorForce>,
+}
+
+/// One input or assumption of the verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct Input {
+    /// Stable key (the design-file key where there is one).
+    #[serde(skip)]
+    pub id: String,
+    /// What.
+    pub name: String,
+    /// Its value, as text with the unit.
+    pub value: String,
+    /// Where it comes from.
+    pub source: String,
 }
 
 /// One line of the quantity table.
@@ -152,6 +269,10 @@ fn by_id_quantities<S: serde::Serializer>(q: &[Quantity], ser: S) -> std::result
     crate::app::report::by_id(q, |x| x.id.as_str(), ser)
 }
 
+fn by_id_inputs<S: serde::Serializer>(c: &[Input], ser: S) -> std::result::Result<S::Ok, S::Error> {
+    crate::app::report::by_id(c, |x| x.id.as_str(), ser)
+}
+
 fn by_id_checks<S: serde::Serializer>(c: &[Check], ser: S) -> std::result::Result<S::Ok, S::Error> {
     crate::app::report::by_id(c, |x| x.id.as_str(), ser)
 }
@@ -171,8 +292,19 @@ pub struct DesignReport {
     pub table_frequencies_hz: Vec<f64>,
     /// Leaf thicknesses tried while tuning (m) and the detuning each gave.
     pub leaf_iterations: Vec<(f64, f64)>,
-    /// Modes of the 3D machine up to `machine.mode_range` × the excitation.
+    /// Modes of the 3D machine up to `machine.mode_range` × the excitation (unique names).
     pub machine_modes: Vec<MachineMode>,
+    /// The force law of the verdict (`flux` or `paper`).
+    pub force_law: String,
+    /// Mains frequency, Hz (the excitation is twice it).
+    pub mains_hz: f64,
+    /// The force on the floor per isolator and in total, at the excitation and its harmonics,
+    /// from both models.
+    pub floor_force: FloorForces,
+    /// The inputs and assumptions the verdict rests on, each with its source (in JSON: an
+    /// object keyed by each input's id).
+    #[serde(serialize_with = "by_id_inputs")]
+    pub inputs: Vec<Input>,
     /// Wall time per step (s).
     pub timings_s: Vec<(String, f64)>,
     /// Notes.

@@ -300,3 +300,177 @@ fn golden(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, max: bool) -> f64 {
     }
     0.5 * (a + b)
 }
+
+/// How the magnets' pull varies over a mains period (`drive.force_law` of a design file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ForceLaw {
+    /// The paper's rectified sine P·|sin ωt| (eq. (8)): mean (2/π)·P, every even harmonic of ω.
+    Paper,
+    /// A coil fed from the mains: the pull goes with the flux squared, and with a sinusoidal
+    /// flux P·sin²ωt = P/2 − (P/2)·cos 2ωt: mean P/2, one harmonic at 2ω of amplitude P/2 and
+    /// nothing above (the default for new designs).
+    #[default]
+    Flux,
+}
+
+impl ForceLaw {
+    /// `"paper"` or `"flux"`.
+    pub fn parse(s: &str) -> Option<ForceLaw> {
+        match s {
+            "paper" => Some(ForceLaw::Paper),
+            "flux" => Some(ForceLaw::Flux),
+            _ => None,
+        }
+    }
+
+    /// The name used in design files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            ForceLaw::Paper => "paper",
+            ForceLaw::Flux => "flux",
+        }
+    }
+}
+
+/// The magnets' pull under either force law: P(t) = P·|sin ωt| (paper) or P·sin²ωt (flux),
+/// P the total peak pull of all magnets, ω the mains angular frequency; the force repeats at
+/// Ω = 2ω under both.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MagnetDrive {
+    /// The force law.
+    pub law: ForceLaw,
+    /// Total peak pull of all magnets P, N (≥ 0).
+    pub p_em: f64,
+    /// Mains angular frequency ω, rad/s (> 0).
+    pub omega_mains: f64,
+}
+
+impl MagnetDrive {
+    /// `n` magnets of peak pull `p_each` (N) on mains ω (rad/s), validated as
+    /// [`RectifiedDrive::from_magnets`].
+    pub fn from_magnets(law: ForceLaw, n: usize, p_each: f64, omega_mains: f64) -> Result<Self> {
+        let r = RectifiedDrive::from_magnets(n, p_each, omega_mains)?;
+        Ok(MagnetDrive {
+            law,
+            p_em: r.p_em,
+            omega_mains,
+        })
+    }
+
+    /// Force frequency Ω = 2ω, rad/s.
+    pub fn omega_force(&self) -> f64 {
+        2.0 * self.omega_mains
+    }
+
+    /// Instantaneous pull P(t), N.
+    pub fn force(&self, t: f64) -> f64 {
+        let s = (self.omega_mains * t).sin();
+        match self.law {
+            ForceLaw::Paper => self.p_em * s.abs(),
+            ForceLaw::Flux => self.p_em * s * s,
+        }
+    }
+
+    /// Coefficient of cos(kΩt) in P(t), N (k = 0: the mean pull). Paper: eq. (8); flux:
+    /// P/2 at k = 0, −P/2 at k = 1, zero above.
+    pub fn cos_coefficient(&self, k: u32) -> f64 {
+        match self.law {
+            ForceLaw::Paper => fourier_coefficient(k) * self.p_em,
+            ForceLaw::Flux => match k {
+                0 => 0.5 * self.p_em,
+                1 => -0.5 * self.p_em,
+                _ => 0.0,
+            },
+        }
+    }
+
+    /// Mean pull, N: (2/π)·P (paper, eq. (9)) or P/2 (flux).
+    pub fn mean(&self) -> f64 {
+        self.cos_coefficient(0)
+    }
+
+    /// Amplitude of the Ω = 2ω harmonic that drives the machine, N: (4/(3π))·P (paper,
+    /// eq. (11)) or P/2 (flux).
+    pub fn harmonic_amplitude(&self) -> f64 {
+        -self.cos_coefficient(1)
+    }
+
+    /// The paper law's drive as the transient integrator takes it.
+    pub fn rectified(&self) -> Result<RectifiedDrive> {
+        RectifiedDrive::new(self.p_em, self.omega_mains)
+    }
+}
+
+/// The magnets' stiffness at the working gap δ (m), all magnets together (N/m, negative): the
+/// gradient of the mean pull P̄ (N). An electromagnet's pull at a constant current linkage NI
+/// is F = μ0·A·(NI)²/(4δ²)·(per pole pair) — Roters, *Electromagnetic Devices* (Wiley 1941),
+/// ch. 7; the same form in Harris' *Shock and Vibration Handbook* (6th ed., ch. 13,
+/// electrodynamic and electromagnetic exciters) — so dF/dδ = −2F/δ: the pull grows as the gap
+/// closes, a negative spring −2P̄/δ between armature and core. (At a constant flux, i.e. a coil
+/// fed at constant voltage with negligible resistance, the pull does not depend on the gap and
+/// the stiffness vanishes; the constant-current value is the conservative one and is used.)
+pub fn magnet_stiffness(mean_pull: f64, gap: f64) -> Result<f64> {
+    if !(gap.is_finite() && gap > 0.0) {
+        return Err(Error::param(
+            "gap",
+            format!("magnet gap must be finite and > 0 m, got {gap}"),
+        ));
+    }
+    if !(mean_pull.is_finite() && mean_pull >= 0.0) {
+        return Err(Error::param(
+            "mean_pull",
+            format!("mean magnet pull must be finite and ≥ 0 N, got {mean_pull}"),
+        ));
+    }
+    Ok(-2.0 * mean_pull / gap)
+}
+
+/// The largest relative displacement |x1 − x2| (m) of the start-up from rest under `drive`
+/// over `t_end` (s), and the steady relative amplitude at its end (half peak-to-peak over the
+/// last period, m): classical fourth-order Runge–Kutta with 400 steps per force period (the
+/// system is linear and its fastest mode is the resonant one near Ω, so the step resolves it
+/// with an error far below the 1e-3 this peak is read to).
+pub fn startup_peak_relative(model: &TwoMass, drive: &MagnetDrive, t_end: f64) -> Result<(f64, f64)> {
+    model.validate()?;
+    if !(t_end.is_finite() && t_end > 0.0) {
+        return Err(Error::param(
+            "t_end",
+            format!("start-up length must be > 0 s, got {t_end}"),
+        ));
+    }
+    let (m, c, k) = model.matrices();
+    let period = std::f64::consts::TAU / drive.omega_force();
+    let n_per = 400usize;
+    let dt = period / n_per as f64;
+    let steps = (t_end / dt).ceil() as usize;
+    let rhs = |t: f64, y: &[f64; 4]| -> [f64; 4] {
+        let p = drive.force(t);
+        let f = [-p, p];
+        let mut a = [0.0; 2];
+        for i in 0..2 {
+            let s: f64 = (0..2).map(|j| c[(i, j)] * y[2 + j] + k[(i, j)] * y[j]).sum();
+            a[i] = (f[i] - s) / m[(i, i)];
+        }
+        [y[2], y[3], a[0], a[1]]
+    };
+    let mut y = [0.0f64; 4];
+    let (mut peak, mut lo, mut hi) = (0.0f64, f64::INFINITY, f64::NEG_INFINITY);
+    for s in 0..steps {
+        let t = s as f64 * dt;
+        let k1 = rhs(t, &y);
+        let y2: [f64; 4] = std::array::from_fn(|i| y[i] + 0.5 * dt * k1[i]);
+        let k2 = rhs(t + 0.5 * dt, &y2);
+        let y3: [f64; 4] = std::array::from_fn(|i| y[i] + 0.5 * dt * k2[i]);
+        let k3 = rhs(t + 0.5 * dt, &y3);
+        let y4: [f64; 4] = std::array::from_fn(|i| y[i] + dt * k3[i]);
+        let k4 = rhs(t + dt, &y4);
+        y = std::array::from_fn(|i| y[i] + dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+        let rel = y[0] - y[1];
+        peak = peak.max(rel.abs());
+        if s + n_per >= steps {
+            lo = lo.min(rel);
+            hi = hi.max(rel);
+        }
+    }
+    Ok((peak, 0.5 * (hi - lo)))
+}

@@ -482,6 +482,22 @@ impl TwoMass {
         Ok(Complex::new(self.c13, omega * self.mu13) * x)
     }
 
+    /// Power dissipated by the model's dashpots at the steady state, W, for Ω (rad/s) and F (N):
+    /// the mean of Σ c·v² over a period, Ω²/2·Xᴴ C X (= Ω²/2·(μ1|X1|² + μ12|X1 − X2|² + μ13|X2|²)
+    /// for the eq. (1) terms); the power the drive must supply to the mechanics in steady state.
+    pub fn dissipated_power(&self, omega: f64, force: f64) -> Result<f64> {
+        let s = self.steady_state(omega, force)?;
+        let (_, c, _) = self.matrices();
+        let x = [s.x1, s.x2];
+        let mut p = 0.0;
+        for i in 0..2 {
+            for j in 0..2 {
+                p += (x[i].conj() * c[(i, j)] * x[j]).re;
+            }
+        }
+        Ok(0.5 * omega * omega * p)
+    }
+
     /// Drive power by eq. (6), W, at the steady state for Ω (rad/s) and F (N), with efficiency η
     /// (0 < η ≤ 1) and the attached load mass m_pr (kg, ≥ 0) moving with m1:
     /// `N = Ω³/(2η)·(X1²·m1/γ1 + X2²·m2/γ2 + X1²·m_pr)`.
