@@ -28,12 +28,13 @@ fn builtin_design_reports_fatigue_checks() {
             .contains("paper's reference")
     );
     // The coil's surge frequency by hand: f = d/(2π N D²)·√(G/(2ρ)) with d = 6 mm, D = 32 mm,
-    // N = 6, G = 77 GPa, ρ = 7850 kg/m³: 0.006/(2π·6·0.032²)·√(7.7e10/15700) = 344.2 Hz; the
-    // nearest harmonic of 100 Hz is 300 Hz, 14.7 % away.
+    // N = 6, G = 77 GPa, ρ = 7850 kg/m³: 0.006/(2π·6·0.032²)·√(7.7e10/15700) = 344.2 Hz; of the
+    // harmonics of 100 Hz, 300 Hz is 14.7 % away and 400 Hz 13.9 % (relative to the harmonic).
     let (fs, k, cl) = coil_surge_values(&d);
     let hand = 0.006 / (2.0 * std::f64::consts::PI * 6.0 * 0.032f64.powi(2)) * (7.7e10f64 / 15700.0).sqrt();
     assert!((fs - hand).abs() < 1e-9 * hand && (fs - 344.2).abs() < 0.1, "{fs}");
-    assert_eq!(k, 3);
+    assert_eq!(k, 4);
+    assert!((cl - (400.0 - hand) / 400.0).abs() < 1e-12);
     assert!((json["checks"]["coil_surge"]["value"].as_f64().unwrap() - cl * 100.0).abs() < 1e-9);
     // Squared and ground ends (Shigley Table 10-1): L0 = p N + 2d = 72 mm, Ls = d (N + 2) = 48 mm.
     let (l0, ls, _) = coil_lengths(&d);

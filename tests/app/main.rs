@@ -14,6 +14,7 @@ mod design_inputs;
 mod dynamics;
 mod export_engine;
 mod harmonic;
+mod harmonic_fatigue;
 mod harmonic_inputs;
 mod machine3d;
 mod machine_inputs;
