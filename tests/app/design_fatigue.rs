@@ -10,6 +10,15 @@ fn builtin_design_reports_fatigue_checks() {
     let d = Design::paper();
     let r = run_design(&d, None, &|_| {}).unwrap();
     let json: serde_json::Value = serde_json::to_value(&r).unwrap();
+    for c in &r.checks {
+        eprintln!(
+            "{:<24} {:>10.4} {:>10.4} {}",
+            c.id,
+            c.value,
+            c.limit,
+            if c.ok { "ok" } else { "FAIL" }
+        );
+    }
     for id in [
         "leaf_fatigue",
         "coil_fatigue",

@@ -153,7 +153,7 @@ impl FatigueArgs {
             ));
         }
         crate::post::fatigue::reliability_factor(self.reliability)
-            .map_err(|e| Error::option("--reliability", e.to_string()))?;
+            .map_err(|e| Error::option("--reliability", format!("--reliability: {e}")))?;
         let criterion = Criterion::parse("--fatigue-criterion", &self.fatigue_criterion)
             .map_err(|e| Error::option("--fatigue-criterion", e.to_string()))?;
         let mean_stress = MeanStress::parse("--mean-stress", &self.mean_stress)
