@@ -978,13 +978,26 @@ pub fn write_fields(
     vtu: Option<&std::path::Path>,
     msh: Option<&std::path::Path>,
 ) -> Result<()> {
+    write_fields_with(mesh, run, k, vtu, msh, vec![])
+}
+
+/// [`write_fields`] with `extra` fields (name, components, node-major data) appended.
+pub fn write_fields_with(
+    mesh: &Mesh,
+    run: &HarmonicRun,
+    k: usize,
+    vtu: Option<&std::path::Path>,
+    msh: Option<&std::path::Path>,
+    extra: Vec<(String, usize, Vec<f64>)>,
+) -> Result<()> {
     let Some(i) = run.field_points.iter().position(|&p| p == k) else {
         return Err(Error::param(
             "k",
             format!("harmonic: the field of frequency {k} was not kept by the run"),
         ));
     };
-    let f = fields(mesh, &run.nodal[i]);
+    let mut f = fields(mesh, &run.nodal[i]);
+    f.extend(extra);
     let freq = run.report.points[k].freq_hz;
     if let Some(p) = vtu {
         let pf: Vec<crate::io::vtk::PointField> = f
@@ -1169,4 +1182,258 @@ fn scaled_norm(v: impl Iterator<Item = c64> + Clone) -> f64 {
         return s;
     }
     s * v.map(|z| (z / s).norm_sqr()).sum::<f64>().sqrt()
+}
+
+/// Cap of the safety factor written to the VTU field (unloaded nodes have an infinite one).
+pub const SAFETY_FIELD_CAP: f64 = 1e3;
+
+/// A fatigue assessment of a harmonic run (`--fatigue`; docs/fatigue.md): the alternating state
+/// is the response at one frequency, the mean state a static case on the same model.
+#[derive(Clone, Debug)]
+pub struct FatigueRequest {
+    /// Material, surface, criterion, correction and cycles.
+    pub settings: crate::post::fatigue::FatigueSettings,
+    /// The mean (static) loads: one case on the harmonic model (empty: zero mean).
+    pub mean_loads: Vec<crate::analysis::statics::Load>,
+    /// Nodes closer than this to a fixed group are left out of the hot spots (m; 0: none).
+    pub clamp_distance: f64,
+    /// Rows of the hot-spot table.
+    pub hot_spots: usize,
+}
+
+/// The fatigue result under stable JSON keys (`fatigue` in `harmonic --json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct FatigueReport {
+    /// The material data with their source.
+    pub material: crate::post::fatigue::FatigueMaterial,
+    /// `signed principal` or `signed von Mises`.
+    pub criterion: String,
+    /// `fkm`, `goodman` or `gerber`.
+    pub mean_stress: String,
+    /// Cycles required.
+    pub cycles: f64,
+    /// Frequency of the alternating state (Hz).
+    pub frequency_hz: f64,
+    /// The corrected endurance limit and its factors.
+    pub endurance: crate::post::fatigue::Endurance,
+    /// Strength at the cycles (Pa).
+    pub strength: f64,
+    /// FKM mean-stress sensitivity M_σ.
+    pub m_sigma: f64,
+    /// Lowest safety over the assessed nodes (`null` when nothing is loaded).
+    pub min_safety: Option<f64>,
+    /// Lowest first-cycle yield safety.
+    pub min_yield_safety: Option<f64>,
+    /// The hot spots, lowest safety first.
+    pub hot_spots: Vec<crate::post::fatigue::HotSpot>,
+    /// Distance from the fixed groups within which nodes are not assessed (m).
+    pub clamp_distance: f64,
+    /// Nodes left out by it.
+    pub excluded_nodes: usize,
+    /// Notes.
+    pub notes: Vec<String>,
+}
+
+/// The fatigue field and its report.
+pub struct FatigueRun {
+    /// Report.
+    pub report: FatigueReport,
+    /// Per-node field.
+    pub field: crate::post::fatigue::FatigueField,
+}
+
+/// Mask of the nodes at least `distance` from every node of the fixed groups of `spec`.
+fn clamp_mask(mesh: &Mesh, spec: &crate::model::ModelSpec, distance: f64) -> Vec<bool> {
+    let n = mesh.nodes.len();
+    if distance <= 0.0 {
+        return vec![true; n];
+    }
+    let fixed: Vec<[f64; 3]> = spec
+        .fixes
+        .iter()
+        .filter_map(|(g, _)| mesh.groups.iter().find(|x| &x.name == g))
+        .flat_map(|g| mesh.group_nodes(g))
+        .map(|a| mesh.nodes[a as usize])
+        .collect();
+    let d2 = distance * distance;
+    mesh.nodes
+        .iter()
+        .map(|x| {
+            fixed
+                .iter()
+                .all(|f| (x[0] - f[0]).powi(2) + (x[1] - f[1]).powi(2) + (x[2] - f[2]).powi(2) >= d2)
+        })
+        .collect()
+}
+
+/// Nodal stresses of a displacement field given per mesh node (3 per node).
+fn nodal_tensors(sys: &System, u: &[f64]) -> Result<crate::post::stress::NodalStress> {
+    let m = sys.model();
+    crate::post::stress::nodal_stress(&m.solids, m.n_mesh_nodes, u)
+}
+
+/// Assess the response of frequency index `k` of `run` (a kept field) against the mean static
+/// case of `req` solved on the same mesh and model options.
+pub fn fatigue(sys: &System, mesh: &Mesh, run: &HarmonicRun, k: usize, req: &FatigueRequest) -> Result<FatigueRun> {
+    let Some(i) = run.field_points.iter().position(|&p| p == k) else {
+        return Err(Error::param(
+            "k",
+            format!("fatigue: the field of frequency {k} was not kept"),
+        ));
+    };
+    let n = mesh.nodes.len();
+    let nodal = &run.nodal[i];
+    let part = |f: fn(&c64) -> f64| -> Vec<f64> {
+        (0..n)
+            .flat_map(|a| [f(&nodal[a][0]), f(&nodal[a][1]), f(&nodal[a][2])])
+            .collect()
+    };
+    let alt_re = nodal_tensors(sys, &part(|z| z.re))?;
+    let alt_im = nodal_tensors(sys, &part(|z| z.im))?;
+    let mut notes = vec![];
+    let mean = if req.mean_loads.is_empty() {
+        notes.push("no mean load given: fully reversed stress (mean 0)".to_string());
+        vec![[0.0; 6]; n]
+    } else {
+        let opts = crate::analysis::statics::StaticOptions {
+            spec: sys.model().spec.clone(),
+            cases: vec![req.mean_loads.clone()],
+        };
+        let st = crate::analysis::statics::run_static(mesh, "fatigue mean load", &opts)?;
+        let u = crate::app::report::mesh_displacements(&st, 0);
+        nodal_tensors(sys, &u)?.stress
+    };
+    let solid: Vec<bool> = alt_re.count.iter().map(|&c| c > 0).collect();
+    let field = crate::post::fatigue::assess(&req.settings, &mean, &alt_re.stress, &alt_im.stress, &solid)?;
+    let mask = clamp_mask(mesh, &sys.model().spec, req.clamp_distance);
+    let excluded = (0..n).filter(|&a| solid[a] && !mask[a]).count();
+    let mut shown = field.clone();
+    for a in (0..n).filter(|&a| !mask[a]) {
+        shown.safety[a] = f64::INFINITY;
+    }
+    let hot = crate::post::fatigue::hot_spots(mesh, &shown, req.hot_spots);
+    if req.clamp_distance <= 0.0 {
+        let on_fixed = clamp_mask(mesh, &sys.model().spec, 1e-12 * mesh_size(mesh));
+        if let Some(h) = hot.first() {
+            let a = mesh.node_tags.iter().position(|&t| t == h.node).unwrap_or(0);
+            if !on_fixed[a] {
+                notes.push(format!(
+                    "the hot spot (node {}) lies on a fixed group: a rigid clamp makes the stress there grow with \
+                     mesh refinement; give --clamp-distance (e.g. one element or the part's thickness) to read \
+                     the hot spot at that distance (docs/fatigue.md)",
+                    h.node
+                ));
+            }
+        }
+    }
+    let min_of = |v: &[f64]| -> Option<f64> {
+        (0..n)
+            .filter(|&a| mask[a] && v[a].is_finite())
+            .map(|a| v[a])
+            .min_by(f64::total_cmp)
+    };
+    let s = &req.settings;
+    let report = FatigueReport {
+        material: s.material.clone(),
+        criterion: s.criterion.name().into(),
+        mean_stress: s.mean_stress.name().into(),
+        cycles: s.cycles,
+        frequency_hz: run.report.points[k].freq_hz,
+        endurance: field.endurance.clone(),
+        strength: field.strength,
+        m_sigma: field.m_sigma,
+        min_safety: min_of(&field.safety),
+        min_yield_safety: min_of(&field.yield_safety),
+        hot_spots: hot,
+        clamp_distance: req.clamp_distance,
+        excluded_nodes: excluded,
+        notes,
+    };
+    Ok(FatigueRun { report, field })
+}
+
+/// The mesh's bounding-box diagonal (m).
+fn mesh_size(mesh: &Mesh) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for x in &mesh.nodes {
+        for c in 0..3 {
+            lo[c] = lo[c].min(x[c]);
+            hi[c] = hi[c].max(x[c]);
+        }
+    }
+    (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// The fatigue fields for VTU (`fatigue_safety` capped at [`SAFETY_FIELD_CAP`],
+/// `fatigue_sigma_a`, `fatigue_sigma_m` in Pa).
+pub fn fatigue_fields(f: &crate::post::fatigue::FatigueField) -> Vec<(String, usize, Vec<f64>)> {
+    vec![
+        (
+            "fatigue_safety".into(),
+            1,
+            f.safety.iter().map(|&s| s.min(SAFETY_FIELD_CAP)).collect(),
+        ),
+        ("fatigue_sigma_a".into(), 1, f.sigma_a.clone()),
+        ("fatigue_sigma_m".into(), 1, f.sigma_m.clone()),
+    ]
+}
+
+/// The fatigue section of the text report.
+pub fn fatigue_text(r: &FatigueReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let m = &r.material;
+    let _ = writeln!(
+        s,
+        "\nFatigue at {} Hz, {:.3e} cycles: {} ({}; R_m {:.0} MPa, R_e {:.0} MPa, σ_W {:.0} MPa, k {}, N_D {:.0e}), \
+         {} stress, {} mean-stress correction",
+        crate::io::fmt_sig(r.frequency_hz, 5),
+        r.cycles,
+        m.name,
+        m.source,
+        m.r_m / 1e6,
+        m.r_e / 1e6,
+        m.sigma_w / 1e6,
+        m.slope,
+        m.knee_cycles,
+        r.criterion,
+        r.mean_stress
+    );
+    for f in &r.endurance.factors {
+        let _ = writeln!(s, "  {f}");
+    }
+    let _ = writeln!(
+        s,
+        "  endurance S_e = {:.1} MPa, strength at the cycles {:.1} MPa, M_σ = {:.3}",
+        r.endurance.value / 1e6,
+        r.strength / 1e6,
+        r.m_sigma
+    );
+    match r.min_safety {
+        Some(x) => {
+            let _ = writeln!(s, "  lowest safety {x:.3}");
+        }
+        None => {
+            let _ = writeln!(s, "  nothing loaded");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "  {:>8}  {:<16} {:>10} {:>10} {:>9} {:>10}",
+        "node", "group", "σ_a MPa", "σ_m MPa", "safety", "life"
+    );
+    for h in &r.hot_spots {
+        let _ = writeln!(
+            s,
+            "  {:>8}  {:<16} {:>10.2} {:>10.2} {:>9.3} {:>10}",
+            h.node,
+            h.group,
+            h.sigma_a / 1e6,
+            h.sigma_m / 1e6,
+            h.safety,
+            h.life.map_or("∞".to_string(), |l| format!("{l:.3e}"))
+        );
+    }
+    s
 }

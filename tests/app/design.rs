@@ -43,7 +43,7 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
     ] {
         assert!(dir.join(f).exists() || f == "report.md", "{f} missing");
     }
-    assert_eq!(r.checks.len(), 9);
+    assert_eq!(r.checks.len(), 13);
     assert!(r.table_frequencies_hz.len() == 6 && r.table_frequencies_hz[0] > 50.0);
     report_formats(&r, &dir);
 }

@@ -13,6 +13,7 @@ mod determinism;
 mod elements;
 mod errors_audit;
 mod extremes;
+mod fatigue_closed_forms;
 mod fuzz_regressions;
 mod gmsh_bookkeeping;
 mod group_names;

@@ -10,6 +10,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod fatigue;
 mod harmonic;
 mod prestress;
 mod published_shells_beams;

@@ -62,17 +62,146 @@ pub struct HarmonicArgs {
     /// FRF plot (SVG) of a sweep.
     #[arg(long)]
     plot: Option<PathBuf>,
+    #[command(flatten)]
+    fatigue: FatigueArgs,
+}
+
+/// Fatigue assessment of the response (docs/fatigue.md): the alternating state is the response
+/// at `--freq` (or a sweep's largest), the mean state the static case of the `--mean-*` loads.
+#[derive(clap::Args)]
+pub struct FatigueArgs {
+    /// Assess fatigue with this material: a built-in name (60Si2Mn, 65Mn, 50CrVA, 51CrMoV4), a
+    /// TOML file (*.toml) or `rm=MPA,re=MPA[,sw=MPA,tw=MPA,k=SLOPE,nd=CYCLES]`.
+    #[arg(long, value_name = "MATERIAL")]
+    fatigue: Option<String>,
+    /// Mean load: total force on a group, `GROUP=FX,FY,FZ` (N), as `static --force`; repeatable.
+    #[arg(long = "mean-force", value_name = "GROUP=FX,FY,FZ", allow_hyphen_values = true)]
+    mean_force: Vec<String>,
+    /// Mean load: pressure on a surface group, `GROUP=P` (Pa), as `static --pressure`.
+    #[arg(long = "mean-pressure", value_name = "GROUP=P", allow_hyphen_values = true)]
+    mean_pressure: Vec<String>,
+    /// Mean load: body acceleration `GX,GY,GZ` (m/s²), as `static --gravity`.
+    #[arg(long = "mean-gravity", value_name = "GX,GY,GZ", allow_hyphen_values = true)]
+    mean_gravity: Option<String>,
+    /// Cycles the part must survive (Basquin below the knee; default 1e9).
+    #[arg(long, default_value_t = 1e9)]
+    cycles: f64,
+    /// Equivalent stress: principal (signed, largest magnitude; default) or von-mises (signed by
+    /// the hydrostatic stress).
+    #[arg(long = "fatigue-criterion", default_value = "principal")]
+    fatigue_criterion: String,
+    /// Mean-stress correction: fkm (Haigh diagram with M_σ; default), goodman or gerber.
+    #[arg(long = "mean-stress", default_value = "fkm")]
+    mean_stress: String,
+    /// Surface roughness Rz (µm; 0: polished; 200: rolled).
+    #[arg(long, default_value_t = 0.0)]
+    roughness: f64,
+    /// Equivalent diameter of the section for the size factor (mm; default: none).
+    #[arg(long = "size-mm")]
+    size_mm: Option<f64>,
+    /// Reliability of the endurance limit: 0.5, 0.9, 0.95, 0.99, 0.999, … (default 0.5).
+    #[arg(long, default_value_t = 0.5)]
+    reliability: f64,
+    /// Leave out nodes closer than this (m) to a fixed group: a rigid clamp is singular
+    /// (docs/fatigue.md).
+    #[arg(long = "clamp-distance", default_value_t = 0.0)]
+    clamp_distance: f64,
+    /// Rows of the hot-spot table.
+    #[arg(long = "hot-spots", default_value_t = 10)]
+    hot_spots: usize,
+    /// Haigh diagram with the hot spots (SVG).
+    #[arg(long)]
+    haigh: Option<PathBuf>,
+}
+
+impl FatigueArgs {
+    /// The request, checked before any work (None without `--fatigue`).
+    fn request(&self) -> Result<Option<crate::app::harmonic::FatigueRequest>> {
+        use crate::post::fatigue::{Criterion, FatigueMaterial, FatigueSettings, MeanStress, PartCondition};
+        let Some(m) = &self.fatigue else {
+            let used = [
+                ("--mean-force", !self.mean_force.is_empty()),
+                ("--mean-pressure", !self.mean_pressure.is_empty()),
+                ("--mean-gravity", self.mean_gravity.is_some()),
+                ("--haigh", self.haigh.is_some()),
+            ];
+            if let Some((o, _)) = used.iter().find(|x| x.1) {
+                return Err(Error::option(o.to_string(), format!("{o} needs --fatigue MATERIAL")));
+            }
+            return Ok(None);
+        };
+        let material = FatigueMaterial::parse("--fatigue", m).map_err(|e| Error::option("--fatigue", e.to_string()))?;
+        if !(self.cycles.is_finite() && self.cycles >= 1.0) {
+            return Err(Error::option(
+                "--cycles",
+                format!("--cycles {}: must be at least 1", self.cycles),
+            ));
+        }
+        if !(self.roughness.is_finite() && self.roughness >= 0.0) {
+            return Err(Error::option(
+                "--roughness",
+                format!("--roughness {}: must be ≥ 0 µm", self.roughness),
+            ));
+        }
+        if let Some(d) = self.size_mm.filter(|d| !(d.is_finite() && *d > 0.0)) {
+            return Err(Error::option("--size-mm", format!("--size-mm {d}: must be positive")));
+        }
+        if !(self.clamp_distance.is_finite() && self.clamp_distance >= 0.0) {
+            return Err(Error::option(
+                "--clamp-distance",
+                format!("--clamp-distance {}: must be ≥ 0 m", self.clamp_distance),
+            ));
+        }
+        crate::post::fatigue::reliability_factor(self.reliability)
+            .map_err(|e| Error::option("--reliability", format!("--reliability: {e}")))?;
+        let criterion = Criterion::parse("--fatigue-criterion", &self.fatigue_criterion)
+            .map_err(|e| Error::option("--fatigue-criterion", e.to_string()))?;
+        let mean_stress = MeanStress::parse("--mean-stress", &self.mean_stress)
+            .map_err(|e| Error::option("--mean-stress", e.to_string()))?;
+        let mut scratch = crate::model::ModelSpec::default();
+        let mean_loads = crate::input::options::LoadOptions {
+            force: self.mean_force.clone(),
+            pressure: self.mean_pressure.clone(),
+            gravity: self.mean_gravity.clone(),
+            displace: vec![],
+        }
+        .apply(&mut scratch)
+        .map_err(|e| {
+            Error::option(
+                "--mean-force",
+                format!("mean load (--mean-force/--mean-pressure/--mean-gravity): {e}"),
+            )
+        })?;
+        Ok(Some(crate::app::harmonic::FatigueRequest {
+            settings: FatigueSettings {
+                material,
+                condition: PartCondition {
+                    rz_um: self.roughness,
+                    size_mm: self.size_mm,
+                    reliability: self.reliability,
+                },
+                criterion,
+                mean_stress,
+                cycles: self.cycles,
+            },
+            mean_loads,
+            clamp_distance: self.clamp_distance,
+            hot_spots: self.hot_spots,
+        }))
+    }
 }
 
 pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
     use crate::app::harmonic as h;
     let spec = a.model.spec()?;
     let req = request(a)?;
+    let fat = a.fatigue.request()?;
     check_outputs(
         &[
             ("--vtu", a.vtu.as_deref()),
             ("--msh-out", a.msh_out.as_deref()),
             ("--plot", a.plot.as_deref()),
+            ("--haigh", a.fatigue.haigh.as_deref()),
         ],
         None,
         &[("input mesh", std::path::Path::new(&a.mesh))],
@@ -86,22 +215,43 @@ pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
     };
     let sys = crate::system::System::build(model, &opts, &a.mesh)?;
     let run = h::run_with(&sys, &mesh, &req, h::Fields::Peak)?;
+    let k = h::peak_index(&run.report);
+    let fr = fat.as_ref().map(|f| h::fatigue(&sys, &mesh, &run, k, f)).transpose()?;
     if a.json {
+        let mut v = serde_json::to_value(&run.report).map_err(|e| Error::output("JSON", e))?;
+        if let (Some(f), Some(obj)) = (&fr, v.as_object_mut()) {
+            obj.insert(
+                "fatigue".into(),
+                serde_json::to_value(&f.report).map_err(|e| Error::output("JSON", e))?,
+            );
+        }
         outln!(
             "{}",
-            serde_json::to_string_pretty(&run.report).map_err(|e| Error::output("JSON", e))?
+            serde_json::to_string_pretty(&v).map_err(|e| Error::output("JSON", e))?
         );
     } else {
         out!("{}", h::text(&run.report));
+        if let Some(f) = &fr {
+            out!("{}", h::fatigue_text(&f.report));
+        }
     }
     if a.vtu.is_some() || a.msh_out.is_some() {
-        let k = h::peak_index(&run.report);
-        h::write_fields(&mesh, &run, k, a.vtu.as_deref(), a.msh_out.as_deref())?;
+        let extra = fr.as_ref().map_or(vec![], |f| h::fatigue_fields(&f.field));
+        h::write_fields_with(&mesh, &run, k, a.vtu.as_deref(), a.msh_out.as_deref(), extra)?;
         if run.report.points.len() > 1 {
             eprintln!(
                 "note: fields written at {} Hz, the frequency of the largest response",
                 crate::io::fmt_sig(run.report.points[k].freq_hz, 5)
             );
+        }
+    }
+    if let (Some(f), Some(p)) = (&fr, &a.fatigue.haigh) {
+        let svg = crate::post::fatigue::haigh_svg(&f.report.material, f.report.strength, &f.report.hot_spots);
+        std::fs::write(p, svg).map_err(|e| Error::io(p, e))?;
+    }
+    if let Some(f) = &fr {
+        for n in &f.report.notes {
+            eprintln!("note: {n}");
         }
     }
     if let Some(p) = &a.plot {

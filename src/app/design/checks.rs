@@ -16,6 +16,10 @@ pub fn all(d: &Design, v: &ChainValues) -> Vec<Check> {
         mode_clearance,
         surface_uniformity,
         magnet_gap,
+        super::fatigue::leaf_fatigue,
+        super::fatigue::coil_fatigue,
+        super::fatigue::coil_binding,
+        super::fatigue::coil_surge,
     ]
     .iter()
     .map(|check| check(d, v))
@@ -51,7 +55,7 @@ pub fn isolation(d: &Design, v: &ChainValues) -> Check {
 pub fn leaf_stress(d: &Design, v: &ChainValues) -> Check {
     Check::new(
         "leaf_stress",
-        "leaf stress at the working amplitude (3D machine, worst leaf) ≤ allowable [MPa]",
+        "leaf stress at the working amplitude (3D machine, worst leaf) ≤ allowable: the paper's reference check [MPa]",
         v.sigma_leaf / 1e6,
         d.leaf.allowable / 1e6,
         true,

@@ -91,6 +91,74 @@ pub struct LeafDesign {
     pub allowable: f64,
     /// hex20 divisions along length, width, thickness.
     pub divisions: [usize; 3],
+    /// Fatigue inputs (`[leaf.fatigue]`, docs/fatigue.md).
+    pub fatigue: LeafFatigue,
+}
+
+/// The leaves' fatigue inputs (`[leaf.fatigue]`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LeafFatigue {
+    /// Fatigue material: a built-in name (`60Si2Mn`, `65Mn`, `50CrVA`, `51CrMoV4`) or
+    /// `rm=MPA,re=MPA[,sw=…,tw=…,k=…,nd=…]`.
+    pub material: String,
+    /// Required safety factor.
+    pub safety: f64,
+    /// Cycles the leaves must survive.
+    pub cycles: f64,
+    /// Surface roughness R_z, µm (200: rolled, DIN 4768 indicative value).
+    pub roughness: f64,
+    /// Reliability of the endurance limit (0.5, 0.9, 0.95, 0.99, 0.999, …).
+    pub reliability: f64,
+    /// Mean-stress correction: `fkm`, `goodman` or `gerber`.
+    pub mean_stress: String,
+}
+
+impl Default for LeafFatigue {
+    fn default() -> Self {
+        LeafFatigue {
+            material: "60Si2Mn".into(),
+            safety: 1.5,
+            cycles: 1e9,
+            roughness: 200.0,
+            reliability: 0.99,
+            mean_stress: "fkm".into(),
+        }
+    }
+}
+
+/// The coil isolators' fatigue, binding and surge inputs (`[coil.fatigue]`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CoilFatigue {
+    /// Wire material (built-in name or `rm=MPA,re=MPA`): its R_m gives S_su = 0.67 R_m.
+    pub material: String,
+    /// Required fatigue safety factor.
+    pub safety: f64,
+    /// The line through Zimmerli's point: `goodman` or `gerber`.
+    pub criterion: String,
+    /// Shot-peened wire (Zimmerli's peened data).
+    pub peened: bool,
+    /// End type: `plain`, `plain_ground`, `squared`, `squared_ground` (free and solid lengths).
+    pub ends: String,
+    /// Least fractional overrun to closure ξ = travel/deflection − 1 (Shigley: 0.15).
+    pub overrun: f64,
+    /// Least clearance of the surge frequency from every force harmonic (fraction).
+    pub surge_clearance: f64,
+}
+
+impl Default for CoilFatigue {
+    fn default() -> Self {
+        CoilFatigue {
+            material: "60Si2Mn".into(),
+            safety: 1.5,
+            criterion: "goodman".into(),
+            peened: false,
+            ends: "squared_ground".into(),
+            overrun: 0.15,
+            surge_clearance: 0.10,
+        }
+    }
 }
 
 /// Coil isolators.
@@ -113,6 +181,8 @@ pub struct CoilDesign {
     pub allowable_shear: f64,
     /// Beam elements (3-node) per turn.
     pub elements_per_turn: usize,
+    /// Fatigue, binding and surge inputs (`[coil.fatigue]`, docs/fatigue.md).
+    pub fatigue: CoilFatigue,
 }
 
 /// Electromagnetic drive.
@@ -188,6 +258,7 @@ impl Default for LeafDesign {
             material: [2.1e11, 0.3, 7850.0],
             allowable: 170e6,
             divisions: [24, 8, 2],
+            fatigue: LeafFatigue::default(),
         }
     }
 }
@@ -203,6 +274,7 @@ impl Default for CoilDesign {
             allowable_shear: 560e6,
             // Line3 beams, 12 per turn: converged to 0.03 % (validation/springs_s3_s4_s5.py).
             elements_per_turn: 12,
+            fatigue: CoilFatigue::default(),
         }
     }
 }
@@ -343,6 +415,7 @@ impl Design {
         self.validate_transient()?;
         self.validate_choices()?;
         self.validate_parts()?;
+        self.validate_fatigue()?;
         self.machine.validate(self)?;
         self.search.validate()
     }
@@ -560,6 +633,55 @@ impl Design {
     /// compared with the paper's published numbers.
     pub fn is_builtin(&self) -> bool {
         serde_json::to_value(self).ok() == serde_json::to_value(Design::paper()).ok()
+    }
+
+    /// The `[leaf.fatigue]` and `[coil.fatigue]` inputs, each error naming its key.
+    fn validate_fatigue(&self) -> Result<()> {
+        use crate::post::fatigue::{FatigueMaterial, MeanStress, reliability_factor};
+        let (lf, cf) = (&self.leaf.fatigue, &self.coil.fatigue);
+        for (key, m) in [
+            ("leaf.fatigue.material", &lf.material),
+            ("coil.fatigue.material", &cf.material),
+        ] {
+            FatigueMaterial::parse(key, m).map_err(|e| bad(key, format!("{e}")))?;
+        }
+        MeanStress::parse("leaf.fatigue.mean_stress", &lf.mean_stress)
+            .map_err(|e| bad("leaf.fatigue.mean_stress", format!("{e}")))?;
+        reliability_factor(lf.reliability).map_err(|e| bad("leaf.fatigue.reliability", format!("{e}")))?;
+        for (key, v, range) in [
+            ("leaf.fatigue.safety", lf.safety, Range::Positive),
+            ("leaf.fatigue.cycles", lf.cycles, Range::Between(1.0, 1e15, true)),
+            (
+                "leaf.fatigue.roughness",
+                lf.roughness,
+                Range::Between(0.0, 1000.0, true),
+            ),
+            ("coil.fatigue.safety", cf.safety, Range::Positive),
+            ("coil.fatigue.overrun", cf.overrun, Range::NonNegative),
+            (
+                "coil.fatigue.surge_clearance",
+                cf.surge_clearance,
+                Range::Between(0.0, 1.0, true),
+            ),
+        ] {
+            range.check(key, v)?;
+        }
+        if !["goodman", "gerber"].contains(&cf.criterion.as_str()) {
+            return Err(bad(
+                "coil.fatigue.criterion",
+                format!("must be goodman or gerber, got '{}'", cf.criterion),
+            ));
+        }
+        if !["plain", "plain_ground", "squared", "squared_ground"].contains(&cf.ends.as_str()) {
+            return Err(bad(
+                "coil.fatigue.ends",
+                format!(
+                    "must be plain, plain_ground, squared or squared_ground, got '{}'",
+                    cf.ends
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// The table generator's parameters (quad4 shells).

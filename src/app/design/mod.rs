@@ -19,6 +19,7 @@
 
 pub mod chain;
 pub mod checks;
+pub mod fatigue;
 pub mod file;
 pub mod machine;
 pub mod parts;

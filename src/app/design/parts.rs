@@ -15,9 +15,44 @@ use crate::section::{BeamSection, ShellSection};
 use crate::{Error, Result};
 
 /// FE stiffness of one leaf (N/m) and the peak von Mises stress per metre of guided
-/// displacement (Pa/m), both from a guided 1000 N load.
+/// displacement (Pa/m), both from a guided 1000 N load ([`leaf_fe_stresses`]).
 pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
+    let s = leaf_fe_stresses(d, h)?;
+    Ok((s.k, s.von_mises_per_m))
+}
+
+/// What the leaf's FE statics give per metre of guided displacement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafStresses {
+    /// Stiffness of one leaf (N/m).
+    pub k: f64,
+    /// Peak von Mises stress per metre (Pa/m).
+    pub von_mises_per_m: f64,
+    /// |Signed principal stress| (the principal of largest magnitude) per metre at the node of
+    /// the von Mises peak (Pa/m): the fatigue stress of a bending leaf (docs/fatigue.md).
+    pub principal_per_m: f64,
+}
+
+/// Results of [`leaf_fe_stresses`] by their inputs (length, width, h, E, ν, ρ bits and the
+/// divisions), so that the fatigue check reads the stresses of the chain's last leaf solve.
+type LeafKey = ([u64; 6], [usize; 3]);
+static LEAF_CACHE: std::sync::Mutex<Vec<(LeafKey, LeafStresses)>> = std::sync::Mutex::new(Vec::new());
+
+/// The leaf's FE statics under a guided 1000 N load: stiffness and peak stresses per metre of
+/// guided displacement (nodal stresses of the hex20 solid, clamped at one end).
+pub fn leaf_fe_stresses(d: &Design, h: f64) -> Result<LeafStresses> {
     let l = &d.leaf;
+    let key: LeafKey = (
+        [l.length, l.width, h, l.material[0], l.material[1], l.material[2]].map(f64::to_bits),
+        l.divisions,
+    );
+    if let Some(hit) = LEAF_CACHE
+        .lock()
+        .ok()
+        .and_then(|c| c.iter().find(|e| e.0 == key).map(|e| e.1))
+    {
+        return Ok(hit);
+    }
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let spec = ModelSpec {
         material: Material {
@@ -49,8 +84,28 @@ pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
     let k = 1000.0 / uz;
     let u = crate::app::report::mesh_displacements(&run, 0);
     let ns = crate::post::stress::nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
-    let vm = ns.von_mises.iter().fold(0.0f64, |a, &b| a.max(b));
-    Ok((k, vm / uz))
+    // The von Mises peak's node (the reference check's hot spot) and its signed principal
+    // stress: the largest |principal| over all nodes would be a free-edge corner of the rigid
+    // clamp, whose value grows with the mesh (docs/fatigue.md, *A rigid clamp is singular*).
+    let (hot, vm) = ns
+        .von_mises
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, 0.0f64), |a, (i, v)| if v > a.1 { (i, v) } else { a });
+    let pr = ns.principal.get(hot).map_or(0.0, |p| p[0].abs().max(p[2].abs()));
+    let out = LeafStresses {
+        k,
+        von_mises_per_m: vm / uz,
+        principal_per_m: pr / uz,
+    };
+    if let Ok(mut c) = LEAF_CACHE.lock() {
+        if c.len() >= 64 {
+            c.remove(0);
+        }
+        c.push((key, out));
+    }
+    Ok(out)
 }
 
 /// FE axial stiffness of one coil isolator (beam helix), N/m.
