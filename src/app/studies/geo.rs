@@ -125,6 +125,13 @@ fn classify(p: &Path) -> Gmsh {
         .file_name()
         .map(|n| n.to_string_lossy().to_lowercase())
         .unwrap_or_default();
+    // A relative path is made absolute (symlinks kept: a venv's python is one, and resolving it
+    // would leave the venv); a bare name is searched on PATH by the OS.
+    let p = &if p.components().count() > 1 {
+        std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+    } else {
+        p.to_path_buf()
+    };
     if name.starts_with("python") {
         Gmsh::Python(p.to_path_buf())
     } else {
@@ -213,7 +220,9 @@ impl Gmsh {
         out: &Path,
         limit: Duration,
     ) -> std::result::Result<String, String> {
+        // Absolute paths: gmsh resolves the driver's paths against the driver's folder.
         let geo = std::fs::canonicalize(geo).map_err(|e| format!("{}: {e}", geo.display()))?;
+        let out = &std::path::absolute(out).map_err(|e| format!("{}: {e}", out.display()))?;
         let _ = std::fs::remove_file(out);
         let q = |p: &Path| p.display().to_string().replace('\\', "\\\\").replace('"', "\\\"");
         let driver = out.with_extension("driver.geo");
@@ -243,7 +252,6 @@ impl Gmsh {
                 c
             }
         };
-        cmd.current_dir(geo.parent().unwrap_or(Path::new(".")));
         let o = run_limited(cmd, limit).map_err(|e| format!("could not start the {}: {e}", self.describe()))?;
         let _ = std::fs::remove_file(&driver);
         if o.timed_out {
