@@ -1215,13 +1215,29 @@ fn analyse_levels(
         let source = p.path.display().to_string();
         let reset = reset_peak_memory();
         let t = Instant::now();
-        let mesh = crate::input::source::load(&source, study.length_scale)?;
+        let why = if p.warnings.is_empty() {
+            String::new()
+        } else {
+            format!(" (gmsh: {})", p.warnings)
+        };
+        // A mesh gmsh wrote without volume cells (an open surface loop: gmsh only warns) is a
+        // failed level like a gmsh error; a user's mesh that cannot be read is an input error.
+        let mesh = match crate::input::source::load(&source, study.length_scale) {
+            Ok(m) => Some(m),
+            Err(e) if p.size.is_some() => {
+                let msg = format!(
+                    "{}: no volume cells in gmsh's mesh: {e}{why}; a closed surface loop and, if the geometry has \
+                     physical groups, a Physical Volume are needed",
+                    p.label
+                );
+                progress(&format!("error: {msg}"));
+                failed.push(msg);
+                None
+            }
+            Err(e) => return Err(e),
+        };
+        let Some(mesh) = mesh else { continue };
         let (Some(form), Some(edge)) = (volume_formulation(&mesh), mean_edge_length(&mesh)) else {
-            let why = if p.warnings.is_empty() {
-                String::new()
-            } else {
-                format!(" (gmsh: {})", p.warnings)
-            };
             let msg = format!(
                 "{}: the mesh has no volume cells{why}; a closed surface loop and, if the geometry has physical \
                  groups, a Physical Volume are needed",

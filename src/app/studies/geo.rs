@@ -235,7 +235,7 @@ impl Gmsh {
             q(out)
         );
         std::fs::write(&driver, text).map_err(|e| format!("{}: {e}", driver.display()))?;
-        let mut cmd = match self {
+        let cmd = match self {
             Gmsh::Exe(p) => {
                 let mut c = Command::new(p);
                 c.arg(&driver).arg("-");
