@@ -7,6 +7,7 @@ mod common;
 
 mod batch_resume;
 mod cli;
+mod converge_geo;
 mod converge_pairing;
 mod design;
 mod design_fatigue;

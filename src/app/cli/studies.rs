@@ -1,6 +1,7 @@
 //! Scene runs, batches, sweeps, convergence studies and merges of batch shards.
 
 use super::{check_outputs, emit};
+use crate::app::cli::args::{LoadArgs, ModelArgs, length_scale};
 use crate::{Error, Result};
 use std::path::PathBuf;
 
@@ -196,19 +197,98 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
 
 #[derive(clap::Args)]
 pub struct ConvergeArgs {
-    /// Built-in case (s1, s3, s5, s7, tiny) or a scene file with a box:, helix: or sandwich:paper
-    /// generator.
+    /// Built-in case (s1, s3, s5, s7, tiny), a scene file with a box:, helix: or sandwich:paper
+    /// generator, a gmsh geometry PART.geo (meshed at each of --sizes and --orders), or a glob
+    /// of meshes of one part, e.g. 'plate_h*.msh' (docs/converge.md).
     case: String,
-    /// Folder for converge.md, converge.json and converge.svg.
+    /// Folder for converge.md, converge.json and converge.svg (and the meshes of a .geo).
     #[arg(short, long, default_value = "vibrofem-converge")]
     out: PathBuf,
     /// Refinement levels of a scene (each halves the element size).
     #[arg(long, default_value_t = 3)]
     levels: usize,
+    /// Element sizes of a .geo (gmsh's Mesh.MeshSizeMax, in the geometry's units), e.g. 20,10,5.
+    #[arg(long, value_name = "H1,H2,…")]
+    sizes: Option<String>,
+    /// Element orders of a .geo: 1 (tet4, hex8 where the .geo recombines) and/or 2 (tet10, hex20).
+    #[arg(long, value_name = "1,2")]
+    orders: Option<String>,
+    /// Tolerance of the cheapest run (relative to the best Richardson estimate), e.g. 1% or 0.01.
+    #[arg(long)]
+    tolerance: Option<String>,
+    /// Elastic frequencies measured on a .geo or a set of meshes (the lowest ones).
+    #[arg(long)]
+    frequencies: Option<usize>,
+    /// gmsh to run: the gmsh executable or a Python with the gmsh module (default: the variable
+    /// VIBROFEM_GMSH, else gmsh on PATH, else python3/python on PATH with the gmsh module).
+    #[arg(long)]
+    gmsh: Option<PathBuf>,
+    /// Time limit of one mesh generation, s.
+    #[arg(long = "mesh-timeout", value_name = "SECONDS")]
+    mesh_timeout: Option<f64>,
+    /// Print the JSON of a .geo or mesh-set study on stdout instead of the tables.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    model: ModelArgs,
+    #[command(flatten)]
+    loads: LoadArgs,
+}
+
+/// Is the case a study on the user's part: a `.geo`, or a glob / `.msh` file?
+fn user_case(case: &str) -> bool {
+    let lower = case.to_lowercase();
+    lower.ends_with(".geo") || lower.ends_with(".msh") || case.contains(['*', '?'])
+}
+
+/// The first option of a study on the user's part that was given to a built-in case or scene.
+fn user_option_given(a: &ConvergeArgs) -> Option<&'static str> {
+    let m = &a.model;
+    let l = &a.loads;
+    [
+        ("--sizes", a.sizes.is_some()),
+        ("--orders", a.orders.is_some()),
+        ("--tolerance", a.tolerance.is_some()),
+        ("--frequencies", a.frequencies.is_some()),
+        ("--gmsh", a.gmsh.is_some()),
+        ("--mesh-timeout", a.mesh_timeout.is_some()),
+        ("--json", a.json),
+        ("--material", m.material != "steel"),
+        ("--group-material", !m.group_material.is_empty()),
+        ("--fix", !m.fix.is_empty()),
+        ("--couple", !m.couple.is_empty()),
+        ("--point-mass", !m.point_mass.is_empty()),
+        ("--spring", !m.spring.is_empty()),
+        ("--mass", m.mass != "consistent"),
+        ("--hex8", m.hex8 != "standard"),
+        ("--solid", !m.solid.is_empty()),
+        ("--shell", !m.shell.is_empty()),
+        ("--beam", !m.beam.is_empty()),
+        ("--length-unit", m.length_unit != "m"),
+        ("--force", !l.force.is_empty()),
+        ("--pressure", !l.pressure.is_empty()),
+        ("--gravity", l.gravity.is_some()),
+        ("--displace", !l.displace.is_empty()),
+    ]
+    .into_iter()
+    .find(|(_, g)| *g)
+    .map(|(n, _)| n)
 }
 
 pub fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
     use crate::app::studies::converge;
+    if user_case(&a.case) {
+        return converge_user_cmd(a);
+    }
+    if let Some(o) = user_option_given(a) {
+        return Err(Error::option(
+            o,
+            format!(
+                "{o} applies to a study on a .geo geometry or a set of .msh meshes, not to '{}'",
+                a.case
+            ),
+        ));
+    }
     let case = if std::path::Path::new(&a.case).is_file() {
         converge::from_scene(std::path::Path::new(&a.case), a.levels)?
     } else {
@@ -223,6 +303,149 @@ pub fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
     converge::write_outputs(&c, &a.out)?;
     out!("{}", converge::table_markdown(&c));
     outln!("outputs in {}", a.out.display());
+    Ok(0)
+}
+
+/// A list `a,b,c` of positive numbers for `option`.
+fn positive_list(option: &str, text: &str) -> Result<Vec<f64>> {
+    let v = crate::app::cli::args::numbers(option, text, text)?;
+    if v.is_empty() || v.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+        return Err(Error::option(
+            option,
+            format!("{option} '{text}': expected positive numbers separated by commas, e.g. 20,10,5"),
+        ));
+    }
+    Ok(v)
+}
+
+/// `1%`, `0.5 %` or `0.01`: a relative tolerance in (0, 1).
+fn parse_tolerance(text: &str) -> Result<f64> {
+    let t = text.trim();
+    let v = match t.strip_suffix('%') {
+        Some(p) => p.trim().parse::<f64>().map(|x| x / 100.0),
+        None => t.parse::<f64>(),
+    };
+    match v {
+        Ok(x) if x > 0.0 && x < 1.0 => Ok(x),
+        _ => Err(Error::option(
+            "--tolerance",
+            format!("--tolerance '{text}': expected a relative tolerance such as 1% or 0.01 (between 0 and 1)"),
+        )),
+    }
+}
+
+/// `vibrofem converge PART.geo` and `vibrofem converge 'part_h*.msh'`.
+fn converge_user_cmd(a: &ConvergeArgs) -> Result<i32> {
+    use crate::app::studies::converge::{self, UserLevels, UserStudy};
+    use crate::app::studies::geo::Gmsh;
+    let path = std::path::Path::new(&a.case);
+    let geo = a.case.to_lowercase().ends_with(".geo");
+    let mut spec = a.model.spec()?;
+    let loads = a.loads.apply(&mut spec)?;
+    let has_loads = !loads.is_empty() || !a.loads.displace.is_empty();
+    let frequencies = a.frequencies.unwrap_or(1);
+    if frequencies == 0 && !has_loads {
+        return Err(Error::option(
+            "--frequencies",
+            "--frequencies 0 leaves nothing to measure: give a load (--force with a --couple GROUP:guided=AXIS for              a stiffness)",
+        ));
+    }
+    let tolerance = a.tolerance.as_deref().map(parse_tolerance).transpose()?.unwrap_or(0.01);
+    let levels = if geo {
+        if !path.is_file() {
+            return Err(Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::NotFound, "no such geometry file"),
+            ));
+        }
+        let sizes = positive_list(
+            "--sizes",
+            a.sizes
+                .as_deref()
+                .ok_or_else(|| Error::option("--sizes", "a .geo study needs --sizes, e.g. --sizes 20,10,5"))?,
+        )?;
+        let orders: Vec<usize> = positive_list("--orders", a.orders.as_deref().unwrap_or("1,2"))?
+            .into_iter()
+            .map(|o| match o {
+                1.0 => Ok(1),
+                2.0 => Ok(2),
+                _ => Err(Error::option(
+                    "--orders",
+                    format!("--orders: order {o}: use 1 and/or 2"),
+                )),
+            })
+            .collect::<Result<_>>()?;
+        let timeout = a.mesh_timeout.unwrap_or(300.0);
+        if !(timeout.is_finite() && timeout > 0.0) {
+            return Err(Error::option(
+                "--mesh-timeout",
+                "--mesh-timeout must be a positive number of seconds",
+            ));
+        }
+        check_outputs(&[], Some(("--out", &a.out)), &[("geometry", path)])?;
+        UserLevels::Geo {
+            geo: path.to_path_buf(),
+            sizes,
+            orders,
+            gmsh: Gmsh::find(a.gmsh.as_deref())?,
+            timeout: std::time::Duration::from_secs_f64(timeout),
+            work: a.out.join("meshes"),
+        }
+    } else {
+        if let Some(o) = [
+            ("--sizes", a.sizes.is_some()),
+            ("--orders", a.orders.is_some()),
+            ("--gmsh", a.gmsh.is_some()),
+        ]
+        .iter()
+        .find(|o| o.1)
+        {
+            return Err(Error::option(
+                o.0,
+                format!("{} applies to a .geo geometry; a set of meshes has its own sizes", o.0),
+            ));
+        }
+        let files = crate::app::studies::batch::glob_files(&a.case)?;
+        if files.is_empty() {
+            return Err(Error::param(
+                "pattern",
+                format!("converge: no file matches '{}'", a.case),
+            ));
+        }
+        let inputs: Vec<(&str, &std::path::Path)> = files.iter().map(|f| ("mesh", f.as_path())).collect();
+        check_outputs(&[], Some(("--out", &a.out)), &inputs)?;
+        UserLevels::Meshes(files)
+    };
+    let study = UserStudy {
+        name: path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| a.case.clone()),
+        levels,
+        spec,
+        loads: has_loads.then_some(loads),
+        length_scale: length_scale(&a.model.length_unit)?,
+        length_unit: a.model.length_unit.clone(),
+        frequencies,
+        tolerance,
+    };
+    let c = converge::run_user(&study, &|l| eprintln!("{l}"))?;
+    let written = converge::write_user_outputs(&c, &a.out)?;
+    if a.json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&c).map_err(|e| Error::output("JSON", e))?
+        );
+    } else {
+        out!("{}", converge::user_markdown(&c));
+        outln!("outputs in {}", a.out.display());
+    }
+    for p in written {
+        eprintln!("wrote {}", p.display());
+    }
+    for f in &c.failed {
+        eprintln!("warning: {f}");
+    }
     Ok(0)
 }
 

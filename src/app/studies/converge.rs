@@ -14,16 +14,19 @@
 //! extrapolation of the reference formulation's last three levels (each halving the element size)
 //! when they converge monotonically at an order ≥ 1.5, else its finest level.
 
+use super::geo::Gmsh;
 use super::scene::{MeshSource, Scene};
 use crate::analysis::modal::ModalTarget;
+use crate::analysis::statics::Load;
 use crate::app::toml_file;
 use crate::input::source::{BoxSpec, HelixSpec, SandwichSpec};
-use crate::mesh::CellKind;
 use crate::mesh::parametric::SandwichParams;
+use crate::mesh::{CellKind, Mesh};
+use crate::model::ModelSpec;
 use crate::{Error, Result};
 use serde::Serialize;
-use std::path::Path;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 /// How one run of a case is made.
 #[derive(Clone, Debug)]
@@ -136,11 +139,16 @@ fn sample(shape: &[f64], at: &[usize]) -> Vec<f64> {
 /// largest MAC is taken. Returns, per level, `(index among its elastic modes, MAC)`, or `None`
 /// where a level has no shapes.
 pub fn pair_by_mac(levels: &[Option<LevelModes>]) -> Vec<Option<(usize, f64)>> {
+    pair_mode_by_mac(levels, 0)
+}
+
+/// [`pair_by_mac`] for the finest level's elastic mode `mode` (0-based) instead of its first.
+pub fn pair_mode_by_mac(levels: &[Option<LevelModes>], mode: usize) -> Vec<Option<(usize, f64)>> {
     let Some(finest) = levels.iter().rev().flatten().next() else {
         return vec![None; levels.len()];
     };
     let coarsest = levels.iter().flatten().min_by_key(|l| l.points.len()).unwrap_or(finest);
-    let Some(target) = finest.shapes.first() else {
+    let Some(target) = finest.shapes.get(mode) else {
         return vec![None; levels.len()];
     };
     let target = sample(target, &nearest(&coarsest.points, &finest.points));
@@ -820,4 +828,770 @@ fn write_svg(c: &Convergence, path: &Path) -> Result<()> {
         .map_err(|e| perr(&e))?;
     root.present().map_err(|e| perr(&e))?;
     Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Studies on the user's own part: a gmsh geometry meshed at several sizes and orders, or a set
+// of meshes the user made.
+// ---------------------------------------------------------------------------------------------
+
+/// Where the levels of a study on the user's part come from.
+#[derive(Clone, Debug)]
+pub enum UserLevels {
+    /// A gmsh geometry meshed by `gmsh` at each size (the geometry's units) and order, into
+    /// `work`, each within `timeout`.
+    Geo {
+        /// The `.geo` file.
+        geo: PathBuf,
+        /// Element sizes (Mesh.MeshSizeMax), geometry units.
+        sizes: Vec<f64>,
+        /// Element orders (1: tet4/hex8, 2: tet10/hex20).
+        orders: Vec<usize>,
+        /// How gmsh runs.
+        gmsh: Gmsh,
+        /// Time limit of one mesh generation.
+        timeout: Duration,
+        /// Folder for the meshes.
+        work: PathBuf,
+    },
+    /// Meshes of one part made by the user (their sizes: the mean edge length).
+    Meshes(Vec<PathBuf>),
+}
+
+/// A speed–accuracy study on the user's part.
+#[derive(Clone, Debug)]
+pub struct UserStudy {
+    /// Name (the geometry's or the pattern's).
+    pub name: String,
+    /// The levels.
+    pub levels: UserLevels,
+    /// The model built on every level.
+    pub spec: ModelSpec,
+    /// Loads of one static case; with them the study measures a stiffness (or, without a guided
+    /// coupling, the largest displacement).
+    pub loads: Option<Vec<Load>>,
+    /// Metres per mesh unit.
+    pub length_scale: f64,
+    /// Name of the mesh unit (for sizes).
+    pub length_unit: String,
+    /// Elastic frequencies measured (the lowest ones).
+    pub frequencies: usize,
+    /// Relative tolerance of the cheapest run.
+    pub tolerance: f64,
+}
+
+/// One level of a study on the user's part.
+#[derive(Clone, Debug, Serialize)]
+pub struct UserRow {
+    /// Formulation: the volume cell kind(s) of the mesh (`tet10`, `hex20`, `hex8+wedge6`).
+    pub formulation: String,
+    /// Element size asked of gmsh (geometry units), or the mean edge length of a user's mesh.
+    pub size: f64,
+    /// Mean edge length of the volume cells (corner to corner, geometry units): the h of the
+    /// extrapolation.
+    pub mean_edge: f64,
+    /// The mesh file.
+    pub mesh: String,
+    /// Free DOFs (of the modal model; of the static model without frequencies).
+    pub dofs: usize,
+    /// Mesh generation wall time (s), for meshes made here.
+    pub mesh_time_s: Option<f64>,
+    /// Analysis wall time (s): reading the mesh, model, solution(s).
+    pub time_s: f64,
+    /// Peak resident memory of the analysis (bytes), where the OS reports it.
+    pub peak_memory_bytes: Option<u64>,
+    /// Value per quantity.
+    pub values: Vec<f64>,
+    /// Relative error per quantity against its best estimate.
+    pub errors: Vec<f64>,
+    /// Per frequency quantity: the elastic mode (1-based) of this level paired by MAC with the
+    /// finest level's, and the MAC, where it is not the same index.
+    pub paired: Vec<Option<(usize, f64)>>,
+}
+
+/// The Richardson extrapolation of one formulation's levels for one quantity.
+#[derive(Clone, Debug, Serialize)]
+pub struct Fit {
+    /// Formulation.
+    pub formulation: String,
+    /// Levels of this formulation.
+    pub levels: usize,
+    /// Value of its finest level.
+    pub finest: f64,
+    /// Richardson-extrapolated value from its three finest levels.
+    pub extrapolated: Option<f64>,
+    /// Observed order of convergence p (error ∝ hᵖ).
+    pub order: Option<f64>,
+    /// Estimated relative error of the finest level: |finest − extrapolated| / |extrapolated|.
+    pub error_estimate: Option<f64>,
+}
+
+/// One quantity of a study on the user's part.
+#[derive(Clone, Debug, Serialize)]
+pub struct UserQuantity {
+    /// Name (`elastic frequency 1`, `stiffness`, `largest displacement`).
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Per formulation.
+    pub fits: Vec<Fit>,
+    /// Best estimate of the converged value: the extrapolation with the smallest error estimate.
+    pub estimate: f64,
+    /// Which formulation's extrapolation it is.
+    pub estimate_from: String,
+    /// Index into the rows of the cheapest (analysis time) within the tolerance.
+    pub cheapest: Option<usize>,
+}
+
+/// A finished study on the user's part.
+#[derive(Clone, Debug, Serialize)]
+pub struct UserConvergence {
+    /// Name.
+    pub name: String,
+    /// Relative tolerance.
+    pub tolerance: f64,
+    /// Unit of the sizes.
+    pub length_unit: String,
+    /// The levels that ran, by formulation, coarse to fine.
+    pub rows: Vec<UserRow>,
+    /// Per quantity.
+    pub quantities: Vec<UserQuantity>,
+    /// Index into the rows of the cheapest within the tolerance for every quantity.
+    pub cheapest: Option<usize>,
+    /// Levels that could not be meshed, with the reason.
+    pub failed: Vec<String>,
+}
+
+/// Corner edges of the volume cells (gmsh node order).
+fn corner_edges(kind: CellKind) -> &'static [[usize; 2]] {
+    match kind.linear() {
+        CellKind::Tet4 => &[[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]],
+        CellKind::Hex8 => &[
+            [0, 1],
+            [1, 2],
+            [2, 3],
+            [3, 0],
+            [4, 5],
+            [5, 6],
+            [6, 7],
+            [7, 4],
+            [0, 4],
+            [1, 5],
+            [2, 6],
+            [3, 7],
+        ],
+        CellKind::Wedge6 => &[[0, 1], [1, 2], [2, 0], [3, 4], [4, 5], [5, 3], [0, 3], [1, 4], [2, 5]],
+        _ => &[],
+    }
+}
+
+/// Mean corner-to-corner edge length of the volume cells (each cell's edges counted once per
+/// cell), in the mesh's coordinates; `None` without volume cells.
+pub fn mean_edge_length(mesh: &Mesh) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for b in mesh.blocks.iter().filter(|b| b.kind.dim() == 3) {
+        let edges = corner_edges(b.kind);
+        for c in 0..b.len() {
+            let cell = b.cell(c);
+            for e in edges {
+                let (p, q) = (mesh.nodes[cell[e[0]] as usize], mesh.nodes[cell[e[1]] as usize]);
+                sum += ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+                n += 1;
+            }
+        }
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// The formulation of a mesh: its volume cell kinds joined by `+`; `None` without volume cells.
+pub fn volume_formulation(mesh: &Mesh) -> Option<String> {
+    let kinds: Vec<&str> = mesh
+        .blocks
+        .iter()
+        .filter(|b| b.kind.dim() == 3 && !b.is_empty())
+        .map(|b| b.kind.name())
+        .collect();
+    (!kinds.is_empty()).then(|| kinds.join("+"))
+}
+
+/// Richardson extrapolation of three levels at sizes `h` (decreasing) with values `v`, for any
+/// size ratios: the order p solves (v₁ − v₀)/(v₂ − v₁) = (h₀ᵖ − h₁ᵖ)/(h₁ᵖ − h₂ᵖ) (bisection,
+/// 0.05 ≤ p ≤ 20), and v = v∞ + C hᵖ through the two finest levels gives v∞. `None` when the
+/// differences do not shrink monotonically, or the order is outside that range.
+pub fn richardson_sizes(h: [f64; 3], v: [f64; 3]) -> Option<(f64, f64)> {
+    let (d1, d2) = (v[1] - v[0], v[2] - v[1]);
+    if !(h[0] > h[1] && h[1] > h[2] && h[2] > 0.0) || d1 * d2 <= 0.0 || d2.abs() >= d1.abs() {
+        return None;
+    }
+    let q = d1 / d2;
+    let g = |p: f64| (h[0].powf(p) - h[1].powf(p)) / (h[1].powf(p) - h[2].powf(p));
+    let (mut lo, mut hi) = (0.05, 20.0);
+    if !(g(lo) <= q && q <= g(hi)) {
+        return None;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) < q {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let p = 0.5 * (lo + hi);
+    let c = d2 / (h[2].powf(p) - h[1].powf(p));
+    Some((v[2] - c * h[2].powf(p), p))
+}
+
+/// Refuse levels that do not converge monotonically: the successive changes of the value must
+/// keep their sign and shrink. `levels`: (size label, value), coarse to fine.
+pub fn check_monotone(formulation: &str, quantity: &str, unit: &str, levels: &[(String, f64)]) -> Result<()> {
+    for i in 2..levels.len() {
+        let d1 = levels[i - 1].1 - levels[i - 2].1;
+        let d2 = levels[i].1 - levels[i - 1].1;
+        if d1 * d2 <= 0.0 || d2.abs() >= d1.abs() {
+            let all: Vec<String> = levels.iter().map(|(s, v)| format!("{s}: {v:.6e}")).collect();
+            return Err(Error::Verification(format!(
+                "converge: {formulation}, {quantity} [{unit}]: the levels do not converge monotonically at {} (change \
+                 {d2:+.4e} after {d1:+.4e}; the changes must keep their sign and shrink); levels {}. No \
+                 extrapolation is trusted: use smaller sizes (or drop the coarsest), or check the mesh",
+                levels[i].0,
+                all.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A mesh of the study, before its analysis.
+struct Pending {
+    /// Size asked of gmsh (`None`: a user's mesh).
+    size: Option<f64>,
+    path: PathBuf,
+    mesh_time: Option<f64>,
+    /// gmsh's warnings, shown if the mesh turns out unusable.
+    warnings: String,
+    /// How messages name the level (`size 20 (order 2)`, the file name).
+    label: String,
+}
+
+/// Mesh every (order, size) of a geometry (or list a user's meshes): the meshes made, and the
+/// levels that failed, each naming its size and carrying gmsh's message.
+fn mesh_levels(levels: &UserLevels, progress: &dyn Fn(&str)) -> Result<(Vec<Pending>, Vec<String>)> {
+    let (geo, sizes, orders, gmsh, timeout, work) = match levels {
+        UserLevels::Meshes(paths) => {
+            let p = paths
+                .iter()
+                .map(|p| Pending {
+                    size: None,
+                    path: p.clone(),
+                    mesh_time: None,
+                    warnings: String::new(),
+                    label: p.display().to_string(),
+                })
+                .collect();
+            return Ok((p, Vec::new()));
+        }
+        UserLevels::Geo {
+            geo,
+            sizes,
+            orders,
+            gmsh,
+            timeout,
+            work,
+        } => (geo, sizes, orders, gmsh, timeout, work),
+    };
+    std::fs::create_dir_all(work).map_err(|e| Error::io(work, e))?;
+    let stem = geo
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let (mut made, mut failed) = (Vec::new(), Vec::new());
+    for &order in orders {
+        for &size in sizes {
+            let label = format!("size {size} (order {order})");
+            let path = work.join(format!("{stem}_o{order}_h{}.msh", format!("{size}").replace('.', "p")));
+            progress(&format!(
+                "meshing {} at {label} with the {}",
+                geo.display(),
+                gmsh.describe()
+            ));
+            let t = Instant::now();
+            match gmsh.mesh(geo, size, order, &path, *timeout) {
+                Ok(warnings) => made.push(Pending {
+                    size: Some(size),
+                    path,
+                    mesh_time: Some(t.elapsed().as_secs_f64()),
+                    warnings,
+                    label,
+                }),
+                Err(e) => {
+                    progress(&format!("error: {label}: {e}"));
+                    failed.push(format!("{label}: {e}"));
+                }
+            }
+        }
+    }
+    Ok((made, failed))
+}
+
+/// What one level's analysis gives: elastic frequencies (with shapes for pairing), the static
+/// quantity (value, and whether it is a stiffness), the DOFs.
+struct LevelOutcome {
+    freqs: Vec<f64>,
+    modes: Option<LevelModes>,
+    statics: Option<(f64, bool)>,
+    dofs: usize,
+}
+
+/// Analyse one mesh of the study: the modal run (if frequencies are measured: the lowest
+/// 6 + N + [`PAIRING_EXTRA`] modes, verified) and the static case (if loads are given).
+fn analyse_user_level(study: &UserStudy, mesh: &Mesh, source: &str) -> Result<LevelOutcome> {
+    use crate::analysis::modal::ModalOptions;
+    let mut out = LevelOutcome {
+        freqs: Vec::new(),
+        modes: None,
+        statics: None,
+        dofs: 0,
+    };
+    if study.frequencies > 0 {
+        let opts = ModalOptions {
+            spec: study.spec.clone(),
+            target: ModalTarget::Modes(6 + study.frequencies + PAIRING_EXTRA),
+            ..Default::default()
+        };
+        let run = crate::app::engines::Engine::Native.solve_mesh(mesh, source, &opts, 0.0)?;
+        let r = &run.report;
+        if !(r.complete && r.accurate) {
+            return Err(Error::Verification(format!(
+                "{source}: the modal solution failed its Sturm-sequence or residual check"
+            )));
+        }
+        let elastic: Vec<usize> = (0..r.modes.len()).filter(|&i| r.modes[i].kind == "elastic").collect();
+        out.freqs = elastic.iter().map(|&i| r.modes[i].frequency_hz).collect();
+        if out.freqs.len() < study.frequencies {
+            return Err(Error::Verification(format!(
+                "{source}: {} elastic modes found, {} asked (--frequencies)",
+                out.freqs.len(),
+                study.frequencies
+            )));
+        }
+        out.modes = Some(LevelModes {
+            points: mesh.nodes.clone(),
+            freqs: out.freqs.clone(),
+            shapes: elastic.iter().filter_map(|&i| run.shapes.get(i).cloned()).collect(),
+        });
+        out.dofs = r.dofs;
+    }
+    if let Some(loads) = &study.loads {
+        let opts = crate::analysis::statics::StaticOptions {
+            spec: study.spec.clone(),
+            cases: vec![loads.clone()],
+        };
+        let run = crate::analysis::statics::run_static(mesh, source, &opts)?;
+        let case = run
+            .cases
+            .first()
+            .ok_or_else(|| Error::Verification(format!("{source}: the static solution gave no load case")))?;
+        out.statics = Some(match case.references.iter().find_map(|r| r.stiffness) {
+            Some(k) => (k, true),
+            None => (case.max_displacement.0, false),
+        });
+        if out.dofs == 0 {
+            out.dofs = run.dofs;
+        }
+    }
+    Ok(out)
+}
+
+/// Analyse every mesh made: the rows (values filled later), their modes and static kind.
+fn analyse_levels(
+    study: &UserStudy,
+    pending: Vec<Pending>,
+    failed: &mut Vec<String>,
+    progress: &dyn Fn(&str),
+) -> Result<(Vec<UserRow>, Vec<LevelOutcome>)> {
+    let (mut rows, mut outcomes) = (Vec::new(), Vec::new());
+    for p in pending {
+        let source = p.path.display().to_string();
+        let reset = reset_peak_memory();
+        let t = Instant::now();
+        let why = if p.warnings.is_empty() {
+            String::new()
+        } else {
+            format!(" (gmsh: {})", p.warnings)
+        };
+        // A mesh gmsh wrote without volume cells (an open surface loop: gmsh only warns) is a
+        // failed level like a gmsh error; a user's mesh that cannot be read is an input error.
+        let mesh = match crate::input::source::load(&source, study.length_scale) {
+            Ok(m) => Some(m),
+            Err(e) if p.size.is_some() => {
+                let msg = format!(
+                    "{}: no volume cells in gmsh's mesh: {e}{why}; a closed surface loop and, if the geometry has \
+                     physical groups, a Physical Volume are needed",
+                    p.label
+                );
+                progress(&format!("error: {msg}"));
+                failed.push(msg);
+                None
+            }
+            Err(e) => return Err(e),
+        };
+        let Some(mesh) = mesh else { continue };
+        let (Some(form), Some(edge)) = (volume_formulation(&mesh), mean_edge_length(&mesh)) else {
+            let msg = format!(
+                "{}: the mesh has no volume cells{why}; a closed surface loop and, if the geometry has physical \
+                 groups, a Physical Volume are needed",
+                p.label
+            );
+            if p.size.is_none() {
+                return Err(Error::InvalidInput(format!("converge: {msg}")));
+            }
+            progress(&format!("error: {msg}"));
+            failed.push(msg);
+            continue;
+        };
+        let edge = edge / study.length_scale;
+        progress(&format!(
+            "solving {} ({form}, mean edge {edge:.4} {}, {} nodes)",
+            p.label,
+            study.length_unit,
+            mesh.n_nodes()
+        ));
+        let o = analyse_user_level(study, &mesh, &source)
+            .map_err(|e| Error::InvalidInput(format!("converge: {}: {e}", p.label)))?;
+        let time_s = t.elapsed().as_secs_f64();
+        let mem = if reset {
+            crate::analysis::modal::peak_memory()
+        } else {
+            None
+        };
+        let shown: Vec<String> = o
+            .freqs
+            .iter()
+            .take(study.frequencies)
+            .map(|f| format!("{f:.4} Hz"))
+            .collect();
+        progress(&format!(
+            "{} {form}: {}{} ({} DOFs, {time_s:.2} s)",
+            p.label,
+            shown.join(", "),
+            o.statics.map(|(v, _)| format!(" {v:.6e}")).unwrap_or_default(),
+            o.dofs
+        ));
+        rows.push(UserRow {
+            formulation: form,
+            size: p.size.unwrap_or(edge),
+            mean_edge: edge,
+            mesh: source,
+            dofs: o.dofs,
+            mesh_time_s: p.mesh_time,
+            time_s,
+            peak_memory_bytes: mem,
+            values: Vec::new(),
+            errors: Vec::new(),
+            paired: Vec::new(),
+        });
+        outcomes.push(o);
+    }
+    Ok((rows, outcomes))
+}
+
+/// The rows grouped by formulation (first appearance), each group coarse to fine (largest size
+/// first): indices into the rows.
+fn groups(rows: &[UserRow]) -> Vec<(String, Vec<usize>)> {
+    let mut g: Vec<(String, Vec<usize>)> = Vec::new();
+    for (i, r) in rows.iter().enumerate() {
+        match g.iter_mut().find(|(f, _)| *f == r.formulation) {
+            Some((_, v)) => v.push(i),
+            None => g.push((r.formulation.clone(), vec![i])),
+        }
+    }
+    for (_, v) in &mut g {
+        v.sort_by(|&a, &b| rows[b].size.total_cmp(&rows[a].size));
+    }
+    g
+}
+
+/// Fill each row's values: frequency j is the level's elastic mode paired by MAC with the
+/// finest level's mode j of the same formulation; the static quantity follows.
+fn fill_values(study: &UserStudy, rows: &mut [UserRow], outcomes: &[LevelOutcome]) {
+    for (_, idx) in groups(rows) {
+        let lm: Vec<Option<LevelModes>> = idx.iter().map(|&i| outcomes[i].modes.clone()).collect();
+        for &i in &idx {
+            rows[i].values = outcomes[i].freqs.iter().take(study.frequencies).copied().collect();
+            rows[i].paired = vec![None; study.frequencies];
+        }
+        for j in 0..study.frequencies {
+            for (&i, p) in idx.iter().zip(pair_mode_by_mac(&lm, j)) {
+                if let Some((k, m)) = p {
+                    if k != j {
+                        rows[i].values[j] = outcomes[i].freqs[k];
+                        rows[i].paired[j] = Some((k + 1, m));
+                    }
+                }
+            }
+        }
+        for &i in &idx {
+            if let Some((v, _)) = outcomes[i].statics {
+                rows[i].values.push(v);
+            }
+        }
+    }
+}
+
+/// The fit of one formulation's levels (coarse to fine) for quantity `q`, refusing levels that
+/// do not converge monotonically.
+fn fit(rows: &[UserRow], form: &str, idx: &[usize], q: usize, name: &str, unit: &str, size_unit: &str) -> Result<Fit> {
+    let levels: Vec<(String, f64)> = idx
+        .iter()
+        .map(|&i| (format!("size {} {size_unit}", rows[i].size), rows[i].values[q]))
+        .collect();
+    check_monotone(form, name, unit, &levels)?;
+    let n = idx.len();
+    let finest = rows[idx[n - 1]].values[q];
+    let rich = (n >= 3)
+        .then(|| {
+            let at = |k: usize| &rows[idx[n - 3 + k]];
+            richardson_sizes(
+                [at(0).mean_edge, at(1).mean_edge, at(2).mean_edge],
+                [at(0).values[q], at(1).values[q], at(2).values[q]],
+            )
+        })
+        .flatten();
+    Ok(Fit {
+        formulation: form.to_string(),
+        levels: n,
+        finest,
+        extrapolated: rich.map(|r| r.0),
+        order: rich.map(|r| r.1),
+        error_estimate: rich.map(|(v, _)| ((finest - v) / v).abs()),
+    })
+}
+
+/// Run a study on the user's part: mesh (a failed size is reported and the others go on), solve,
+/// refuse levels that do not converge monotonically, extrapolate each formulation's three
+/// finest levels, and pick the cheapest run within the tolerance.
+pub fn run_user(study: &UserStudy, progress: &dyn Fn(&str)) -> Result<UserConvergence> {
+    let (pending, mut failed) = mesh_levels(&study.levels, progress)?;
+    let (rows, outcomes) = analyse_levels(study, pending, &mut failed, progress)?;
+    // Rows by formulation, coarse to fine.
+    let order: Vec<usize> = groups(&rows).into_iter().flat_map(|(_, v)| v).collect();
+    let mut slots: Vec<Option<(UserRow, LevelOutcome)>> = rows.into_iter().zip(outcomes).map(Some).collect();
+    let (mut rows, outcomes): (Vec<UserRow>, Vec<LevelOutcome>) = order.iter().filter_map(|&i| slots[i].take()).unzip();
+    let cannot = |why: String| {
+        let f = if failed.is_empty() {
+            String::new()
+        } else {
+            format!("; failed levels: {}", failed.join("; "))
+        };
+        if failed.is_empty() {
+            Error::param("sizes", format!("converge: {why}"))
+        } else {
+            Error::Engine {
+                engine: "gmsh".into(),
+                msg: format!("converge: {why}{f}"),
+            }
+        }
+    };
+    if rows.is_empty() {
+        return Err(cannot("no level could be meshed".into()));
+    }
+    fill_values(study, &mut rows, &outcomes);
+    let mut names: Vec<(String, String)> = (1..=study.frequencies)
+        .map(|j| (format!("elastic frequency {j}"), "Hz".to_string()))
+        .collect();
+    if let Some(o) = outcomes.first().and_then(|o| o.statics) {
+        names.push(if o.1 {
+            ("stiffness".into(), "N/m".into())
+        } else {
+            ("largest displacement".into(), "m".into())
+        });
+    }
+    let groups = groups(&rows);
+    let mut quantities = Vec::new();
+    for (q, (name, unit)) in names.iter().enumerate() {
+        let fits = groups
+            .iter()
+            .map(|(f, idx)| fit(&rows, f, idx, q, name, unit, &study.length_unit))
+            .collect::<Result<Vec<Fit>>>()?;
+        let best = fits
+            .iter()
+            .filter(|f| f.extrapolated.is_some())
+            .min_by(|a, b| {
+                a.error_estimate
+                    .unwrap_or(1.0)
+                    .total_cmp(&b.error_estimate.unwrap_or(1.0))
+            })
+            .ok_or_else(|| {
+                let have: Vec<String> = groups.iter().map(|(f, i)| format!("{f}: {} levels", i.len())).collect();
+                cannot(format!(
+                    "{name}: Richardson extrapolation needs three levels of one formulation with decreasing mean \
+                     edge length and an observed order between 0.05 and 20 ({})",
+                    have.join(", ")
+                ))
+            })?;
+        let (estimate, from) = (best.extrapolated.unwrap_or(best.finest), best.formulation.clone());
+        for r in rows.iter_mut() {
+            r.errors.push((r.values[q] - estimate) / estimate);
+        }
+        let cheapest = (0..rows.len())
+            .filter(|&i| rows[i].errors[q].abs() <= study.tolerance)
+            .min_by(|&a, &b| rows[a].time_s.total_cmp(&rows[b].time_s));
+        quantities.push(UserQuantity {
+            name: name.clone(),
+            unit: unit.clone(),
+            fits,
+            estimate,
+            estimate_from: from,
+            cheapest,
+        });
+    }
+    let cheapest = (0..rows.len())
+        .filter(|&i| rows[i].errors.iter().all(|e| e.abs() <= study.tolerance))
+        .min_by(|&a, &b| rows[a].time_s.total_cmp(&rows[b].time_s));
+    Ok(UserConvergence {
+        name: study.name.clone(),
+        tolerance: study.tolerance,
+        length_unit: study.length_unit.clone(),
+        rows,
+        quantities,
+        cheapest,
+        failed,
+    })
+}
+
+/// The study on the user's part as markdown: per quantity the levels, the extrapolation of each
+/// formulation and the cheapest run within the tolerance.
+pub fn user_markdown(c: &UserConvergence) -> String {
+    let u = &c.length_unit;
+    let mut s = format!(
+        "{}: {} levels; sizes in {u}; tolerance {}\n",
+        c.name,
+        c.rows.len(),
+        pct(c.tolerance)
+    );
+    for (q, qu) in c.quantities.iter().enumerate() {
+        s.push_str(&format!(
+            "\n## {} [{}]\n\nbest estimate {:.6e} {} (Richardson extrapolation of {})\n\n",
+            qu.name, qu.unit, qu.estimate, qu.unit, qu.estimate_from
+        ));
+        s.push_str(&format!(
+            "| formulation | size [{u}] | mean edge [{u}] | DOFs | value | error | mesh [s] | solve [s] |\n"
+        ));
+        s.push_str("|---|---:|---:|---:|---:|---:|---:|---:|\n");
+        for r in &c.rows {
+            s.push_str(&format!(
+                "| {} | {} | {:.4} | {} | {:.6e}{} | {:+.3} % | {} | {:.3} |\n",
+                r.formulation,
+                r.size,
+                r.mean_edge,
+                r.dofs,
+                r.values[q],
+                match r.paired.get(q).copied().flatten() {
+                    Some((k, m)) => format!(" (mode {k}, MAC {m:.2})"),
+                    None => String::new(),
+                },
+                r.errors[q] * 100.0,
+                r.mesh_time_s.map(|t| format!("{t:.2}")).unwrap_or_else(|| "–".into()),
+                r.time_s
+            ));
+        }
+        s.push_str(
+            "\n| formulation | levels | finest | Richardson | observed order | error estimate of the finest |\n",
+        );
+        s.push_str("|---|---:|---:|---:|---:|---:|\n");
+        for f in &qu.fits {
+            let o = |v: Option<f64>, k: &dyn Fn(f64) -> String| v.map(k).unwrap_or_else(|| "–".into());
+            s.push_str(&format!(
+                "| {} | {} | {:.6e} | {} | {} | {} |\n",
+                f.formulation,
+                f.levels,
+                f.finest,
+                o(f.extrapolated, &|v| format!("{v:.6e}")),
+                o(f.order, &|p| format!("{p:.2}")),
+                o(f.error_estimate, &|e| format!("{:.3} %", e * 100.0)),
+            ));
+        }
+        s.push_str(&format!(
+            "\n- cheapest within {}: {}\n",
+            pct(c.tolerance),
+            row_text(c, qu.cheapest, q)
+        ));
+    }
+    if c.quantities.len() > 1 {
+        s.push_str(&format!(
+            "\ncheapest within {} for every quantity: {}\n",
+            pct(c.tolerance),
+            row_text(c, c.cheapest, 0)
+        ));
+    }
+    for f in &c.failed {
+        s.push_str(&format!("\nfailed: {f}\n"));
+    }
+    s
+}
+
+/// One row named for the cheapest line.
+fn row_text(c: &UserConvergence, i: Option<usize>, q: usize) -> String {
+    match i {
+        Some(i) => {
+            let r = &c.rows[i];
+            format!(
+                "{} at size {} {} ({:+.3} %, {:.3} s, {} DOFs)",
+                r.formulation,
+                r.size,
+                c.length_unit,
+                r.errors[q] * 100.0,
+                r.time_s,
+                r.dofs
+            )
+        }
+        None => "none of the runs".into(),
+    }
+}
+
+/// Write `converge.md`, `converge.json` and the plots of |error| against analysis time
+/// (`converge.svg` for the first quantity, `converge_2.svg`, … for the others) to `dir`.
+pub fn write_user_outputs(c: &UserConvergence, dir: &Path) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let mut written = Vec::new();
+    let p = dir.join("converge.md");
+    std::fs::write(&p, user_markdown(c)).map_err(|e| Error::io(&p, e))?;
+    written.push(p);
+    let p = dir.join("converge.json");
+    let text = serde_json::to_string_pretty(c).map_err(|e| Error::output("JSON", e))?;
+    std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
+    written.push(p);
+    for (q, qu) in c.quantities.iter().enumerate() {
+        let view = Convergence {
+            name: format!("{}, {}", c.name, qu.name),
+            quantity: qu.name.clone(),
+            unit: qu.unit.clone(),
+            reference: qu.estimate,
+            reference_kind: format!("Richardson extrapolation of {}", qu.estimate_from),
+            rows: c
+                .rows
+                .iter()
+                .map(|r| LevelResult {
+                    formulation: r.formulation.clone(),
+                    mesh: format!("{}", r.size),
+                    value: r.values[q],
+                    error: r.errors[q],
+                    dofs: r.dofs,
+                    time_s: r.time_s,
+                    peak_memory_bytes: r.peak_memory_bytes,
+                    paired: r.paired.get(q).copied().flatten(),
+                })
+                .collect(),
+            cheapest: vec![(c.tolerance, qu.cheapest)],
+        };
+        let p = if q == 0 {
+            dir.join("converge.svg")
+        } else {
+            dir.join(format!("converge_{}.svg", q + 1))
+        };
+        write_svg(&view, &p)?;
+        written.push(p);
+    }
+    Ok(written)
 }
