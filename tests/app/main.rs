@@ -9,6 +9,7 @@ mod batch_resume;
 mod cli;
 mod converge_pairing;
 mod design;
+mod design_envelope;
 mod design_inputs;
 mod dynamics;
 mod export_engine;

@@ -18,6 +18,13 @@ use crate::{Error, Result};
 /// displacement (Pa/m), both from a guided 1000 N load.
 pub fn leaf_fe(d: &Design, h: f64) -> Result<(f64, f64)> {
     let l = &d.leaf;
+    let key = super::cache::key("leaf_fe", &(l.length, l.width, h, l.material, l.divisions));
+    Ok(*super::cache::get_or(key, || leaf_fe_fresh(d, h))?)
+}
+
+/// [`leaf_fe`] computed (not memoised).
+fn leaf_fe_fresh(d: &Design, h: f64) -> Result<(f64, f64)> {
+    let l = &d.leaf;
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let spec = ModelSpec {
         material: Material {
@@ -61,6 +68,12 @@ pub fn coil_fe(d: &Design) -> Result<f64> {
 /// Stiffness of one coil isolator (beam helix, N/m) with its bottom end clamped and its top end
 /// guided along `axis` (0 = x, 2 = z) under `force` N along it.
 pub fn coil_stiffness_along(d: &Design, axis: usize, force: f64) -> Result<f64> {
+    let key = super::cache::key("coil", &(&d.coil, axis, force));
+    Ok(*super::cache::get_or(key, || coil_stiffness_fresh(d, axis, force))?)
+}
+
+/// [`coil_stiffness_along`] computed (not memoised).
+fn coil_stiffness_fresh(d: &Design, axis: usize, force: f64) -> Result<f64> {
     let c = &d.coil;
     let hp = HelixParams {
         mean_diameter: c.mean_diameter,
@@ -274,6 +287,13 @@ pub fn table_parts(d: &Design) -> Result<(crate::mesh::Mesh, Vec<CouplingSpec>, 
 
 /// Work-table modal analysis (shells, free–free): mass and the first six elastic frequencies.
 pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
+    let key = super::cache::key("table_fe", &(&d.table, d.steel, &d.spacers));
+    let r = super::cache::get_or(key, || table_fe_fresh(d))?;
+    Ok((r.0, r.1.clone(), super::cache::clone_run(&r.2), r.3.clone()))
+}
+
+/// [`table_fe`] computed (not memoised).
+fn table_fe_fresh(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
     let (mesh, links, thick) = table_parts(d)?;
     let mat = Material {
         young: d.steel[0],
@@ -332,6 +352,13 @@ pub fn estimate_dofs(d: &Design) -> Result<usize> {
 /// the end face, the clamp face held: six FE statics with one component of the end's rigid
 /// coupling prescribed each, the column the reaction it takes.
 pub fn leaf_end_stiffness(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
+    let l = &d.leaf;
+    let key = super::cache::key("leaf_end", &(l.length, l.width, h, l.material, l.divisions));
+    Ok(*super::cache::get_or(key, || leaf_end_stiffness_fresh(d, h))?)
+}
+
+/// [`leaf_end_stiffness`] computed (not memoised).
+fn leaf_end_stiffness_fresh(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
     let l = &d.leaf;
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let mut k = [[0.0; 6]; 6];
