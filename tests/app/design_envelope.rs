@@ -154,3 +154,72 @@ fn corner_patterns_are_the_worst_and_opposite_corners() {
         vec![vec![-1.0, 1.0], vec![1.0, -1.0], vec![-1.0, -1.0], vec![1.0, 1.0]]
     );
 }
+
+#[test]
+fn linear_transient_matches_the_two_mass_startup() {
+    // The generic n-DOF integration (matrices, ramped phase, bisected kinks) against the
+    // two-mass start-up's own right-hand side switched onto the mains at t = 0: the same
+    // equations by two codings, both at rtol 1e-10; 1e-7 of the amplitude allows for the kink
+    // times differing in their last bits (bisection against the closed form).
+    use vibrofem::app::dynamics::electromagnet::RectifiedDrive;
+    use vibrofem::app::dynamics::ode::Dopri5Options;
+    use vibrofem::app::dynamics::transient::{Ramp, TransientOptions, simulate_linear, simulate_startup};
+    use vibrofem::app::dynamics::two_mass::TwoMass;
+    let tm = TwoMass::paper();
+    let drive = RectifiedDrive::paper();
+    let opts = TransientOptions {
+        t_end: 0.1,
+        samples_per_period: 40,
+        ..Default::default()
+    };
+    let a = simulate_startup(&tm, &drive, &opts).unwrap();
+    let (m, c, k) = tm.matrices();
+    let flat = |x: nalgebra::Matrix2<f64>| vec![x[(0, 0)], x[(0, 1)], x[(1, 0)], x[(1, 1)]];
+    let ramp = Ramp {
+        omega_mains: drive.omega_mains,
+        up_s: 0.0,
+        hold_s: 1.0,
+        down_s: 0.0,
+    };
+    let dt = std::f64::consts::TAU / drive.omega_force() / 40.0;
+    let b = simulate_linear(
+        &flat(m),
+        &flat(c),
+        &flat(k),
+        &[-1.0, 1.0],
+        drive.p_em,
+        &ramp,
+        0.1,
+        dt,
+        &Dopri5Options::default(),
+    )
+    .unwrap();
+    assert_eq!(a.t.len(), b.t.len());
+    let scale = a.x1.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+    for i in 0..a.t.len() {
+        assert!((a.x1[i] - b.x[i][0]).abs() < 1e-7 * scale, "x1 at {}", a.t[i]);
+        assert!((a.x2[i] - b.x[i][1]).abs() < 1e-7 * scale, "x2 at {}", a.t[i]);
+    }
+}
+
+#[test]
+fn ramp_phase_and_kinks() {
+    use vibrofem::app::dynamics::transient::Ramp;
+    let r = Ramp {
+        omega_mains: 314.0,
+        up_s: 2.0,
+        hold_s: 1.0,
+        down_s: 2.0,
+    };
+    // Continuous phase at the switching times; the frequency runs 0 → ω → 0.
+    for t in [2.0, 3.0] {
+        assert!((r.phase(t - 1e-9).unwrap() - r.phase(t + 1e-9).unwrap()).abs() < 1e-6);
+    }
+    assert_eq!(r.omega_at(1.0), 157.0);
+    assert!(r.phase(5.5).is_none());
+    // Every kink is a zero of sin φ: φ = nπ.
+    for t in r.kinks(6.0).into_iter().filter(|t| ![2.0, 3.0, 5.0].contains(t)) {
+        let ph = r.phase(t).unwrap() / std::f64::consts::PI;
+        assert!((ph - ph.round()).abs() < 1e-9, "{t}: {ph}");
+    }
+}

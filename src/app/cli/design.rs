@@ -65,6 +65,15 @@ pub fn design_cmd(a: &DesignArgs) -> Result<i32> {
     } else {
         None
     };
+    let soft = design::startup::run(&d, &r, design::startup::RAMP_S)?;
+    let switched = design::startup::run(&d, &r, 0.0)?;
+    let at = report
+        .sections
+        .iter()
+        .position(|s| s.id == "quantities")
+        .unwrap_or(report.sections.len());
+    report.sections.insert(at, design::startup::section(&soft, &switched));
+    report.data["startup"] = serde_json::json!({ "ramped": json_value(&soft)?, "switched": json_value(&switched)? });
     let margin = d.search.required_margin;
     let fails = r.checks.iter().any(|c| !c.ok)
         || env

@@ -31,6 +31,7 @@ pub mod reference;
 pub mod report;
 pub mod results;
 pub mod search;
+pub mod startup;
 
 pub use chain::run_design;
 pub use envelope::{EnvelopeDesign, EnvelopeResult};
