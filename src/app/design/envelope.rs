@@ -486,7 +486,11 @@ pub fn run(d: &Design, r: &DesignReport, progress: &dyn Fn(&str)) -> Result<Enve
 /// The corner sign patterns an envelope ran (to reuse on a variant of its design).
 pub fn patterns_of(e: &EnvelopeResult) -> Vec<Vec<f64>> {
     let mut out: Vec<Vec<f64>> = vec![];
-    for r in e.runs.iter().filter(|r| r.label.starts_with(&format!("{} corner ", r.case))) {
+    for r in e
+        .runs
+        .iter()
+        .filter(|r| r.label.starts_with(&format!("{} corner ", r.case)))
+    {
         let p: Vec<f64> = e
             .tolerance_order
             .iter()

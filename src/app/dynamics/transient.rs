@@ -329,7 +329,12 @@ impl Ramp {
             }
             out.push(0.5 * (a + b));
         }
-        out.retain(|&t| t > 0.0 && t < t_end);
+        // A zero of sin φ may fall on a switching time or on the end to rounding: breakpoints
+        // closer than 1 ns to another, to 0 or to `t_end` would leave the integrator a step of
+        // rounding size.
+        out.retain(|&t| t > 1e-9 && t < t_end - 1e-9);
+        out.sort_by(f64::total_cmp);
+        out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
         out
     }
 }
