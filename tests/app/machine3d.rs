@@ -260,6 +260,12 @@ fn search_reports_the_lightest_passing_variant() {
     d.search.n_trans_webs = vec![3];
     d.search.spacers = vec!["plates".into()];
     d.search.max_full_runs = 1;
+    // The table search alone, at the nominal point (issue 29 added pulls, leaf moves, a margin
+    // and the envelope to the defaults).
+    d.search.pull = vec![];
+    d.search.leaf_shift = vec![0.0];
+    d.search.required_margin = 0.0;
+    d.search.over_envelope = false;
     let o = search(&d, None, &|_| {}).unwrap();
     assert_eq!(o.candidates.len(), 2);
     assert!(o.candidates[0].mass_kg < o.candidates[1].mass_kg, "lightest first");

@@ -10,6 +10,7 @@ mod cli;
 mod converge_geo;
 mod converge_pairing;
 mod design;
+mod design_envelope;
 mod design_fatigue;
 mod design_inputs;
 mod design_machine;

@@ -52,6 +52,8 @@ pub struct Design {
     pub spacers: String,
     /// The search for a passing variant when a check fails.
     pub search: SearchDesign,
+    /// Load cases and tolerance bands every check must hold over ([`super::envelope`]).
+    pub envelope: super::envelope::EnvelopeDesign,
 }
 
 /// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
@@ -69,6 +71,10 @@ pub struct MassDesign {
     pub active_extra: f64,
     /// Reactive mass m2 (magnet cores, frame, tuning plates), kg.
     pub reactive: f64,
+    /// Centre `[x, y]` (m, from the table centre) of the load moving with the table: at the
+    /// centre it is spread over the whole work surface; elsewhere (an eccentric load) over the
+    /// work-surface nodes within a quarter of the table's length and width of that point.
+    pub load_offset: [f64; 2],
 }
 
 /// Flat leaf springs.
@@ -244,6 +250,7 @@ impl Default for MassDesign {
             load_share: 0.0,
             active_extra: 206.7 - 163.0,
             reactive: 161.8,
+            load_offset: [0.0, 0.0],
         }
     }
 }
@@ -385,6 +392,7 @@ impl Design {
             machine: Default::default(),
             spacers: "plates".into(),
             search: Default::default(),
+            envelope: Default::default(),
         }
     }
 
@@ -417,7 +425,8 @@ impl Design {
         self.validate_parts()?;
         self.validate_fatigue()?;
         self.machine.validate(self)?;
-        self.search.validate()
+        self.search.validate()?;
+        self.envelope.validate(self)
     }
 
     /// Every number of the file with its range.
@@ -859,8 +868,21 @@ pub struct SearchDesign {
     pub trans_web_span: f64,
     /// Spacers: `"plates"`, `"channel10"`.
     pub spacers: Vec<String>,
-    /// At most this many whole chains (each some seconds).
+    /// At most this many whole chains (each some seconds; over the envelope, each variant's
+    /// corners).
     pub max_full_runs: usize,
+    /// Thinnest top plate the bolt recess allows (m): thinner `top_thickness` values are skipped.
+    pub top_min: f64,
+    /// Peak pulls per magnet to try (N); empty: the design's `drive.pull` only.
+    pub pull: Vec<f64>,
+    /// Moves of every leaf's table end along its own direction (m, towards its clamp; negative:
+    /// outwards) to try; `[0.0]` keeps the layout.
+    pub leaf_shift: Vec<f64>,
+    /// Margin every check must keep over the whole envelope (a fraction of its limit, as the
+    /// checks' margins).
+    pub required_margin: f64,
+    /// Judge the variants over the envelope (`[envelope]`); else at the nominal point only.
+    pub over_envelope: bool,
 }
 
 impl Default for SearchDesign {
@@ -879,8 +901,54 @@ impl Default for SearchDesign {
             n_trans_webs: vec![3],
             trans_web_span: 1.1,
             spacers: vec!["plates".into(), "channel10".into()],
-            max_full_runs: 4,
+            max_full_runs: 3,
+            top_min: 0.012,
+            pull: vec![330.0, 370.0, 410.0],
+            leaf_shift: vec![0.0, 0.03],
+            required_margin: 0.05,
+            over_envelope: true,
         }
+    }
+}
+
+impl SearchDesign {
+    /// The pull, leaf-position and margin fields.
+    fn validate_envelope_fields(&self) -> Result<()> {
+        let bad = |k: &str, m: String| bad(&format!("search.{k}"), m);
+        if !(self.top_min.is_finite() && self.top_min >= 0.0) {
+            return Err(bad(
+                "top_min",
+                format!("must be zero or positive, got {}", self.top_min),
+            ));
+        }
+        if self.top_thickness.iter().all(|&t| t < self.top_min) {
+            return Err(bad(
+                "top_min",
+                format!(
+                    "= {} m leaves no value of search.top_thickness {:?}",
+                    self.top_min, self.top_thickness
+                ),
+            ));
+        }
+        if self.pull.iter().any(|p| !(p.is_finite() && *p > 0.0)) {
+            return Err(bad(
+                "pull",
+                format!("must list positive pulls (N), got {:?}", self.pull),
+            ));
+        }
+        if self.leaf_shift.is_empty() || self.leaf_shift.iter().any(|x| !(x.is_finite() && x.abs() < 1.0)) {
+            return Err(bad(
+                "leaf_shift",
+                format!("must list moves under 1 m (e.g. [0.0]), got {:?}", self.leaf_shift),
+            ));
+        }
+        if !(self.required_margin.is_finite() && (0.0..1.0).contains(&self.required_margin)) {
+            return Err(bad(
+                "required_margin",
+                format!("must be at least 0 and below 1, got {}", self.required_margin),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -900,6 +968,8 @@ impl SearchDesign {
             self.n_trans_webs.len(),
             self.spacers.len(),
             self.long_web_span.len(),
+            self.pull.len().max(1),
+            self.leaf_shift.len(),
         ]
         .iter()
         .fold(1usize, |a, &n| a.saturating_mul(n))
@@ -947,6 +1017,7 @@ impl SearchDesign {
                 ),
             ));
         }
+        self.validate_envelope_fields()?;
         if self.max_full_runs == 0 || self.max_full_runs > 50 {
             return Err(bad(
                 "max_full_runs",

@@ -462,6 +462,7 @@ fn machine_layout(d: &Design, rigid: bool) -> Result<Layout> {
             }
         })
         .collect();
+    load_patch(d, &mut mesh, &mut block, bp, &top)?;
     mesh.blocks.push(block);
     Ok(Layout {
         mesh,
@@ -593,6 +594,25 @@ fn armature_patches(
     Ok(armatures)
 }
 
+/// The work-surface nodes carrying an eccentric load (`masses.load_offset` off the centre):
+/// those within a quarter of the table's length and width of the offset (group `load_patch`).
+fn load_patch(d: &Design, mesh: &mut Mesh, block: &mut CellBlock, bp: u32, top: &[u32]) -> Result<()> {
+    let o = d.masses.load_offset;
+    if o == [0.0, 0.0] {
+        return Ok(());
+    }
+    let h = [0.25 * d.table.length, 0.25 * d.table.top_width];
+    let nodes = patch(mesh, top, o, [1.0, 0.0], h, &vec![false; mesh.n_nodes()]);
+    if nodes.is_empty() {
+        return Err(bad(
+            "masses.load_offset",
+            format!("{o:?} m: no work-surface node within {h:?} m of it"),
+        ));
+    }
+    point_group(mesh, block, bp, "load_patch", &nodes);
+    Ok(())
+}
+
 /// The reactive mass (a uniform block's inertia), the armatures (`masses.active_extra` shared)
 /// and the load share spread over the work surface.
 fn machine_masses(d: &Design, n_armatures: usize) -> Masses {
@@ -620,7 +640,12 @@ fn machine_masses(d: &Design, n_armatures: usize) -> Masses {
     let load_mass = d.masses.load_share * d.masses.load;
     if load_mass > 0.0 {
         specs.push(PointMassSpec {
-            group: "top_plate".into(),
+            group: if d.masses.load_offset == [0.0, 0.0] {
+                "top_plate"
+            } else {
+                "load_patch"
+            }
+            .into(),
             mass: load_mass,
             inertia: [0.0; 6],
         });

@@ -11,14 +11,18 @@
 //! - [`plots`]: the figures written beside the report;
 //! - [`chain`]: the run as named steps ([`run_design`]);
 //! - [`report`]: [`DesignReport`] as a [`crate::app::report::Report`];
+//! - [`envelope`]: every check over the load cases and tolerance bands (through [`run_design`];
+//!   [`cache`] memoises the FE parts the runs share);
 //! - [`search`]: the lightest passing variant, through [`run_design`] (the chain does not know
 //!   the search exists).
 //!
 //! The lumped dynamics it uses (two-mass model, magnet, isolation, transient, tuning, plots) are
 //! the shared toolkit of [`crate::app::dynamics`].
 
+pub mod cache;
 pub mod chain;
 pub mod checks;
+pub mod envelope;
 pub mod fatigue;
 pub mod file;
 pub mod machine;
@@ -28,8 +32,10 @@ pub mod reference;
 pub mod report;
 pub mod results;
 pub mod search;
+pub mod startup;
 
 pub use chain::run_design;
+pub use envelope::{EnvelopeDesign, EnvelopeResult};
 pub use file::{
     CoilDesign, DampingDesign, Design, DriveDesign, LeafDesign, MAX_TRANSIENT_S, MachineDesign, MassDesign,
     SearchDesign, TableDesign,
@@ -41,4 +47,4 @@ pub use parts::{
 };
 pub use report::{report_html, report_markdown, verdict_text};
 pub use results::{ChainValues, Check, DesignReport, Quantity};
-pub use search::{Candidate, SearchOutcome, search, search_text};
+pub use search::{Candidate, SearchOutcome, search, search_text, search_with};

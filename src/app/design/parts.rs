@@ -33,26 +33,17 @@ pub struct LeafStresses {
     pub principal_per_m: f64,
 }
 
-/// Results of [`leaf_fe_stresses`] by their inputs (length, width, h, E, ν, ρ bits and the
-/// divisions), so that the fatigue check reads the stresses of the chain's last leaf solve.
-type LeafKey = ([u64; 6], [usize; 3]);
-static LEAF_CACHE: std::sync::Mutex<Vec<(LeafKey, LeafStresses)>> = std::sync::Mutex::new(Vec::new());
-
 /// The leaf's FE statics under a guided 1000 N load: stiffness and peak stresses per metre of
 /// guided displacement (nodal stresses of the hex20 solid, clamped at one end).
 pub fn leaf_fe_stresses(d: &Design, h: f64) -> Result<LeafStresses> {
     let l = &d.leaf;
-    let key: LeafKey = (
-        [l.length, l.width, h, l.material[0], l.material[1], l.material[2]].map(f64::to_bits),
-        l.divisions,
-    );
-    if let Some(hit) = LEAF_CACHE
-        .lock()
-        .ok()
-        .and_then(|c| c.iter().find(|e| e.0 == key).map(|e| e.1))
-    {
-        return Ok(hit);
-    }
+    let key = super::cache::key("leaf_fe", &(l.length, l.width, h, l.material, l.divisions));
+    Ok(*super::cache::get_or(key, || leaf_fe_fresh(d, h))?)
+}
+
+/// [`leaf_fe_stresses`] computed (not memoised).
+fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafStresses> {
+    let l = &d.leaf;
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let spec = ModelSpec {
         material: Material {
@@ -99,12 +90,6 @@ pub fn leaf_fe_stresses(d: &Design, h: f64) -> Result<LeafStresses> {
         von_mises_per_m: vm / uz,
         principal_per_m: pr / uz,
     };
-    if let Ok(mut c) = LEAF_CACHE.lock() {
-        if c.len() >= 64 {
-            c.remove(0);
-        }
-        c.push((key, out));
-    }
     Ok(out)
 }
 
@@ -116,6 +101,12 @@ pub fn coil_fe(d: &Design) -> Result<f64> {
 /// Stiffness of one coil isolator (beam helix, N/m) with its bottom end clamped and its top end
 /// guided along `axis` (0 = x, 2 = z) under `force` N along it.
 pub fn coil_stiffness_along(d: &Design, axis: usize, force: f64) -> Result<f64> {
+    let key = super::cache::key("coil", &(&d.coil, axis, force));
+    Ok(*super::cache::get_or(key, || coil_stiffness_fresh(d, axis, force))?)
+}
+
+/// [`coil_stiffness_along`] computed (not memoised).
+fn coil_stiffness_fresh(d: &Design, axis: usize, force: f64) -> Result<f64> {
     let c = &d.coil;
     let hp = HelixParams {
         mean_diameter: c.mean_diameter,
@@ -329,6 +320,13 @@ pub fn table_parts(d: &Design) -> Result<(crate::mesh::Mesh, Vec<CouplingSpec>, 
 
 /// Work-table modal analysis (shells, free–free): mass and the first six elastic frequencies.
 pub fn table_fe(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
+    let key = super::cache::key("table_fe", &(&d.table, d.steel, &d.spacers));
+    let r = super::cache::get_or(key, || table_fe_fresh(d))?;
+    Ok((r.0, r.1.clone(), super::cache::clone_run(&r.2), r.3.clone()))
+}
+
+/// [`table_fe`] computed (not memoised).
+fn table_fe_fresh(d: &Design) -> Result<(f64, Vec<f64>, crate::analysis::modal::ModalRun, crate::mesh::Mesh)> {
     let (mesh, links, thick) = table_parts(d)?;
     let mat = Material {
         young: d.steel[0],
@@ -387,6 +385,13 @@ pub fn estimate_dofs(d: &Design) -> Result<usize> {
 /// the end face, the clamp face held: six FE statics with one component of the end's rigid
 /// coupling prescribed each, the column the reaction it takes.
 pub fn leaf_end_stiffness(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
+    let l = &d.leaf;
+    let key = super::cache::key("leaf_end", &(l.length, l.width, h, l.material, l.divisions));
+    Ok(*super::cache::get_or(key, || leaf_end_stiffness_fresh(d, h))?)
+}
+
+/// [`leaf_end_stiffness`] computed (not memoised).
+fn leaf_end_stiffness_fresh(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
     let l = &d.leaf;
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let mut k = [[0.0; 6]; 6];

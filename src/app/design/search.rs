@@ -11,6 +11,7 @@
 //! that pass it, the whole chain with the 3D machine. The first candidate whose chain passes
 //! every check is the lightest passing one.
 use super::chain::run_design;
+use super::envelope::EnvelopeResult;
 use super::file::{Design, MAX_SEARCH_VARIANTS, bad};
 use super::parts::{coil_fe, table_fe, table_mass};
 use super::results::DesignReport;
@@ -44,8 +45,25 @@ pub struct SearchOutcome {
     pub screened: usize,
     /// The lightest passing variant, with its design and full report.
     pub best: Option<(Design, DesignReport)>,
+    /// The passing variant's envelope (when judged over one).
+    pub envelope: Option<EnvelopeResult>,
+    /// The checks every whole-chain variant missed (no passing variant: the check no variant
+    /// could meet).
+    pub never_met: Vec<String>,
     /// The given table with plate and with channel spacers: (spacers, mass kg, f1 Hz).
     pub spacer_effect: Vec<(String, f64, f64)>,
+}
+
+/// The check ids every variant run whole failed (empty when none was run or one passed).
+fn never_met(c: &[Candidate]) -> Vec<String> {
+    let runs: Vec<&Vec<String>> = c.iter().filter_map(|c| c.failed.as_ref()).collect();
+    if runs.is_empty() || runs.iter().any(|f| f.is_empty()) {
+        return vec![];
+    }
+    let id = |f: &String| f.split(' ').next().unwrap_or("").to_string();
+    let mut out: Vec<String> = runs[0].iter().map(id).collect();
+    out.retain(|x| runs.iter().all(|f| f.iter().any(|g| &id(g) == x)));
+    out
 }
 
 fn label(t: &TableSpec, spacers: &str) -> String {
@@ -136,16 +154,16 @@ fn variants(d: &Design) -> Result<Vec<Design>> {
                             t.n_long_webs = nl;
                             t.n_trans_webs = nt;
                             t.long_web_span = span;
+                            if tt < s.top_min {
+                                continue;
+                            }
                             let Ok(p) = t.params() else { continue };
                             let mut v = d.clone();
                             v.table = p;
                             v.spacers = sp.clone();
                             v.search.enabled = false;
                             v.name = label(&t, sp);
-                            if v.validate().is_err() {
-                                continue;
-                            }
-                            designs.push(v);
+                            designs.extend(drive_and_leaves(&v));
                             if designs.len() > MAX_SEARCH_VARIANTS {
                                 return Err(bad(
                                     "search",
@@ -164,9 +182,88 @@ fn variants(d: &Design) -> Result<Vec<Design>> {
     Ok(designs)
 }
 
+/// The variants of `v` with each pull of `search.pull` (the design's if empty) and each move
+/// of the leaves of `search.leaf_shift`, the valid ones.
+fn drive_and_leaves(v: &Design) -> Vec<Design> {
+    let s = &v.search;
+    let pulls = if s.pull.is_empty() {
+        vec![v.drive.pull]
+    } else {
+        s.pull.clone()
+    };
+    let mut out = vec![];
+    for &p in &pulls {
+        for &dx in &s.leaf_shift {
+            let mut w = v.clone();
+            w.drive.pull = p;
+            for l in &mut w.machine.leaves {
+                let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
+                l[0] += dx * l[2] / n;
+                l[1] += dx * l[3] / n;
+            }
+            if s.pull.len() > 1 || s.leaf_shift.len() > 1 {
+                w.name = format!("{}; pull {p:.0} N, leaves moved {:.0} mm", v.name, dx * 1e3);
+            }
+            if w.validate().is_ok() {
+                out.push(w);
+            }
+        }
+    }
+    out
+}
+
+/// Whether run `r` of variant `v` passes: every check with `search.required_margin`, over the
+/// envelope when `search.over_envelope` and `[envelope]` are on (with the given design's corner
+/// patterns); the checks that miss, and the envelope.
+fn judge(
+    d: &Design,
+    v: &Design,
+    r: &DesignReport,
+    patterns: Option<&[Vec<f64>]>,
+    progress: &dyn Fn(&str),
+) -> Result<(Vec<String>, Option<EnvelopeResult>)> {
+    let margin = d.search.required_margin;
+    if d.search.over_envelope && d.envelope.enabled {
+        let mut v = v.clone();
+        v.envelope = d.envelope.clone();
+        let env = super::envelope::run_plan(&v, r, patterns, progress)?;
+        let short = env
+            .short(margin)
+            .into_iter()
+            .map(|(id, m, at)| format!("{id} (worst margin {:.1} % at {at})", 100.0 * m))
+            .collect();
+        return Ok((short, Some(env)));
+    }
+    let short = r
+        .checks
+        .iter()
+        .filter(|c| !(c.ok && c.margin >= margin))
+        .map(|c| {
+            format!(
+                "{} ({} vs {})",
+                c.id,
+                crate::io::fmt_sig(c.value, 4),
+                crate::io::fmt_sig(c.limit, 4)
+            )
+        })
+        .collect();
+    Ok((short, None))
+}
+
 /// Search the variants of `d`'s table for the lightest that passes every check.
 /// The whole chains write their plots to `out` (the passing variant's last).
 pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)) -> Result<SearchOutcome> {
+    search_with(d, out, None, progress)
+}
+
+/// [`search`] reusing the corner patterns of the given design's envelope (`patterns`) for the
+/// variants' envelopes.
+pub fn search_with(
+    d: &Design,
+    out: Option<&std::path::Path>,
+    patterns: Option<&[Vec<f64>]>,
+    progress: &dyn Fn(&str),
+) -> Result<SearchOutcome> {
     let s = &d.search;
     s.validate()?;
     let k_coil = coil_fe(d)?;
@@ -194,6 +291,7 @@ pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)
         .collect();
     let screened = rows.iter().filter(|r| r.1 >= d.target_amplitude).count();
     let mut best = None;
+    let mut envelope = None;
     let mut full_runs = 0;
     for (i, (_, x1, v)) in rows.iter().enumerate() {
         if *x1 < d.target_amplitude {
@@ -212,22 +310,11 @@ pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)
         full_runs += 1;
         progress(&format!("design search: whole chain, {}", v.name));
         let r = run_design(v, out, &|_| {})?;
-        let failed: Vec<String> = r
-            .checks
-            .iter()
-            .filter(|c| !c.ok)
-            .map(|c| {
-                format!(
-                    "{} ({} vs {})",
-                    c.id,
-                    crate::io::fmt_sig(c.value, 4),
-                    crate::io::fmt_sig(c.limit, 4)
-                )
-            })
-            .collect();
+        let (failed, env) = judge(d, v, &r, patterns, progress)?;
         candidates[i].failed = Some(failed.clone());
         if failed.is_empty() {
             best = Some((v.clone(), r));
+            envelope = env;
             break;
         }
     }
@@ -240,10 +327,13 @@ pub fn search(d: &Design, out: Option<&std::path::Path>, progress: &dyn Fn(&str)
         let (m, f, _, _) = table_fe(&v)?;
         spacer_effect.push((sp.to_string(), m, f.first().copied().unwrap_or(f64::NAN)));
     }
+    let never_met = never_met(&candidates);
     Ok(SearchOutcome {
         candidates,
         screened,
         best,
+        envelope,
+        never_met,
         spacer_effect,
     })
 }
@@ -308,8 +398,13 @@ pub fn search_text(d: &Design, o: &SearchOutcome) -> String {
         None => {
             let _ = writeln!(
                 s,
-                "\nno variant passes every check (within search.max_full_runs = {} whole chains)",
-                d.search.max_full_runs
+                "\nno variant passes every check (within search.max_full_runs = {} whole chains){}",
+                d.search.max_full_runs,
+                if o.never_met.is_empty() {
+                    String::new()
+                } else {
+                    format!("; no variant run could meet: {}", o.never_met.join(", "))
+                }
             );
         }
     }

@@ -256,3 +256,149 @@ impl Transient {
         })
     }
 }
+
+/// A ramped mains supply: the mains frequency rises linearly from 0 to `omega_mains` over
+/// `up_s`, holds for `hold_s`, falls linearly to 0 over `down_s`, and the supply is then off
+/// (`up_s = 0`: switched straight onto the mains; `down_s = 0`: switched off at full frequency).
+/// The pull is P_em·|sin φ(t)| with φ the mains phase ∫ω dt.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ramp {
+    /// Full mains angular frequency ω, rad/s.
+    pub omega_mains: f64,
+    /// Run-up time, s.
+    pub up_s: f64,
+    /// Time at full frequency, s.
+    pub hold_s: f64,
+    /// Run-down time, s.
+    pub down_s: f64,
+}
+
+impl Ramp {
+    /// When the supply goes off, s.
+    pub fn off(&self) -> f64 {
+        self.up_s + self.hold_s + self.down_s
+    }
+
+    /// Mains phase at `t` (None once the supply is off).
+    pub fn phase(&self, t: f64) -> Option<f64> {
+        let w = self.omega_mains;
+        let t1 = self.up_s + self.hold_s;
+        if t < 0.0 || t > self.off() {
+            None
+        } else if t < self.up_s {
+            Some(0.5 * w * t * t / self.up_s)
+        } else if t <= t1 {
+            Some(0.5 * w * self.up_s + w * (t - self.up_s))
+        } else {
+            let tau = t - t1;
+            Some(0.5 * w * self.up_s + w * self.hold_s + w * (tau - 0.5 * tau * tau / self.down_s))
+        }
+    }
+
+    /// Instantaneous mains angular frequency at `t`, rad/s.
+    pub fn omega_at(&self, t: f64) -> f64 {
+        let t1 = self.up_s + self.hold_s;
+        if t < 0.0 || t > self.off() {
+            0.0
+        } else if t < self.up_s {
+            self.omega_mains * t / self.up_s
+        } else if t <= t1 {
+            self.omega_mains
+        } else {
+            self.omega_mains * (1.0 - (t - t1) / self.down_s)
+        }
+    }
+
+    /// The zeros of sin φ (kinks of the pull) and the switching times, up to `t_end`.
+    pub fn kinks(&self, t_end: f64) -> Vec<f64> {
+        use std::f64::consts::PI;
+        let mut out = vec![self.up_s, self.up_s + self.hold_s, self.off()];
+        let phi_end = self.phase(self.off().min(t_end)).unwrap_or(0.0);
+        let n_max = (phi_end / PI).floor() as usize;
+        for n in 1..=n_max {
+            let target = n as f64 * PI;
+            // Bisection on the monotone phase (exact to rounding in 80 halvings).
+            let (mut a, mut b) = (0.0, self.off().min(t_end));
+            for _ in 0..80 {
+                let m = 0.5 * (a + b);
+                if self.phase(m).unwrap_or(f64::INFINITY) < target {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            out.push(0.5 * (a + b));
+        }
+        // A zero of sin φ may fall on a switching time or on the end to rounding: breakpoints
+        // closer than 1 ns to another, to 0 or to `t_end` would leave the integrator a step of
+        // rounding size.
+        out.retain(|&t| t > 1e-9 && t < t_end - 1e-9);
+        out.sort_by(f64::total_cmp);
+        out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        out
+    }
+}
+
+/// A linear system's transient: `x[k]` and `v[k]` are the displacements and velocities at `t[k]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearTransient {
+    /// Sample times, s.
+    pub t: Vec<f64>,
+    /// Displacements per sample.
+    pub x: Vec<Vec<f64>>,
+    /// Velocities per sample.
+    pub v: Vec<Vec<f64>>,
+}
+
+/// The response from rest of `M x'' + C x' + K x = b·P(t)` (n DOFs, row-major n×n matrices)
+/// under the pull P(t) = `p_em`·|sin φ(t)| of the ramped supply `ramp`, sampled every `dt` s to
+/// `t_end` (Dormand–Prince, no step across a kink of the pull or a switching time).
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_linear(
+    m: &[f64],
+    c: &[f64],
+    k: &[f64],
+    b: &[f64],
+    p_em: f64,
+    ramp: &Ramp,
+    t_end: f64,
+    dt: f64,
+    ode: &Dopri5Options,
+) -> Result<LinearTransient> {
+    let n = b.len();
+    if m.len() != n * n || c.len() != n * n || k.len() != n * n || n == 0 {
+        return Err(Error::param("b", format!("linear transient: matrices must be {n}×{n}")));
+    }
+    if !(t_end.is_finite() && t_end > 0.0 && dt.is_finite() && dt > 0.0 && t_end / dt < 5e7) {
+        return Err(Error::param(
+            "t_end",
+            format!("linear transient: t_end {t_end} s and dt {dt} s must be positive, with fewer than 5e7 samples"),
+        ));
+    }
+    let minv = nalgebra::DMatrix::from_row_slice(n, n, m)
+        .try_inverse()
+        .ok_or_else(|| Error::param("m", "linear transient: the mass matrix is singular"))?;
+    let rhs = |t: f64, y: &[f64], dy: &mut [f64]| {
+        let p = ramp.phase(t).map_or(0.0, |ph| p_em * ph.sin().abs());
+        let f: Vec<f64> = (0..n)
+            .map(|i| {
+                b[i] * p
+                    - (0..n)
+                        .map(|j| c[i * n + j] * y[n + j] + k[i * n + j] * y[j])
+                        .sum::<f64>()
+            })
+            .collect();
+        for i in 0..n {
+            dy[i] = y[n + i];
+            dy[n + i] = (0..n).map(|j| minv[(i, j)] * f[j]).sum();
+        }
+    };
+    let n_out = (t_end / dt - 1e-9).ceil() as usize;
+    let t_out: Vec<f64> = (0..=n_out).map(|i| i as f64 * dt).collect();
+    let sol = integrate(rhs, 0.0, &vec![0.0; 2 * n], &t_out, &ramp.kinks(t_out[n_out]), ode)?;
+    Ok(LinearTransient {
+        t: sol.t,
+        x: sol.y.iter().map(|y| y[..n].to_vec()).collect(),
+        v: sol.y.iter().map(|y| y[n..].to_vec()).collect(),
+    })
+}

@@ -1,0 +1,84 @@
+//! A memo of the design's FE parts, for runs that repeat them: the envelope's corners and the
+//! search's variants share the work table's modal run (one per table geometry), the leaf's FE
+//! statics (one per leaf geometry, material and thickness) and the coil's.
+//!
+//! Each entry is keyed by the serialized inputs the part reads (nothing else), so a hit returns
+//! exactly what the computation would: a corner run with memoised parts equals a run from
+//! scratch. The memo is process-wide and bounded ([`MAX_ENTRIES`]; when full it starts over);
+//! [`clear`] empties it and [`stats`] counts hits and misses.
+
+use crate::Result;
+use std::any::Any;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// Entries kept at most (a table's modal run is the largest, some megabytes).
+pub const MAX_ENTRIES: usize = 64;
+
+#[derive(Default)]
+struct Memo {
+    map: HashMap<String, Arc<dyn Any + Send + Sync>>,
+    hits: usize,
+    misses: usize,
+}
+
+fn memo() -> &'static Mutex<Memo> {
+    static M: OnceLock<Mutex<Memo>> = OnceLock::new();
+    M.get_or_init(|| Mutex::new(Memo::default()))
+}
+
+/// The key of `kind` computed from `inputs` (their JSON text: f64 values print exactly).
+pub fn key<T: serde::Serialize + ?Sized>(kind: &str, inputs: &T) -> String {
+    format!(
+        "{kind}:{}",
+        serde_json::to_string(inputs).unwrap_or_else(|e| format!("unserializable {e}"))
+    )
+}
+
+/// The value stored under `key`, or `compute()` stored there. The computation runs outside the
+/// lock (two threads may compute the same entry; both get the same value).
+pub fn get_or<T, F>(key: String, compute: F) -> Result<Arc<T>>
+where
+    T: Any + Send + Sync,
+    F: FnOnce() -> Result<T>,
+{
+    {
+        let mut m = memo().lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(v) = m.map.get(&key).cloned() {
+            if let Ok(v) = v.downcast::<T>() {
+                m.hits += 1;
+                return Ok(v);
+            }
+        }
+        m.misses += 1;
+    }
+    let v = Arc::new(compute()?);
+    let mut m = memo().lock().unwrap_or_else(|e| e.into_inner());
+    if m.map.len() >= MAX_ENTRIES {
+        m.map.clear();
+    }
+    m.map.insert(key, v.clone());
+    Ok(v)
+}
+
+/// Empty the memo (the next parts are computed afresh).
+pub fn clear() {
+    let mut m = memo().lock().unwrap_or_else(|e| e.into_inner());
+    m.map.clear();
+}
+
+/// (hits, misses) since the process started.
+pub fn stats() -> (usize, usize) {
+    let m = memo().lock().unwrap_or_else(|e| e.into_inner());
+    (m.hits, m.misses)
+}
+
+/// A copy of a modal run (its fields are all data).
+pub fn clone_run(r: &crate::analysis::modal::ModalRun) -> crate::analysis::modal::ModalRun {
+    crate::analysis::modal::ModalRun {
+        report: r.report.clone(),
+        shapes: r.shapes.clone(),
+        lambda: r.lambda.clone(),
+        vectors: r.vectors.clone(),
+    }
+}
