@@ -447,12 +447,9 @@ pub fn solve_pencil(
             s.as_ref().subcols(0, cand),
             1.0,
         );
-        // Op·Y (the next directions) and the backward errors of the Ritz pairs,
+        // The backward errors of the Ritz pairs,
         // ‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖): free of the cancellation a residual in the
         // K⁻¹ norm suffers on ill-conditioned (slender) models.
-        let mut opy = gy.clone();
-        fk.solve_in_place(opy.as_mut());
-        applications += cand;
         let ag = g.abs_mul_norms(y.as_ref());
         let ak = k.abs_mul_norms(y.as_ref());
         let eta: Vec<f64> = (0..cand)
@@ -498,7 +495,9 @@ pub fn solve_pencil(
         }
         // Expand with Op applied to the best unconverged Ritz vectors.
         let pick: Vec<usize> = (0..cand).filter(|&j| !converged[j]).take(b).collect();
-        let next = Mat::from_fn(n, pick.len(), |i, j| opy[(i, pick[j])]);
+        let mut next = Mat::from_fn(n, pick.len(), |i, j| gy[(i, pick[j])]);
+        fk.solve_in_place(next.as_mut());
+        applications += pick.len();
         if basis.cols + next.ncols() > nb {
             basis.restart(s.as_ref(), keep.min(c));
         }
