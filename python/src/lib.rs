@@ -649,7 +649,10 @@ impl PyModel {
     /// Modal analysis with `engine` (`native` or `slepc` on `ranks` MPI ranks: the command
     /// line's `--engine` switch). Returns (report JSON, eigenvalues, free-DOF vectors n × k,
     /// shapes at the mesh nodes n_nodes × 6 × k).
-    #[pyo3(signature = (n = None, band = None, shift_hz = None, block = 6, engine = "native", ranks = 1))]
+    /// With `prestress` (loads in the command line's grammar: `force`, `pressure`, `gravity`,
+    /// `displace`), the modes of the preloaded structure, (K + K_σ)x = λMx (native engine).
+    #[pyo3(signature = (n = None, band = None, shift_hz = None, block = 6, engine = "native", ranks = 1,
+        prestress = None))]
     #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     fn modes<'py>(
         &self,
@@ -660,6 +663,7 @@ impl PyModel {
         block: usize,
         engine: &str,
         ranks: usize,
+        prestress: Option<(Vec<String>, Vec<String>, Option<String>, Vec<String>)>,
     ) -> PyResult<(
         String,
         Bound<'py, PyArray1<f64>>,
@@ -690,17 +694,86 @@ impl PyModel {
             },
         )
         .map_err(err)?;
-        let system = self.system_task(engine.clone());
-        let out = interruptible(py, move || {
-            let sys = system()?;
-            let run = engine.solve(&sys, &params, Before::default())?;
-            modes_out(&sys, run)
-        })?;
+        let out = if let Some((force, pressure, gravity, displace)) = prestress {
+            if !matches!(engine, Engine::Native) {
+                return Err(InputError::new_err(
+                    "prestressed modes are solved by engine='native' only",
+                ));
+            }
+            let loads = LoadOptions {
+                force,
+                pressure,
+                gravity,
+                displace,
+            };
+            let (mesh, opts, source) = (self.mesh.clone(), self.options.clone(), self.source.clone());
+            interruptible(py, move || {
+                let mut spec = opts.spec()?;
+                let case = loads.apply(&mut spec)?;
+                let model = Model::build(&mesh, &spec, &source)?;
+                let mut sys = System::build(model, &SystemOptions::default(), &source)?;
+                vibrofem::analysis::prestress::prestress_system(&mut sys, &mesh, &case)?;
+                let run = vibrofem::analysis::modal::solve(&sys, &params)?;
+                modes_out(&sys, run)
+            })?
+        } else {
+            let system = self.system_task(engine.clone());
+            interruptible(py, move || {
+                let sys = system()?;
+                let run = engine.solve(&sys, &params, Before::default())?;
+                modes_out(&sys, run)
+            })?
+        };
         Ok((
             out.json,
             out.lambda.into_pyarray(py),
             out.vectors.into_pyarray(py),
             out.shapes.into_pyarray(py),
+        ))
+    }
+
+    /// Linear buckling (see `vibrofem buckling`) under one load case in the command line's
+    /// grammar: the `n` lowest positive load factors. Returns (report JSON, load factors,
+    /// shapes at the mesh nodes n_nodes × 3 × k, largest translation 1).
+    #[pyo3(signature = (n = 4, force = vec![], pressure = vec![], gravity = None, displace = vec![]))]
+    #[allow(clippy::type_complexity)]
+    fn buckling<'py>(
+        &self,
+        py: Python<'py>,
+        n: usize,
+        force: Vec<String>,
+        pressure: Vec<String>,
+        gravity: Option<String>,
+        displace: Vec<String>,
+    ) -> PyResult<(String, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray3<f64>>)> {
+        if n == 0 {
+            return Err(InputError::new_err("n must be at least 1"));
+        }
+        let loads = LoadOptions {
+            force,
+            pressure,
+            gravity,
+            displace,
+        };
+        let (mesh, opts, source) = (self.mesh.clone(), self.options.clone(), self.source.clone());
+        let run = interruptible(py, move || {
+            let mut spec = opts.spec()?;
+            let case = loads.apply(&mut spec)?;
+            let bo = vibrofem::analysis::buckling::BucklingOptions {
+                spec,
+                modes: n,
+                ..Default::default()
+            };
+            vibrofem::analysis::buckling::run_buckling(&mesh, &source, &bo, &case, 0.0)
+        })?;
+        let json = serde_json::to_string(&run.report).map_err(json_output).map_err(err)?;
+        let k = run.shapes.len();
+        let nn = run.shapes.first().map_or(0, |s| s.len() / 3);
+        let shapes = Array3::from_shape_fn((nn, 3, k), |(a, c, j)| run.shapes[j][3 * a + c]);
+        Ok((
+            json,
+            run.report.load_factors.clone().into_pyarray(py),
+            shapes.into_pyarray(py),
         ))
     }
 

@@ -4,6 +4,8 @@
 //!   (references in `validation/reference/`, regenerated live by `validation/run_live.sh`);
 //! - `published_shells_beams`: published benchmarks (Scordelis–Lo roof, Navier plate, MacNeal–
 //!   Harder, closed-form beams) and the formulation comparisons of scenes S1, S2, S5, S6, S7;
+//! - `buckling`: linear buckling against Euler columns (beams, hex20, tet10 with Engesser's
+//!   shear correction), the k = 4 plate and the prestressed beam's vanishing frequency;
 //! - `prestress`: prestressed modes against the axially loaded beam's closed form, and the
 //!   geometric stiffness kernels' exact properties.
 
@@ -11,6 +13,7 @@
 mod common;
 
 mod fatigue;
+mod buckling;
 mod harmonic;
 mod prestress;
 mod published_shells_beams;

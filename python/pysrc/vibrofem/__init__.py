@@ -489,14 +489,25 @@ class Model:
     def notes(self):
         return self._core.summary()[2]
 
-    def modes(self, n=None, band=None, shift_hz=None, block=6, engine="native", ranks=1):
+    def modes(self, n=None, band=None, shift_hz=None, block=6, engine="native", ranks=1, prestress=None):
         """The ``n`` lowest modes (12 by default; nearest ``shift_hz`` if given), or every mode
         with frequency in ``band = (f_lo, f_hi)`` Hz; verified (Sturm count, backward errors).
         ``engine="slepc"`` solves with SLEPc + MUMPS on ``ranks`` MPI ranks instead. A result
         that fails its verification is returned with ``complete``/``accurate`` False (the command
-        line then exits 2); check them."""
+        line then exits 2); check them. ``prestress=dict(force=..., pressure=..., gravity=...,
+        displace=...)`` (as :meth:`static`) gives the modes of the structure preloaded by that
+        static case, (K + K_σ)x = λMx (native engine)."""
+        pre = None
+        if prestress is not None:
+            if not isinstance(prestress, dict):
+                raise InputError("modes: prestress takes a dict of static loads, e.g. dict(force={'end': (0, 0, -1e3)})")
+            unknown = set(prestress) - {"force", "pressure", "gravity", "displace"}
+            if unknown:
+                raise InputError(f"modes: prestress: unknown load(s) {sorted(unknown)} (force, pressure, gravity, displace)")
+            pre = self._loads(**prestress)
         rep, lam, vec, shapes = self._core.modes(
-            n=n, band=None if band is None else tuple(band), shift_hz=shift_hz, block=block, engine=engine, ranks=ranks
+            n=n, band=None if band is None else tuple(band), shift_hz=shift_hz, block=block, engine=engine, ranks=ranks,
+            prestress=pre,
         )
         r = _json.loads(rep)
         rows = r["modes"]
@@ -545,6 +556,43 @@ class Model:
             probe=[] if probe is None else _names(probe),
         )
         return Harmonic(frequencies_hz=freqs, displacement=re + 1j * im, report=_json.loads(rep), mesh=self.mesh)
+
+    @staticmethod
+    def _loads(force=None, pressure=None, gravity=None, displace=None):
+        """One static load case in the command line's grammar: (force, pressure, gravity,
+        displace)."""
+        disp = []
+        if isinstance(displace, dict):
+            for g, v in displace.items():
+                disp.append(f"{g}=" + ",".join("-" if a is None else _num(a) for a in v))
+        elif displace is not None:
+            disp = _names(displace)
+        return (
+            _group_values(force, "force"),
+            _group_values(pressure, "pressure"),
+            None if gravity is None else _nums(gravity),
+            disp,
+        )
+
+    def buckling(self, force=None, pressure=None, gravity=None, displace=None, n=4):
+        """Linear buckling (as ``vibrofem buckling``): the ``n`` lowest positive load factors λ
+        of (K + λK_σ)φ = 0 for the static case given as in :meth:`static`, verified (backward
+        errors, Sturm count). Returns a namespace with ``load_factors`` (ascending; empty with
+        ``no_buckling`` True when the load has no compressive part), ``shapes`` (n_nodes × 3 × k,
+        largest translation 1), ``complete``, ``accurate`` and the JSON ``report``."""
+        import types
+
+        f, p, g, d = self._loads(force, pressure, gravity, displace)
+        rep, lam, shapes = self._core.buckling(n=n, force=f, pressure=p, gravity=g, displace=d)
+        r = _json.loads(rep)
+        return types.SimpleNamespace(
+            load_factors=_np.asarray(lam),
+            shapes=shapes,
+            no_buckling=bool(r["no_buckling"]),
+            complete=bool(r["complete"]),
+            accurate=bool(r["accurate"]),
+            report=r,
+        )
 
     def static(self, force=None, pressure=None, gravity=None, displace=None):
         """Linear statics, one load case: ``force={group: (Fx, Fy, Fz)}`` (N; on a coupled group

@@ -24,6 +24,7 @@ macro_rules! outln {
 }
 
 pub mod args;
+mod buckling;
 mod design;
 mod export;
 mod harmonic;
@@ -32,6 +33,7 @@ mod statics;
 mod studies;
 
 pub use args::*;
+use buckling::BucklingArgs;
 use design::DesignArgs;
 use export::ExportArgs;
 use harmonic::HarmonicArgs;
@@ -65,6 +67,8 @@ pub enum Cmd {
     Design(DesignArgs),
     /// Natural frequencies and mode shapes of a solid mesh (gmsh MSH 2.2 or 4.1).
     Modes(ModesArgs),
+    /// Linear buckling: the lowest positive load factors of a static load case and their shapes.
+    Buckling(BucklingArgs),
     /// Linear static analysis: displacements, reactions, stiffness and stresses.
     Static(StaticArgs),
     /// Steady-state response to harmonic forces at one frequency or over a sweep: modal
@@ -161,6 +165,7 @@ pub fn main() -> ExitCode {
     }
     let r = match &cli.cmd {
         Cmd::Modes(a) => modes::run(a),
+        Cmd::Buckling(a) => buckling::run(a),
         Cmd::Design(a) => design::design_cmd(a),
         Cmd::Static(a) => statics::static_cmd(a),
         Cmd::MeshInfo(a) => statics::mesh_info(a),

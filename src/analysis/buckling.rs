@@ -1,0 +1,754 @@
+//! Linear buckling: the lowest positive load factors λ of `(K + λ K_σ) φ = 0`, with `K_σ` the
+//! geometric stiffness of a static load case ([`crate::analysis::prestress`]), and their shapes.
+//!
+//! # Method
+//! The pencil `(K, −K_σ)` is not definite (`K_σ` is indefinite: tension and compression), so
+//! the modal solver's `M`-inner-product Lanczos does not apply as such. With `G = −K_σ` the
+//! problem is written `G φ = μ K φ`, `μ = 1/λ`, and solved with `K` — positive definite on a
+//! supported model — as the "mass": the operator `Op = K⁻¹G` is self-adjoint in the
+//! K inner product, its eigenvalues are the `μ`, and the wanted factors (smallest positive λ)
+//! are its **largest** eigenvalues, extreme ones, which a Krylov method finds first. This is
+//! the buckling transform of shift-invert Lanczos at shift 0 (Grimes, Lewis and Simon, *A
+//! shifted block Lanczos algorithm for solving sparse symmetric generalized eigenproblems*,
+//! SIAM J. Matrix Anal. Appl. 15(1), 1994, §2.2), with one factorisation, that of K. The
+//! null space of `K_σ` (all DOFs it does not touch) is `μ = 0`, the bottom of the wanted side,
+//! and a tensile part gives negative `μ` (factors of the reversed load), which are skipped.
+//!
+//! The basis is a block Krylov space of `Op`, kept K-orthonormal (classical Gram–Schmidt,
+//! twice) together with its images `K V` and `G V`; the Rayleigh quotient `T = VᵀGV` gives the
+//! Ritz pairs. Each step applies `Op` to the best unconverged Ritz vectors (one block solve
+//! with the factor of K). A pair has converged when its backward error
+//! `‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖)` is at rounding level (1e-12), or below the
+//! acceptance 1e-10 once its value has settled (a residual in the K⁻¹ norm, natural for the
+//! operator, loses half its digits to cancellation on slender models: not used).
+//! When the basis is full it restarts from the best Ritz vectors.
+//!
+//! # Verification
+//! - the residual of each pair relative to ‖Kφ‖ and its backward error
+//!   `‖Kφ + λK_σφ‖ / (‖|K||φ|‖ + |λ|‖|K_σ||φ|‖)` ([`crate::linalg::eigen::backward_errors`]);
+//! - a Sturm count: by Sylvester's law of inertia the number of negative pivots of an LDLᵀ of
+//!   `K + σK_σ` (σ > 0) is the number of load factors in `(0, σ)` when K is positive definite
+//!   (`K + σK_σ` is congruent to `I − σ K^{-1/2} G K^{-1/2}`, whose eigenvalues `1 − σμ` are
+//!   negative exactly for `0 < λ < σ`). σ is placed between the last reported factor and the
+//!   next one; the count must equal the factors found.
+//!
+//! # Cost
+//! One static solve (a factorisation of K, which also proves K positive definite), the stresses
+//! and `K_σ` (an assembly without mass), one more factorisation of K for the iteration and one
+//! of `K + σK_σ` for the Sturm count, all on the same ordering and symbolic factorisation: the
+//! cost of a static plus a modal run, whose Lanczos run also factors twice (shift and Sturm
+//! point).
+//!
+//! A load whose `K_σ` has no compressive part has no positive factor: the run says so ("no
+//! buckling under this load") with an empty list, not an error. A model that is not supported
+//! (K singular) is an error from the static solve, which names the free motions.
+
+use crate::analysis::prestress::{InitialStress, StressExtreme};
+use crate::analysis::statics::{self, Load};
+use crate::linalg::eigen::backward_errors;
+use crate::linalg::factor::{Factor, SymbolicFactor};
+use crate::linalg::ordering::Ordering;
+use crate::linalg::sparse::SymMatrix;
+use crate::linalg::tall;
+use crate::mesh::Mesh;
+use crate::model::{Model, ModelSpec};
+use crate::system::{System, SystemOptions};
+use crate::{Error, Result};
+use faer::{Accum, Mat, MatRef};
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What a buckling analysis computes.
+#[derive(Clone, Debug)]
+pub struct BucklingOptions {
+    /// The model (supports, couplings, prescribed displacements of the load case).
+    pub spec: ModelSpec,
+    /// Number of load factors (the lowest positive ones).
+    pub modes: usize,
+    /// Fill-reducing ordering.
+    pub ordering: Ordering,
+    /// Refuse to factorise if the factor would need more than this many bytes.
+    pub max_memory: Option<u64>,
+    /// Limit on the iteration's work (operator applications, vectors).
+    pub max_applications: usize,
+}
+
+impl Default for BucklingOptions {
+    fn default() -> Self {
+        BucklingOptions {
+            spec: ModelSpec::default(),
+            modes: 4,
+            ordering: Ordering::Metis,
+            max_memory: None,
+            max_applications: 20_000,
+        }
+    }
+}
+
+/// One buckling mode of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct BucklingRow {
+    /// 1-based mode number, ascending load factor.
+    pub mode: usize,
+    /// Load factor λ: the loads times λ buckle the structure.
+    pub load_factor: f64,
+    /// ‖Kφ + λK_σφ‖ / ‖Kφ‖.
+    pub rel_residual: f64,
+    /// ‖Kφ + λK_σφ‖ / (‖|K||φ|‖ + |λ|‖|K_σ||φ|‖): the acceptance test.
+    pub backward_error: f64,
+}
+
+/// The Sturm count of a buckling run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BucklingSturm {
+    /// The check point σ (load-factor units).
+    pub point: f64,
+    /// Negative pivots of K + σK_σ: the load factors in (0, σ).
+    pub count: usize,
+    /// Load factors found in (0, σ).
+    pub found: usize,
+    /// `count == found`.
+    pub complete: bool,
+}
+
+/// Wall time per phase, seconds.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct BucklingTimings {
+    /// Reading the mesh.
+    pub read: f64,
+    /// Model, pattern, K, ordering and symbolic factorisation.
+    pub assemble: f64,
+    /// The static solve (its factorisation of K included).
+    pub statics: f64,
+    /// Stresses and K_σ.
+    pub geometric: f64,
+    /// Factorisation of K for the iteration.
+    pub factor: f64,
+    /// The iteration.
+    pub solve: f64,
+    /// Residuals and the Sturm factorisation.
+    pub verify: f64,
+    /// Total.
+    pub total: f64,
+}
+
+/// Everything a buckling run reports (the `--json` document).
+#[derive(Clone, Debug, Serialize)]
+pub struct BucklingReport {
+    /// Mesh file.
+    pub mesh: String,
+    /// Nodes in the mesh.
+    pub nodes: usize,
+    /// Free DOFs.
+    pub dofs: usize,
+    /// The lowest positive load factors, ascending (empty: no buckling under this load).
+    pub load_factors: Vec<f64>,
+    /// Per-mode rows.
+    pub modes: Vec<BucklingRow>,
+    /// `K_σ` has no compressive part: no positive load factor.
+    pub no_buckling: bool,
+    /// The Sturm count.
+    pub sturm: BucklingSturm,
+    /// No factor below the last reported one was missed.
+    pub complete: bool,
+    /// Every backward error below 1e-10 and the factorisations stable.
+    pub accurate: bool,
+    /// Largest relative residual.
+    pub max_rel_residual: f64,
+    /// Largest backward error.
+    pub max_backward_error: f64,
+    /// Worst probe backward error of the factorisations (stability).
+    pub factor_backward_error: f64,
+    /// Applied force of the load case, N (its resultant's magnitude).
+    pub applied_force: f64,
+    /// Equilibrium error of the static case.
+    pub static_equilibrium_error: f64,
+    /// Largest tensile stress of the load case.
+    pub tension: StressExtreme,
+    /// Largest compressive stress of the load case.
+    pub compression: StressExtreme,
+    /// Numeric factorisations (static, iteration, Sturm).
+    pub factorizations: usize,
+    /// Operator applications (vectors).
+    pub operator_applications: usize,
+    /// Phase timings.
+    pub timings_s: BucklingTimings,
+    /// Notes.
+    pub notes: Vec<String>,
+}
+
+/// A buckling run with its shapes.
+pub struct BucklingRun {
+    /// The report.
+    pub report: BucklingReport,
+    /// Buckling shapes at the mesh nodes: 3 translations per node (node-major), scaled to a
+    /// largest translation of 1.
+    pub shapes: Vec<Vec<f64>>,
+    /// The shapes over the free DOFs, K-normalised (φᵀKφ = 1).
+    pub vectors: Mat<f64>,
+}
+
+/// The verified solution of the pencil.
+pub struct PencilSolution {
+    /// Load factors, ascending, positive.
+    pub lambda: Vec<f64>,
+    /// Vectors (columns), K-orthonormal.
+    pub vectors: Mat<f64>,
+    /// ‖Kφ + λK_σφ‖/‖Kφ‖.
+    pub rel_residual: Vec<f64>,
+    /// Backward errors.
+    pub backward_error: Vec<f64>,
+    /// The Sturm count.
+    pub sturm: BucklingSturm,
+    /// No compressive part: no positive factor at all.
+    pub no_buckling: bool,
+    /// Operator applications.
+    pub applications: usize,
+    /// Factorisations (iteration, Sturm).
+    pub factorizations: usize,
+    /// Worst probe backward error of the factorisations.
+    pub factor_backward_error: f64,
+    /// Seconds: factorisation of K, iteration, verification.
+    pub times: [f64; 3],
+}
+
+/// Relative size below which a Ritz value μ = 1/λ counts as zero (the null space of K_σ).
+const ZERO_MU: f64 = 1e-10;
+/// Convergence: backward error of a Ritz pair (or [`VERIFY_TOL`] once its value has settled).
+const TOL: f64 = 1e-12;
+/// Backward error accepted.
+const VERIFY_TOL: f64 = 1e-10;
+
+/// Small deterministic generator for start vectors (xorshift64*).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let v = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+        (v >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+/// A K-orthonormal basis with its images K·V and G·V.
+struct Basis<'a> {
+    k: &'a SymMatrix,
+    g: &'a SymMatrix,
+    v: Mat<f64>,
+    kv: Mat<f64>,
+    gv: Mat<f64>,
+    cols: usize,
+}
+
+impl Basis<'_> {
+    /// Orthogonalise the columns of `w` against the basis and each other in the K inner
+    /// product and append those that keep a part of their norm; returns how many were added.
+    fn append(&mut self, w: MatRef<'_, f64>, rng: &mut Rng) -> usize {
+        let mut added = 0;
+        for j in 0..w.ncols() {
+            if self.cols == self.v.ncols() {
+                break;
+            }
+            let mut x: Vec<f64> = w.col(j).iter().copied().collect();
+            for attempt in 0..3 {
+                if attempt > 0 {
+                    x.iter_mut().for_each(|e| *e = rng.next());
+                }
+                if self.add_one(&mut x) {
+                    added += 1;
+                    break;
+                }
+            }
+        }
+        added
+    }
+
+    /// Add one vector (twice orthogonalised); false when it lies in the basis' span.
+    fn add_one(&mut self, x: &mut [f64]) -> bool {
+        let n = x.len();
+        let c = self.cols;
+        let kx0 = self.k.mul_vec(x);
+        let norm0 = dot(x, &kx0).max(0.0).sqrt();
+        if !(norm0 > 0.0) {
+            return false;
+        }
+        for _ in 0..2 {
+            if c > 0 {
+                let xm = MatRef::from_column_major_slice(x, n, 1);
+                let coef = tall::gram(self.kv.as_ref().subcols(0, c), xm);
+                let mut xm = faer::MatMut::from_column_major_slice_mut(x, n, 1);
+                tall::mul(
+                    xm.as_mut(),
+                    Accum::Add,
+                    self.v.as_ref().subcols(0, c),
+                    coef.as_ref(),
+                    -1.0,
+                );
+            }
+        }
+        let kx = self.k.mul_vec(x);
+        let norm = dot(x, &kx).max(0.0).sqrt();
+        if !(norm > 1e-8 * norm0) {
+            return false;
+        }
+        let gx = self.g.mul_vec(x);
+        for i in 0..n {
+            self.v[(i, c)] = x[i] / norm;
+            self.kv[(i, c)] = kx[i] / norm;
+            self.gv[(i, c)] = gx[i] / norm;
+        }
+        self.cols += 1;
+        true
+    }
+
+    /// Ritz pairs of the basis, μ descending: values and the coefficient matrix.
+    fn ritz(&self) -> Result<(Vec<f64>, Mat<f64>)> {
+        let c = self.cols;
+        let t = tall::gram(self.v.as_ref().subcols(0, c), self.gv.as_ref().subcols(0, c));
+        let scale = (0..c)
+            .map(|i| t[(i, i)].abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let ts = Mat::from_fn(c, c, |i, j| 0.5 * (t[(i, j)] + t[(j, i)]) / scale);
+        let e = ts
+            .self_adjoint_eigen(faer::Side::Lower)
+            .map_err(|e| Error::Factorization(format!("buckling: dense eigen solve: {e:?}")))?;
+        // Descending.
+        let vals: Vec<f64> = (0..c).rev().map(|i| e.S()[i] * scale).collect();
+        let u = e.U();
+        let s = Mat::from_fn(c, c, |i, j| u[(i, c - 1 - j)]);
+        Ok((vals, s))
+    }
+
+    /// Replace the basis by its first `keep` Ritz vectors (coefficients `s`).
+    fn restart(&mut self, s: MatRef<'_, f64>, keep: usize) {
+        let c = self.cols;
+        let y = s.subrows(0, c).subcols(0, keep);
+        for m in [&mut self.v, &mut self.kv, &mut self.gv] {
+            tall::combine_columns_in_place(m.as_mut().subcols_mut(0, c), y);
+        }
+        self.cols = keep;
+    }
+}
+
+/// The Ritz value `j` moved by at most 1e-10 of the largest |μ| since the previous step.
+fn prev_settled(prev: &[f64], vals: &[f64], j: usize, top: f64) -> bool {
+    prev.get(j).is_some_and(|&p| (p - vals[j]).abs() <= 1e-10 * top)
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The lowest `nev` positive load factors of `(K + λK_σ)φ = 0`, verified (module doc). `k`
+/// must be positive definite; `kg` is `K_σ` on K's pattern; `sym` the symbolic factorisation
+/// of that pattern.
+pub fn solve_pencil(
+    k: &SymMatrix,
+    kg: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    nev: usize,
+    max_applications: usize,
+) -> Result<PencilSolution> {
+    if nev == 0 {
+        return Err(Error::option("--modes", "--modes must be at least 1"));
+    }
+    let n = k.n();
+    // G = −K_σ on the same pattern.
+    let mut g = kg.clone();
+    g.values.iter_mut().for_each(|a| *a = -*a);
+    let t0 = Instant::now();
+    let fk = Factor::new(sym.clone(), k)?;
+    if fk.negative_pivots > 0 || fk.pivot_range.0 <= fk.pivot_range.1 * 1e-13 {
+        return Err(Error::Factorization(format!(
+            "buckling needs a supported model: K is not positive definite ({} negative pivots, pivot ratio {:.1e})",
+            fk.negative_pivots,
+            fk.pivot_range.0 / fk.pivot_range.1.max(f64::MIN_POSITIVE)
+        )));
+    }
+    let mut factor_err = fk.probe_residual;
+    let t_factor = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let empty = |applications, times| PencilSolution {
+        lambda: vec![],
+        vectors: Mat::zeros(n, 0),
+        rel_residual: vec![],
+        backward_error: vec![],
+        sturm: BucklingSturm {
+            complete: true,
+            ..Default::default()
+        },
+        no_buckling: true,
+        applications,
+        factorizations: 1,
+        factor_backward_error: factor_err,
+        times,
+    };
+    if g.values.iter().all(|&x| x == 0.0) {
+        return Ok(empty(0, [t_factor, 0.0, 0.0]));
+    }
+    let want = nev + 1; // one more, to place the Sturm point between factors
+    let b = want.clamp(3, 6).min(n);
+    let nb = (2 * want + 4 * b).max(40).min(n);
+    let keep = (want + b).min(nb / 2).max(1);
+    let mut basis = Basis {
+        k,
+        g: &g,
+        v: Mat::zeros(n, nb),
+        kv: Mat::zeros(n, nb),
+        gv: Mat::zeros(n, nb),
+        cols: 0,
+    };
+    let mut rng = Rng(0x5eed_b0c1_1e00_0001);
+    // Start block: Op applied to random vectors (in the range of Op: no null-space part).
+    let mut w = Mat::from_fn(n, b, |_, _| rng.next());
+    let mut gw = Mat::zeros(n, b);
+    g.mul_block(w.as_ref(), gw.as_mut());
+    fk.solve_in_place(gw.as_mut());
+    w = gw;
+    let mut applications = b;
+    basis.append(w.as_ref(), &mut rng);
+    let mut converged: Vec<bool>;
+    let mut prev: Vec<f64> = Vec::new();
+    let (vals, s) = loop {
+        let (vals, s) = basis.ritz()?;
+        let c = basis.cols;
+        let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
+        // Ritz vectors to test and expand: the wanted (positive) ones first.
+        let n_test = want.min(c);
+        let pos = vals.iter().take(n_test).filter(|&&m| m > ZERO_MU * top).count();
+        let cand = (pos.max(1) + b).min(c);
+        let y = {
+            let mut y = Mat::zeros(n, cand);
+            tall::mul(
+                y.as_mut(),
+                Accum::Replace,
+                basis.v.as_ref().subcols(0, c),
+                s.as_ref().subcols(0, cand),
+                1.0,
+            );
+            y
+        };
+        let mut ky = Mat::zeros(n, cand);
+        tall::mul(
+            ky.as_mut(),
+            Accum::Replace,
+            basis.kv.as_ref().subcols(0, c),
+            s.as_ref().subcols(0, cand),
+            1.0,
+        );
+        let mut gy = Mat::zeros(n, cand);
+        tall::mul(
+            gy.as_mut(),
+            Accum::Replace,
+            basis.gv.as_ref().subcols(0, c),
+            s.as_ref().subcols(0, cand),
+            1.0,
+        );
+        // The backward errors of the Ritz pairs,
+        // ‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖): free of the cancellation a residual in the
+        // K⁻¹ norm suffers on ill-conditioned (slender) models.
+        let ag = g.abs_mul_norms(y.as_ref());
+        let ak = k.abs_mul_norms(y.as_ref());
+        let eta: Vec<f64> = (0..cand)
+            .map(|j| {
+                let mu = vals[j];
+                let r: f64 = (0..n)
+                    .map(|i| (gy[(i, j)] - mu * ky[(i, j)]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                r / (ag[j] + mu.abs() * ak[j]).max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        converged = (0..cand)
+            .map(|j| {
+                let still = prev.get(j).is_some_and(|&p: &f64| (p - vals[j]).abs() <= 1e-14 * top);
+                eta[j] <= TOL || (eta[j] <= VERIFY_TOL && still)
+            })
+            .collect();
+        log::debug!(
+            "buckling: basis {c}, μ {:?}, backward errors {:?}",
+            &vals[..cand.min(4)],
+            &eta[..cand.min(4)]
+        );
+        let prev_before = std::mem::replace(&mut prev, vals.clone());
+        let all_wanted = (0..pos.min(want)).all(|j| converged[j]);
+        // Done: the wanted positive ones converged and, when fewer than wanted are positive,
+        // the first non-positive one (the top of the null space) converged too.
+        // (At the null space of K_σ the backward error of a Ritz pair need not fall: its settled
+        // value is what is asked there.)
+        let boundary_ok = pos >= want
+            || converged.get(pos).copied().unwrap_or(true)
+            || prev_settled(&prev_before, &vals, pos, top)
+            || c == n;
+        if (all_wanted && boundary_ok) || c == n {
+            break (vals, s);
+        }
+        if applications > max_applications {
+            return Err(Error::Factorization(format!(
+                "buckling: no convergence after {applications} operator applications ({} of {} load factors converged)",
+                converged.iter().take(pos.min(want)).filter(|&&x| x).count(),
+                pos.min(want)
+            )));
+        }
+        // Expand with Op applied to the best unconverged Ritz vectors.
+        let pick: Vec<usize> = (0..cand).filter(|&j| !converged[j]).take(b).collect();
+        let mut next = Mat::from_fn(n, pick.len(), |i, j| gy[(i, pick[j])]);
+        fk.solve_in_place(next.as_mut());
+        applications += pick.len();
+        if basis.cols + next.ncols() > nb {
+            basis.restart(s.as_ref(), keep.min(c));
+        }
+        if basis.append(next.as_ref(), &mut rng) == 0 && basis.cols < nb {
+            // The space is exhausted (invariant subspace): random directions carry on.
+            let rnd = Mat::from_fn(n, 1, |_, _| rng.next());
+            if basis.append(rnd.as_ref(), &mut rng) == 0 {
+                break (vals, s);
+            }
+        }
+    };
+    let c = basis.cols;
+    let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
+    let pos: Vec<usize> = (0..c.min(want)).filter(|&j| vals[j] > ZERO_MU * top).collect();
+    let t_solve = t1.elapsed().as_secs_f64();
+    if pos.is_empty() {
+        return Ok(empty(applications, [t_factor, t_solve, 0.0]));
+    }
+    let t2 = Instant::now();
+    let report_n = pos.len().min(nev);
+    let lambda: Vec<f64> = pos.iter().take(report_n).map(|&j| 1.0 / vals[j]).collect();
+    let mut vectors = Mat::zeros(n, report_n);
+    tall::mul(
+        vectors.as_mut(),
+        Accum::Replace,
+        basis.v.as_ref().subcols(0, c),
+        s.as_ref().subcols(0, report_n),
+        1.0,
+    );
+    // Residuals of K φ − λ G φ (= Kφ + λK_σφ).
+    let backward_error = backward_errors(k, &g, &lambda, vectors.as_ref());
+    let mut kx = Mat::zeros(n, report_n);
+    let mut gx = Mat::zeros(n, report_n);
+    k.mul_block(vectors.as_ref(), kx.as_mut());
+    g.mul_block(vectors.as_ref(), gx.as_mut());
+    let rel_residual: Vec<f64> = (0..report_n)
+        .map(|j| {
+            let (mut r2, mut k2) = (0.0, 0.0);
+            for i in 0..n {
+                r2 += (kx[(i, j)] - lambda[j] * gx[(i, j)]).powi(2);
+                k2 += kx[(i, j)].powi(2);
+            }
+            (r2 / k2.max(f64::MIN_POSITIVE)).sqrt()
+        })
+        .collect();
+    // Sturm point: between the last reported factor and the next (if there is one, and it
+    // converged), else well above the last.
+    let last = lambda[report_n - 1];
+    let point = match pos.get(report_n) {
+        Some(&j) => 0.5 * (last + 1.0 / vals[j]),
+        None => 2.0 * last,
+    };
+    let point = if point > last * (1.0 + 1e-6) {
+        point
+    } else {
+        last * (1.0 + 1e-6)
+    };
+    let fs = Factor::new_shifted(sym.clone(), k, Some((&g, point)))?;
+    factor_err = factor_err.max(fs.probe_residual);
+    // Found below the point: every positive factor computed (the one beyond the reported
+    // ones included, should it fall below the point).
+    let found = pos.iter().filter(|&&j| 1.0 / vals[j] < point).count();
+    let sturm = BucklingSturm {
+        point,
+        count: fs.negative_pivots,
+        found,
+        complete: fs.negative_pivots == found,
+    };
+    Ok(PencilSolution {
+        lambda,
+        vectors,
+        rel_residual,
+        backward_error,
+        sturm,
+        no_buckling: false,
+        applications,
+        factorizations: 2,
+        factor_backward_error: factor_err,
+        times: [t_factor, t_solve, t2.elapsed().as_secs_f64()],
+    })
+}
+
+/// Linear buckling of `mesh` under `loads` (one static case, with the prescribed displacements
+/// of `opts.spec`): build the system once, solve the static case, assemble `K_σ` of its
+/// stresses and find the lowest positive load factors. `read_time` (s) is reported as the
+/// read phase.
+pub fn run_buckling(
+    mesh: &Mesh,
+    source: &str,
+    opts: &BucklingOptions,
+    loads: &[Load],
+    read_time: f64,
+) -> Result<BucklingRun> {
+    let t_all = Instant::now();
+    let model = Model::build(mesh, &opts.spec, source)?;
+    let sys = System::build(
+        model,
+        &SystemOptions {
+            ordering: opts.ordering,
+            max_memory: opts.max_memory,
+            mass: false,
+        },
+        source,
+    )?;
+    let t_asm = t_all.elapsed().as_secs_f64();
+    solve(&sys, mesh, loads, opts, read_time, t_asm)
+}
+
+/// [`run_buckling`] on an assembled system (K only; its stiffness is not changed).
+pub fn solve(
+    sys: &System,
+    mesh: &Mesh,
+    loads: &[Load],
+    opts: &BucklingOptions,
+    read_time: f64,
+    t_asm: f64,
+) -> Result<BucklingRun> {
+    let t = Instant::now();
+    let st = statics::solve(sys, mesh, &[loads.to_vec()]).map_err(|e| match e {
+        Error::Factorization(m) => Error::Factorization(format!("buckling needs a supported model: {m}")),
+        e => e,
+    })?;
+    let case = st
+        .cases
+        .into_iter()
+        .next()
+        .ok_or_else(|| Error::param("loads", "no static case was solved"))?;
+    let t_static = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let pre = InitialStress::from_displacements(sys.model(), &st.u[0])?;
+    let kg = pre.geometric_stiffness(sys)?;
+    let t_geo = t.elapsed().as_secs_f64();
+    let sol = solve_pencil(sys.k(), &kg, sys.symbolic()?, opts.modes, opts.max_applications)
+        .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
+    let model = sys.model();
+    let shapes = node_shapes(model, &sol.vectors);
+    let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
+    let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| a.max(b));
+    let accurate = max_back <= VERIFY_TOL && sol.factor_backward_error <= 1e-8;
+    let mut notes = model.notes.clone();
+    notes.extend(case.notes.iter().cloned());
+    if sol.no_buckling {
+        notes.push(
+            "no buckling under this load: the geometric stiffness has no compressive part (no positive load factor)"
+                .to_string(),
+        );
+    } else if sol.lambda.len() < opts.modes {
+        notes.push(format!(
+            "only {} positive load factor(s) exist under this load",
+            sol.lambda.len()
+        ));
+    }
+    if !sol.sturm.complete {
+        notes.push(format!(
+            "Sturm check failed: K + σK_σ at σ = {:.6e} has {} negative pivots, {} load factors found below it",
+            sol.sturm.point, sol.sturm.count, sol.sturm.found
+        ));
+    }
+    if !accurate {
+        notes.push(format!(
+            "accuracy not guaranteed: largest backward error {max_back:.2e} (tolerance {VERIFY_TOL:.0e}), \
+             factorisation probe {:.1e}",
+            sol.factor_backward_error
+        ));
+    }
+    if !model.beams.is_empty() || !model.discrete.is_empty() || !model.references.is_empty() {
+        notes.push(
+            "geometric stiffness: solids (full stress), shells (membrane forces), beams (axial force); springs, \
+             point masses and couplings carry none"
+                .to_string(),
+        );
+    }
+    let total = t_all_total(read_time, t_asm, t_static, t_geo, &sol);
+    let report = BucklingReport {
+        mesh: sys.source().to_string(),
+        nodes: model.n_mesh_nodes,
+        dofs: model.dofs.n_free,
+        load_factors: sol.lambda.clone(),
+        modes: (0..sol.lambda.len())
+            .map(|i| BucklingRow {
+                mode: i + 1,
+                load_factor: sol.lambda[i],
+                rel_residual: sol.rel_residual[i],
+                backward_error: sol.backward_error[i],
+            })
+            .collect(),
+        no_buckling: sol.no_buckling,
+        complete: sol.sturm.complete,
+        sturm: sol.sturm.clone(),
+        accurate,
+        max_rel_residual: max_res,
+        max_backward_error: max_back,
+        factor_backward_error: sol.factor_backward_error,
+        applied_force: norm3(case.applied.force),
+        static_equilibrium_error: case.equilibrium_error,
+        tension: pre.tension,
+        compression: pre.compression,
+        factorizations: 1 + sol.factorizations,
+        operator_applications: sol.applications,
+        timings_s: BucklingTimings {
+            read: read_time,
+            assemble: t_asm,
+            statics: t_static,
+            geometric: t_geo,
+            factor: sol.times[0],
+            solve: sol.times[1],
+            verify: sol.times[2],
+            total,
+        },
+        notes,
+    };
+    Ok(BucklingRun {
+        report,
+        shapes,
+        vectors: sol.vectors,
+    })
+}
+
+fn t_all_total(read: f64, asm: f64, st: f64, geo: f64, sol: &PencilSolution) -> f64 {
+    read + asm + st + geo + sol.times.iter().sum::<f64>()
+}
+
+/// Shapes at the mesh nodes, 3 translations per node, largest translation 1 (positive).
+fn node_shapes(model: &Model, x: &Mat<f64>) -> Vec<Vec<f64>> {
+    let n_mesh = model.n_mesh_nodes;
+    (0..x.ncols())
+        .map(|c| {
+            let col: Vec<f64> = x.col(c).iter().copied().collect();
+            let mut s = model.dofs.expand(&col, 3);
+            s.truncate(3 * n_mesh);
+            let (mut big, mut at) = (0.0f64, 0usize);
+            for a in 0..n_mesh {
+                let m = (s[3 * a].powi(2) + s[3 * a + 1].powi(2) + s[3 * a + 2].powi(2)).sqrt();
+                if m > big {
+                    big = m;
+                    at = a;
+                }
+            }
+            if big > 0.0 {
+                let sign = {
+                    let v = &s[3 * at..3 * at + 3];
+                    let j = (0..3).fold(0, |j, i| if v[i].abs() > v[j].abs() { i } else { j });
+                    v[j].signum()
+                };
+                s.iter_mut().for_each(|e| *e *= sign / big);
+            }
+            s
+        })
+        .collect()
+}
+
+fn norm3(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
