@@ -12,8 +12,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-mod fatigue;
 mod buckling;
+mod fatigue;
 mod harmonic;
 mod prestress;
 mod published_shells_beams;
