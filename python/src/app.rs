@@ -51,24 +51,9 @@ fn design_in(path: Option<&Path>, out: &Path, yes: bool) -> Result<(String, Opti
     check_outputs(&[], Some(("out", out)), &inputs)?;
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let quiet = |_: &str| {};
-    let r = design::run_design(&d, Some(out), &quiet)?;
-    let report = design::report::report(&r);
-    render::write_all(&report, out)?;
-    let json = render::json(&report)?;
-    let mut variant = None;
-    if d.search.enabled && r.checks.iter().any(|c| !c.ok) {
-        let vdir = out.join("passing-variant");
-        std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
-        let o = design::search(&d, Some(&vdir), &quiet)?;
-        let text = design::search_text(&d, &o);
-        let st = out.join("search.txt");
-        std::fs::write(&st, &text).map_err(|e| Error::io(&st, e))?;
-        if let Some((_, vr)) = &o.best {
-            let vreport = design::report::report(vr);
-            render::write_all(&vreport, &vdir)?;
-            variant = Some(render::json(&vreport)?);
-        }
-    }
+    let job = design::job::run(&d, out, &quiet)?;
+    let json = render::json(&job.report)?;
+    let variant = job.variant.as_ref().map(render::json).transpose()?;
     Ok((json, variant))
 }
 

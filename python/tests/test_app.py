@@ -46,7 +46,17 @@ def test_design_returns_the_cli_document_and_the_report(design_report: vf.AppRep
     assert "report.html" in html and "work-table first elastic mode" in html
     if r.passing_variant is not None:
         assert (r.out / "passing-variant" / "report.html").is_file()
-    assert strip(r.data) == strip(cli_json("design", tmp_path / "cli"))
+
+
+def test_design_file_returns_the_cli_document(tmp_path: Path) -> None:
+    # The same document as `vibrofem design FILE --json`, on the built-in design without its
+    # envelope (the envelope runs some forty chains, minutes on 2 cores: the built-in run of the
+    # fixture above carries it, and the Rust tests check the envelope against single runs).
+    toml = tmp_path / "no_envelope.toml"
+    toml.write_text("version = 1\n[envelope]\nenabled = false\n")
+    r = vf.design(toml, out=tmp_path / "py")
+    assert "envelope" not in r.data and r.data["checks"]
+    assert strip(r.data) == strip(cli_json("design", tmp_path / "cli", str(toml)))
 
 
 @pytest.mark.parametrize(

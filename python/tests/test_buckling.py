@@ -7,6 +7,8 @@ P_E/(1 + P_E/(κGA)), κ = 5/6 (Timoshenko and Gere, *Theory of Elastic Stabilit
 its buckling load (K + λK_σ singular).
 """
 
+from __future__ import annotations
+
 import math
 
 import numpy as np
@@ -19,18 +21,18 @@ L, B, H = 0.5, 0.03, 0.01
 
 
 @pytest.fixture(scope="module")
-def column():
+def column() -> vf.Model:
     mesh = vf.read_mesh(f"box:{L},{B},{H}:40,3,1:hex20")
     return vf.Model(mesh, material=(E, NU, RHO), fix=["xmin"])
 
 
-def engesser():
+def engesser() -> float:
     p_e = math.pi**2 * E * B * H**3 / 12 / (4 * L * L)
     g = E / (2 * (1 + NU))
     return p_e / (1 + p_e / (5 / 6 * g * B * H))
 
 
-def test_buckling_cantilever_column(column):
+def test_buckling_cantilever_column(column: vf.Model) -> None:
     # Tolerance 0.5 %, as the Rust validation test of the same column (clamped root and the
     # single cell through the thickness add < 0.3 % beyond the shear correction).
     b = column.buckling(force={"xmax": (-1.0, 0.0, 0.0)}, n=2)
@@ -44,12 +46,12 @@ def test_buckling_cantilever_column(column):
     assert np.abs(s[:, 2]).max() > 0.99
 
 
-def test_buckling_under_tension_is_none(column):
+def test_buckling_under_tension_is_none(column: vf.Model) -> None:
     b = column.buckling(force={"xmax": (1.0, 0.0, 0.0)})
     assert b.no_buckling and len(b.load_factors) == 0
 
 
-def test_prestressed_frequency_vanishes_at_the_buckling_load(column):
+def test_prestressed_frequency_vanishes_at_the_buckling_load(column: vf.Model) -> None:
     lam = column.buckling(force={"xmax": (-1.0, 0.0, 0.0)}, n=1).load_factors[0]
     f0 = column.modes(n=1).frequencies_hz[0]
     half = column.modes(n=1, prestress=dict(force={"xmax": (-0.5 * lam, 0.0, 0.0)}))
@@ -62,6 +64,6 @@ def test_prestressed_frequency_vanishes_at_the_buckling_load(column):
     assert abs(at.eigenvalues[0]) < 1e-6 * (2 * math.pi * f0) ** 2
 
 
-def test_prestress_rejects_unknown_loads(column):
+def test_prestress_rejects_unknown_loads(column: vf.Model) -> None:
     with pytest.raises(vf.InputError):
         column.modes(n=1, prestress=dict(moment={"xmax": (1, 0, 0)}))

@@ -152,6 +152,7 @@ class Model:
         block: int = 6,
         engine: str = "native",
         ranks: int = 1,
+        prestress: Optional[Mapping[str, Any]] = None,
     ) -> Modes: ...
     def harmonic(
         self,
@@ -171,6 +172,14 @@ class Model:
         gravity: Union[_Numbers, str, None] = None,
         displace: Union[Mapping[str, Sequence[Optional[float]]], Sequence[str], str, None] = None,
     ) -> Static: ...
+    def buckling(
+        self,
+        force: _GroupValues = None,
+        pressure: _GroupValues = None,
+        gravity: Union[_Numbers, str, None] = None,
+        displace: Union[Mapping[str, Sequence[Optional[float]]], Sequence[str], str, None] = None,
+        n: int = 4,
+    ) -> Any: ...
     def export(self, dir: _PathArg, format: str = "both") -> List[str]: ...
 
 def run_scene(path: _PathArg, out: Optional[_PathArg] = None) -> Dict[str, Any]: ...

@@ -148,6 +148,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
         quantities: reference::quantities(d, &v),
         table_frequencies_hz: v.f_table.clone(),
         leaf_iterations: v.iters.clone(),
+        leaf_thickness_m: v.h,
         machine_modes: v.machine.modes.clone(),
         force_law: v.force_law.clone(),
         mains_hz: v.mains_hz,

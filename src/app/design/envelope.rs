@@ -257,6 +257,13 @@ impl EnvelopeDesign {
                     x + ti * band
                 };
                 *s = Value::from(y);
+                // A given mains frequency fixes the excitation at twice it (the file's
+                // validation): the band moves both, or a valid design would read as invalid.
+                if k == "drive.mains_hz" && x != 0.0 {
+                    if let Some(e) = slot(&mut v, "excitation_hz") {
+                        *e = Value::from(e.as_f64().unwrap_or(0.0) * (y / x));
+                    }
+                }
             }
         }
         Ok(v)
@@ -295,8 +302,9 @@ impl EnvelopeDesign {
 /// The design as built: the leaves at the thickness the run `r` of `d` used, `tune = "none"`.
 pub fn as_built(d: &Design, r: &DesignReport) -> Design {
     let mut b = d.clone();
-    if let Some(&(h, _)) = r.leaf_iterations.last() {
-        b.leaf.thickness = h;
+    // The model of record's thickness (tuned on the 3D machine), not the two-mass tuning's.
+    if r.leaf_thickness_m.is_finite() && r.leaf_thickness_m > 0.0 {
+        b.leaf.thickness = r.leaf_thickness_m;
     }
     b.tune = "none".into();
     b.envelope.enabled = false;

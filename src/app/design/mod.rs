@@ -25,6 +25,7 @@ pub mod checks;
 pub mod envelope;
 pub mod fatigue;
 pub mod file;
+pub mod job;
 pub mod machine;
 pub mod parts;
 pub mod plots;

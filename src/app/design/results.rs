@@ -292,6 +292,9 @@ pub struct DesignReport {
     pub table_frequencies_hz: Vec<f64>,
     /// Leaf thicknesses tried while tuning (m) and the detuning each gave.
     pub leaf_iterations: Vec<(f64, f64)>,
+    /// Leaf thickness of the model of record (m): tuned on the 3D machine with `tune = "leaf"`,
+    /// else as given. The envelope and the search run the machine as built at this thickness.
+    pub leaf_thickness_m: f64,
     /// Modes of the 3D machine up to `machine.mode_range` × the excitation (unique names).
     pub machine_modes: Vec<MachineMode>,
     /// The force law of the verdict (`flux` or `paper`).
