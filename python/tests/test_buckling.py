@@ -33,16 +33,17 @@ def engesser() -> float:
 
 
 def test_buckling_cantilever_column(column: vf.Model) -> None:
-    # Tolerance 0.5 %, as the Rust validation test of the same column (clamped root and the
-    # single cell through the thickness add < 0.3 % beyond the shear correction).
+    # Tolerance 1 %, as the Rust validation test of solid columns (tests/validation/buckling.rs):
+    # the clamped root face and the loaded end of a 3D column put it +0.53 % above Engesser's
+    # beam formula; CalculiX on the same hex20 mesh agrees with vibrofem to 1e-7.
     b = column.buckling(force={"xmax": (-1.0, 0.0, 0.0)}, n=2)
     assert b.complete and b.accurate and not b.no_buckling
     assert len(b.load_factors) == 2 and b.load_factors[0] < b.load_factors[1]
-    assert abs(b.load_factors[0] / engesser() - 1) < 5e-3, b.load_factors
+    assert abs(b.load_factors[0] / engesser() - 1) < 1e-2, b.load_factors
     # Shapes: n_nodes × 3 × k, largest translation 1, bending along z (the thin direction).
     s = b.shapes[:, :, 0]
     assert b.shapes.shape[1:] == (3, 2)
-    assert abs(np.abs(s).max() - 1) < 1e-12
+    assert abs(np.linalg.norm(s, axis=1).max() - 1) < 1e-12
     assert np.abs(s[:, 2]).max() > 0.99
 
 
@@ -54,8 +55,10 @@ def test_buckling_under_tension_is_none(column: vf.Model) -> None:
 def test_prestressed_frequency_vanishes_at_the_buckling_load(column: vf.Model) -> None:
     lam = column.buckling(force={"xmax": (-1.0, 0.0, 0.0)}, n=1).load_factors[0]
     f0 = column.modes(n=1).frequencies_hz[0]
-    half = column.modes(n=1, prestress=dict(force={"xmax": (-0.5 * lam, 0.0, 0.0)}))
-    at = column.modes(n=1, prestress=dict(force={"xmax": (-lam, 0.0, 0.0)}))
+    # n = 2: a prestressed request for one mode reports complete = False (a known defect of the
+    # prestressed path's Sturm bracket for a single mode, open in issue 30); two modes verify.
+    half = column.modes(n=2, prestress=dict(force={"xmax": (-0.5 * lam, 0.0, 0.0)}))
+    at = column.modes(n=2, prestress=dict(force={"xmax": (-lam, 0.0, 0.0)}))
     assert half.complete and half.accurate
     # Half the buckling load lowers f1 by about √(1 − 1/2) (exact for a pinned column; the
     # cantilever's mode shapes differ slightly: 3 %).
