@@ -342,6 +342,110 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// K factored, refused unless positive definite (a supported model).
+fn factor_positive_definite(sym: &Arc<SymbolicFactor>, k: &SymMatrix) -> Result<Factor> {
+    let fk = Factor::new(sym.clone(), k)?;
+    if fk.negative_pivots > 0 || fk.pivot_range.0 <= fk.pivot_range.1 * 1e-13 {
+        return Err(Error::Factorization(format!(
+            "buckling needs a supported model: K is not positive definite ({} negative pivots, pivot ratio {:.1e})",
+            fk.negative_pivots,
+            fk.pivot_range.0 / fk.pivot_range.1.max(f64::MIN_POSITIVE)
+        )));
+    }
+    Ok(fk)
+}
+
+/// The Sturm check of the `reported` lowest of the `computed` positive factors (ascending):
+/// the negative pivots of K − σG at a point σ between the last reported factor and the next
+/// (if one was computed), else well above the last, against the factors found below σ. Returns
+/// the check and the factorisation's probe residual.
+fn sturm_check(
+    sym: &Arc<SymbolicFactor>,
+    k: &SymMatrix,
+    g: &SymMatrix,
+    computed: &[f64],
+    reported: usize,
+) -> Result<(BucklingSturm, f64)> {
+    let last = computed[reported - 1];
+    let point = match computed.get(reported) {
+        Some(&next) => 0.5 * (last + next),
+        None => 2.0 * last,
+    };
+    let point = if point > last * (1.0 + 1e-6) {
+        point
+    } else {
+        last * (1.0 + 1e-6)
+    };
+    let fs = Factor::new_shifted(sym.clone(), k, Some((g, point)))?;
+    // Found below the point: every positive factor computed (the one beyond the reported
+    // ones included, should it fall below the point).
+    let found = computed.iter().filter(|&&l| l < point).count();
+    let sturm = BucklingSturm {
+        point,
+        count: fs.negative_pivots,
+        found,
+        complete: fs.negative_pivots == found,
+    };
+    Ok((sturm, fs.probe_residual))
+}
+
+/// The Ritz vectors `v[:, ..c] · s[:, ..cols]` (of V, KV or GV).
+fn combine(v: &Mat<f64>, s: &Mat<f64>, c: usize, cols: usize) -> Mat<f64> {
+    let mut y = Mat::zeros(v.nrows(), cols);
+    tall::mul(
+        y.as_mut(),
+        Accum::Replace,
+        v.as_ref().subcols(0, c),
+        s.as_ref().subcols(0, cols),
+        1.0,
+    );
+    y
+}
+
+/// The backward errors of the Ritz pairs (μ_j, y_j), ‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖):
+/// free of the cancellation a residual in the K⁻¹ norm suffers on ill-conditioned (slender)
+/// models.
+fn ritz_backward_errors(
+    k: &SymMatrix,
+    g: &SymMatrix,
+    vals: &[f64],
+    y: &Mat<f64>,
+    ky: &Mat<f64>,
+    gy: &Mat<f64>,
+) -> Vec<f64> {
+    let ag = g.abs_mul_norms(y.as_ref());
+    let ak = k.abs_mul_norms(y.as_ref());
+    (0..y.ncols())
+        .map(|j| {
+            let mu = vals[j];
+            let r: f64 = (0..y.nrows())
+                .map(|i| (gy[(i, j)] - mu * ky[(i, j)]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            r / (ag[j] + mu.abs() * ak[j]).max(f64::MIN_POSITIVE)
+        })
+        .collect()
+}
+
+/// ‖Kφ − λGφ‖ / ‖Kφ‖ per factor.
+fn relative_residuals(k: &SymMatrix, g: &SymMatrix, lambda: &[f64], vectors: &Mat<f64>) -> Vec<f64> {
+    let (n, m) = (vectors.nrows(), vectors.ncols());
+    let mut kx = Mat::zeros(n, m);
+    let mut gx = Mat::zeros(n, m);
+    k.mul_block(vectors.as_ref(), kx.as_mut());
+    g.mul_block(vectors.as_ref(), gx.as_mut());
+    (0..m)
+        .map(|j| {
+            let (mut r2, mut k2) = (0.0, 0.0);
+            for i in 0..n {
+                r2 += (kx[(i, j)] - lambda[j] * gx[(i, j)]).powi(2);
+                k2 += kx[(i, j)].powi(2);
+            }
+            (r2 / k2.max(f64::MIN_POSITIVE)).sqrt()
+        })
+        .collect()
+}
+
 /// The lowest `nev` positive load factors of `(K + λK_σ)φ = 0`, verified (module doc). `k`
 /// must be positive definite; `kg` is `K_σ` on K's pattern; `sym` the symbolic factorisation
 /// of that pattern.
@@ -360,14 +464,7 @@ pub fn solve_pencil(
     let mut g = kg.clone();
     g.values.iter_mut().for_each(|a| *a = -*a);
     let t0 = Instant::now();
-    let fk = Factor::new(sym.clone(), k)?;
-    if fk.negative_pivots > 0 || fk.pivot_range.0 <= fk.pivot_range.1 * 1e-13 {
-        return Err(Error::Factorization(format!(
-            "buckling needs a supported model: K is not positive definite ({} negative pivots, pivot ratio {:.1e})",
-            fk.negative_pivots,
-            fk.pivot_range.0 / fk.pivot_range.1.max(f64::MIN_POSITIVE)
-        )));
-    }
+    let fk = factor_positive_definite(sym, k)?;
     let mut factor_err = fk.probe_residual;
     let t_factor = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -420,48 +517,10 @@ pub fn solve_pencil(
         let n_test = want.min(c);
         let pos = vals.iter().take(n_test).filter(|&&m| m > ZERO_MU * top).count();
         let cand = (pos.max(1) + b).min(c);
-        let y = {
-            let mut y = Mat::zeros(n, cand);
-            tall::mul(
-                y.as_mut(),
-                Accum::Replace,
-                basis.v.as_ref().subcols(0, c),
-                s.as_ref().subcols(0, cand),
-                1.0,
-            );
-            y
-        };
-        let mut ky = Mat::zeros(n, cand);
-        tall::mul(
-            ky.as_mut(),
-            Accum::Replace,
-            basis.kv.as_ref().subcols(0, c),
-            s.as_ref().subcols(0, cand),
-            1.0,
-        );
-        let mut gy = Mat::zeros(n, cand);
-        tall::mul(
-            gy.as_mut(),
-            Accum::Replace,
-            basis.gv.as_ref().subcols(0, c),
-            s.as_ref().subcols(0, cand),
-            1.0,
-        );
-        // The backward errors of the Ritz pairs,
-        // ‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖): free of the cancellation a residual in the
-        // K⁻¹ norm suffers on ill-conditioned (slender) models.
-        let ag = g.abs_mul_norms(y.as_ref());
-        let ak = k.abs_mul_norms(y.as_ref());
-        let eta: Vec<f64> = (0..cand)
-            .map(|j| {
-                let mu = vals[j];
-                let r: f64 = (0..n)
-                    .map(|i| (gy[(i, j)] - mu * ky[(i, j)]).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                r / (ag[j] + mu.abs() * ak[j]).max(f64::MIN_POSITIVE)
-            })
-            .collect();
+        let y = combine(&basis.v, &s, c, cand);
+        let ky = combine(&basis.kv, &s, c, cand);
+        let gy = combine(&basis.gv, &s, c, cand);
+        let eta = ritz_backward_errors(k, &g, &vals, &y, &ky, &gy);
         converged = (0..cand)
             .map(|j| {
                 let still = prev.get(j).is_some_and(|&p: &f64| (p - vals[j]).abs() <= 1e-14 * top);
@@ -519,53 +578,13 @@ pub fn solve_pencil(
     let t2 = Instant::now();
     let report_n = pos.len().min(nev);
     let lambda: Vec<f64> = pos.iter().take(report_n).map(|&j| 1.0 / vals[j]).collect();
-    let mut vectors = Mat::zeros(n, report_n);
-    tall::mul(
-        vectors.as_mut(),
-        Accum::Replace,
-        basis.v.as_ref().subcols(0, c),
-        s.as_ref().subcols(0, report_n),
-        1.0,
-    );
+    let vectors = combine(&basis.v, &s, c, report_n);
     // Residuals of K φ − λ G φ (= Kφ + λK_σφ).
     let backward_error = backward_errors(k, &g, &lambda, vectors.as_ref());
-    let mut kx = Mat::zeros(n, report_n);
-    let mut gx = Mat::zeros(n, report_n);
-    k.mul_block(vectors.as_ref(), kx.as_mut());
-    g.mul_block(vectors.as_ref(), gx.as_mut());
-    let rel_residual: Vec<f64> = (0..report_n)
-        .map(|j| {
-            let (mut r2, mut k2) = (0.0, 0.0);
-            for i in 0..n {
-                r2 += (kx[(i, j)] - lambda[j] * gx[(i, j)]).powi(2);
-                k2 += kx[(i, j)].powi(2);
-            }
-            (r2 / k2.max(f64::MIN_POSITIVE)).sqrt()
-        })
-        .collect();
-    // Sturm point: between the last reported factor and the next (if there is one, and it
-    // converged), else well above the last.
-    let last = lambda[report_n - 1];
-    let point = match pos.get(report_n) {
-        Some(&j) => 0.5 * (last + 1.0 / vals[j]),
-        None => 2.0 * last,
-    };
-    let point = if point > last * (1.0 + 1e-6) {
-        point
-    } else {
-        last * (1.0 + 1e-6)
-    };
-    let fs = Factor::new_shifted(sym.clone(), k, Some((&g, point)))?;
-    factor_err = factor_err.max(fs.probe_residual);
-    // Found below the point: every positive factor computed (the one beyond the reported
-    // ones included, should it fall below the point).
-    let found = pos.iter().filter(|&&j| 1.0 / vals[j] < point).count();
-    let sturm = BucklingSturm {
-        point,
-        count: fs.negative_pivots,
-        found,
-        complete: fs.negative_pivots == found,
-    };
+    let rel_residual = relative_residuals(k, &g, &lambda, &vectors);
+    let computed: Vec<f64> = pos.iter().map(|&j| 1.0 / vals[j]).collect();
+    let (sturm, sturm_err) = sturm_check(sym, k, &g, &computed, report_n)?;
+    factor_err = factor_err.max(sturm_err);
     Ok(PencilSolution {
         lambda,
         vectors,
