@@ -952,7 +952,11 @@ fn check_points(
                 if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
                     step = step.min(0.5 * (nx - lam_max));
                 }
-                lam_max + step.max(1e-9 * scale)
+                // Not closer than 1e-6 of the scale (as the lower point below): the found λ is
+                // only as exact as its residual allows (a relative residual up to 1e-6 passes
+                // without a note), and the Lanczos estimate of that same mode, unrefined, can sit
+                // just above it and pass for the next one.
+                lam_max + step.max(1e-6 * scale)
             }
         },
     };
