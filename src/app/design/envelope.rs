@@ -887,24 +887,8 @@ fn sensitivity_section(e: &EnvelopeResult) -> Section {
 /// The two-mass amplitude X1 (m) of `d` with `load` kg moving with the table and leaves `h` m
 /// thick, the leaf stiffness scaled as h³ from the FE value `k0` at `h0`.
 fn two_mass_x1(d: &Design, m_table: f64, k_coil: f64, (k0, h0): (f64, f64), load: f64, h: f64) -> f64 {
-    use crate::app::dynamics::electromagnet::RectifiedDrive;
-    use crate::app::dynamics::two_mass::TwoMass;
-    let omega = std::f64::consts::TAU * d.excitation_hz;
     let c12 = d.leaf.count as f64 * d.leaf.clamping * k0 * (h / h0).powi(3);
-    let run = || -> Result<f64> {
-        let tm = TwoMass::new(
-            m_table + d.masses.active_extra + load,
-            d.masses.reactive,
-            c12,
-            d.coil.count as f64 * k_coil,
-            d.damping.mu1,
-            d.damping.mu12,
-            d.damping.mu13,
-        )?;
-        let f = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?.harmonic_amplitude();
-        Ok(tm.steady_state(omega, f)?.amp1())
-    };
-    run().unwrap_or(f64::NAN)
+    super::chain::two_mass_x1(d, m_table + d.masses.active_extra + load, c12, k_coil).unwrap_or(f64::NAN)
 }
 
 /// The tuning chart (`tuning_chart.svg`): the two-mass work-table amplitude against the load

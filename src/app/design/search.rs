@@ -16,8 +16,6 @@ use super::file::{Design, MAX_SEARCH_VARIANTS, bad};
 use super::parts::{coil_fe, table_fe, table_mass};
 use super::results::DesignReport;
 use crate::Result;
-use crate::app::dynamics::electromagnet::RectifiedDrive;
-use crate::app::dynamics::two_mass::TwoMass;
 use crate::app::sweep::TableSpec;
 use serde::Serialize;
 use std::f64::consts::TAU;
@@ -91,17 +89,7 @@ fn screen_x1(d: &Design, m_table: f64, k_coil: f64) -> Result<f64> {
     let m2 = d.masses.reactive;
     let m_red = m1 * m2 / (m1 + m2);
     let c12 = m_red * (omega / d.target_detuning).powi(2);
-    let tm = TwoMass::new(
-        m1,
-        m2,
-        c12,
-        d.coil.count as f64 * k_coil,
-        d.damping.mu1,
-        d.damping.mu12,
-        d.damping.mu13,
-    )?;
-    let f = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?.harmonic_amplitude();
-    Ok(tm.steady_state(omega, f)?.amp1())
+    super::chain::two_mass_x1(d, m1, c12, k_coil)
 }
 
 /// Every variant of `d`'s table that the `[search]` lists give (webs within 10 mm of the bottom
