@@ -50,8 +50,8 @@ pub struct InitialStress {
     solids: Vec<Vec<Vec<[f64; 6]>>>,
     /// Per shell set, per cell: membrane forces at [`geometric::shell_points`].
     shells: Vec<Vec<[[f64; 3]; 4]>>,
-    /// Per beam set, per cell: axial forces ([`geometric::beam_axial_forces`]).
-    beams: Vec<Vec<[f64; 2]>>,
+    /// Per beam set, per cell: stress resultants ([`geometric::beam_resultants`]).
+    beams: Vec<Vec<[[f64; 6]; 2]>>,
     /// Largest tensile stress: principal stress of the solids and of the shells' faces, axial
     /// stress `N/A` of the beams.
     pub tension: StressExtreme,
@@ -172,20 +172,27 @@ fn shell_forces(set: &ShellSet, u: &[f64]) -> Result<(Vec<[[f64; 3]; 4]>, Extrem
     Ok(split(out))
 }
 
-fn beam_forces(set: &BeamSet, u: &[f64]) -> Result<(Vec<[f64; 2]>, Extremes)> {
+fn beam_forces(set: &BeamSet, u: &[f64]) -> Result<(Vec<[[f64; 6]; 2]>, Extremes)> {
     let ndpn = set.dofs_per_node();
-    let out: Vec<([f64; 2], Extremes)> = (0..set.len())
+    let out: Vec<([[f64; 6]; 2], Extremes)> = (0..set.len())
         .into_par_iter()
         .map(|e| {
             let nodes = set.nodes(e);
             let x: Vec<[f64; 3]> = nodes.iter().map(|&a| set.nodes[a as usize]).collect();
             let mut ue = [0.0; 21];
             gather(u, nodes, ndpn, &mut ue[..ndpn * nodes.len()]);
-            let n = geometric::beam_axial_forces(set.kinds[e], &x, &set.section, &set.material, &ue)
-                .map_err(|err| Error::element(set.tags[e], format!("beam '{}': {err}", set.group)))?;
+            let n = geometric::beam_resultants(
+                set.kinds[e],
+                &x,
+                set.orient[e],
+                &set.section,
+                &set.material,
+                &ue[..ndpn * nodes.len()],
+            )
+            .map_err(|err| Error::element(set.tags[e], format!("beam '{}': {err}", set.group)))?;
             let mut acc = Extremes::default();
             for f in n {
-                extremes(&mut acc, f / set.section.area, || where_(set, e));
+                extremes(&mut acc, f[0] / set.section.area, || where_(set, e));
             }
             Ok((n, acc))
         })
@@ -271,7 +278,7 @@ impl InitialStress {
 enum Geometric<'a> {
     Solid(&'a SolidSet, &'a [Vec<[f64; 6]>]),
     Shell(&'a ShellSet, &'a [[[f64; 3]; 4]]),
-    Beam(&'a BeamSet, &'a [[f64; 2]]),
+    Beam(&'a BeamSet, &'a [[[f64; 6]; 2]]),
 }
 
 impl Geometric<'_> {
@@ -324,7 +331,7 @@ impl ElementSet for Geometric<'_> {
             }
             Geometric::Beam(s, n) => {
                 let x: Vec<[f64; 3]> = s.nodes(e).iter().map(|&a| s.nodes[a as usize]).collect();
-                geometric::beam(s.kinds[e], &x, s.orient[e], &s.section, &s.material, n[e], ke)
+                geometric::beam(s.kinds[e], &x, s.orient[e], &s.section, &s.material, &n[e], ke)
                     .map_err(|err| Error::element(s.tags[e], format!("beam '{}': {err}", s.group)))
             }
         }

@@ -330,8 +330,217 @@ fn kosmatka_slopes(xi: f64, l: f64, phi: f64) -> [f64; 4] {
     ]
 }
 
-/// Geometric stiffness of a beam element from its axial forces `axial` at the points of
-/// [`beam_axial_forces`] (see the module docs for the terms). `kg`: `(n·d)²` row-major in
+/// Stress resultants `[N, Q_y, Q_z, T, M_y, M_z]` of a beam element in its local axes for
+/// element displacements `ue` (global, [`beam::dofs_per_node`] per node): the force and moment
+/// that the part beyond a section exerts on the part before it (`N` tension positive,
+/// `M_y = ∫σ z dA`, `M_z = −∫σ y dA`, `T` about the node line).
+///
+/// - `Line2`: at its two ends (`x = 0`, `x = L`), from the element's end forces
+///   `f = K_e u_e` rotated to local axes: `−f` at node 0, `+f` at node 1. Between them `N`,
+///   `Q` and `T` are constant and the moments linear (no load along the element).
+/// - `Line3`: the axial force at its 2 Gauss points ([`beam_axial_forces`]); the other
+///   resultants are returned as 0, since its geometric stiffness carries `N` only.
+///
+/// Errors as for [`beam::stiffness`].
+pub fn beam_resultants(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    orientation: [f64; 3],
+    sec: &BeamSection,
+    mat: &Material,
+    ue: &[f64],
+) -> Result<[[f64; 6]; 2]> {
+    match kind {
+        CellKind::Line2 => {
+            let nd = beam::dofs_per_node(sec);
+            let n = 2 * nd;
+            let mut ke = [0.0; 14 * 14];
+            beam::stiffness(kind, x, orientation, sec, mat, &mut ke[..n * n])?;
+            let r = beam::local_axes(sub(x[1], x[0]), orientation)?;
+            let mut out = [[0.0; 6]; 2];
+            for (a, sign) in [(0, -1.0), (1, 1.0)] {
+                let mut f = [0.0; 6];
+                for (i, fi) in f.iter_mut().enumerate() {
+                    *fi = (0..n).map(|j| ke[(a * nd + i) * n + j] * ue[j]).sum();
+                }
+                for i in 0..3 {
+                    out[a][i] = sign * dot(r[i], [f[0], f[1], f[2]]);
+                    out[a][3 + i] = sign * dot(r[i], [f[3], f[4], f[5]]);
+                }
+            }
+            Ok(out)
+        }
+        _ => {
+            let n = beam_axial_forces(kind, x, sec, mat, ue)?;
+            Ok([[n[0], 0.0, 0.0, 0.0, 0.0, 0.0], [n[1], 0.0, 0.0, 0.0, 0.0, 0.0]])
+        }
+    }
+}
+
+/// Rotation functions `ψ` of the exact two-node Timoshenko element (Friedman and Kosmatka
+/// 1993) and their `x`-derivatives at `ξ = x/L`, for `(d_1, θ_1, d_2, θ_2)`.
+fn kosmatka_rotations(xi: f64, l: f64, phi: f64) -> ([f64; 4], [f64; 4]) {
+    let c = 1.0 / (1.0 + phi);
+    let x2 = xi * xi;
+    let psi = [
+        c * 6.0 * (x2 - xi) / l,
+        c * (3.0 * x2 - (4.0 + phi) * xi + 1.0 + phi),
+        -c * 6.0 * (x2 - xi) / l,
+        c * (3.0 * x2 - (2.0 - phi) * xi),
+    ];
+    let dpsi = [
+        c * 6.0 * (2.0 * xi - 1.0) / (l * l),
+        c * (6.0 * xi - 4.0 - phi) / l,
+        -c * 6.0 * (2.0 * xi - 1.0) / (l * l),
+        c * (6.0 * xi - 2.0 + phi) / l,
+    ];
+    (psi, dpsi)
+}
+
+/// Adds to the local `Line2` matrix `kl` (`2nd × 2nd`, node-major local DOFs) the terms of the
+/// axial strain, the bending moments, the shear forces and the torque of the resultants `res`
+/// at both ends (see the module docs): `∫ Bᵀ H B dx` over the generalized displacements
+/// `g = (u′, v′, w′, θx, θy, θz, θx′, θy′, θz′)`, 4-point Gauss (exact: the integrand is a
+/// polynomial of degree ≤ 5).
+fn line2_moment_terms(l: f64, phi: [f64; 2], nd: usize, res: &[[f64; 6]; 2], kl: &mut [f64]) {
+    let n = 2 * nd;
+    for &(xg, wg) in &GAUSS4 {
+        let xi = 0.5 * (1.0 + xg);
+        let r: [f64; 6] = std::array::from_fn(|k| (1.0 - xi) * res[0][k] + xi * res[1][k]);
+        let [nx, qy, qz, t, my, mz] = r;
+        // B: 9 generalized displacements × 2nd local DOFs.
+        let mut b = [[0.0; 14]; 9];
+        b[0][0] = -1.0 / l;
+        b[0][nd] = 1.0 / l;
+        // x–y plane: (v, θz), slope v′ ≈ θz; x–z plane: (w, −θy).
+        for (dof, rot, sr, ph, row_d, row_r, row_dr) in [(1, 5, 1.0, phi[0], 1, 5, 8), (2, 4, -1.0, phi[1], 2, 4, 7)] {
+            let s = kosmatka_slopes(xi, l, ph);
+            let (psi, dpsi) = kosmatka_rotations(xi, l, ph);
+            let idx = [dof, rot, nd + dof, nd + rot];
+            let sgn = [1.0, sr, 1.0, sr];
+            for i in 0..4 {
+                b[row_d][idx[i]] += sgn[i] * s[i];
+                b[row_r][idx[i]] += sr * sgn[i] * psi[i];
+                b[row_dr][idx[i]] += sr * sgn[i] * dpsi[i];
+            }
+        }
+        if nd == 6 {
+            b[3][3] = 1.0 - xi;
+            b[3][nd + 3] = xi;
+            b[6][3] = -1.0 / l;
+            b[6][nd + 3] = 1.0 / l;
+        } else {
+            let (h, dh) = hermite(xi, l);
+            for (i, &c) in [3, 6, nd + 3, nd + 6].iter().enumerate() {
+                b[3][c] = h[i];
+                b[6][c] = dh[i];
+            }
+        }
+        // H of the density ½ gᵀ H g: each product c·g_a·g_b puts c at (a, b) and (b, a).
+        let mut hm = [[0.0; 9]; 9];
+        hm[0][0] = nx;
+        for (a, bb, c) in [
+            (6, 5, 0.5 * my),
+            (3, 8, 0.5 * my),
+            (0, 7, my),
+            (1, 6, -my),
+            (6, 4, -0.5 * mz),
+            (3, 7, -0.5 * mz),
+            (0, 8, mz),
+            (2, 6, -mz),
+            (3, 4, 0.5 * qy),
+            (0, 5, -qy),
+            (2, 3, qy),
+            (3, 5, 0.5 * qz),
+            (0, 4, qz),
+            (1, 3, -qz),
+            (7, 5, 0.5 * t),
+            (4, 8, -0.5 * t),
+        ] {
+            hm[a][bb] += c;
+            hm[bb][a] += c;
+        }
+        let w = 0.5 * wg * l;
+        let mut hb = [[0.0; 14]; 9];
+        for a in 0..9 {
+            for j in 0..n {
+                hb[a][j] = (0..9).map(|k| hm[a][k] * b[k][j]).sum();
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let v: f64 = (0..9).map(|k| b[k][i] * hb[k][j]).sum();
+                kl[i * n + j] += w * v;
+            }
+        }
+    }
+}
+
+/// Cubic Hermite functions' values and `x`-derivatives on `[0, L]` at `ξ = x/L`, for
+/// `(θ(0), θ′(0), θ(L), θ′(L))` (the warping element's twist).
+fn hermite(t: f64, l: f64) -> ([f64; 4], [f64; 4]) {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    (
+        [
+            1.0 - 3.0 * t2 + 2.0 * t3,
+            l * (t - 2.0 * t2 + t3),
+            3.0 * t2 - 2.0 * t3,
+            l * (t3 - t2),
+        ],
+        [
+            (6.0 * t2 - 6.0 * t) / l,
+            1.0 - 4.0 * t + 3.0 * t2,
+            (6.0 * t - 6.0 * t2) / l,
+            3.0 * t2 - 2.0 * t,
+        ],
+    )
+}
+
+/// Local geometric stiffness of a `Line2` beam, `(2nd)²` row-major in `kl`.
+fn line2_local(l: f64, sec: &BeamSection, mat: &Material, nd: usize, res: &[[f64; 6]; 2], kl: &mut [f64]) {
+    let n = 2 * nd;
+    let f = 0.5 * (res[0][0] + res[1][0]);
+    let wagner = sec.polar() / sec.area;
+    let (e, g) = (mat.young, mat.shear_modulus());
+    let phi_y = 12.0 * e * sec.iz / (sec.ky * g * sec.area * l * l);
+    let phi_z = 12.0 * e * sec.iy / (sec.kz * g * sec.area * l * l);
+    for (d, rr, sr, phi) in [(1, 5, 1.0, phi_y), (2, 4, -1.0, phi_z)] {
+        let idx = [d, rr, nd + d, nd + rr];
+        let sgn = [1.0, sr, 1.0, sr];
+        for &(xi, w) in &GAUSS4 {
+            let s = kosmatka_slopes(0.5 * (1.0 + xi), l, phi);
+            let c = 0.5 * w * l * f;
+            for i in 0..4 {
+                for j in 0..4 {
+                    kl[idx[i] * n + idx[j]] += c * sgn[i] * sgn[j] * s[i] * s[j];
+                }
+            }
+        }
+    }
+    if nd == 6 {
+        let kt = f * wagner / l;
+        for (i, j, v) in [(3, 3, kt), (nd + 3, nd + 3, kt), (3, nd + 3, -kt), (nd + 3, 3, -kt)] {
+            kl[i * n + j] += v;
+        }
+    } else {
+        // The twist's cubic Hermite interpolation in (θx, w) of the warping element.
+        let idx = [3, 6, nd + 3, nd + 6];
+        for &(xi, w) in &GAUSS4 {
+            let (_, dh) = hermite(0.5 * (1.0 + xi), l);
+            let c = 0.5 * w * l * f * wagner;
+            for i in 0..4 {
+                for j in 0..4 {
+                    kl[idx[i] * n + idx[j]] += c * dh[i] * dh[j];
+                }
+            }
+        }
+    }
+    line2_moment_terms(l, [phi_y, phi_z], nd, res, kl);
+}
+
+/// Geometric stiffness of a beam element from its stress resultants `res` at the points of
+/// [`beam_resultants`] (see the module docs for the terms). `kg`: `(n·d)²` row-major in
 /// global axes, `d` = [`beam::dofs_per_node`]; fully written. Errors as for
 /// [`beam::stiffness`].
 pub fn beam(
@@ -340,7 +549,7 @@ pub fn beam(
     orientation: [f64; 3],
     sec: &BeamSection,
     mat: &Material,
-    axial: [f64; 2],
+    res: &[[f64; 6]; 2],
     kg: &mut [f64],
 ) -> Result<()> {
     let nd = beam::dofs_per_node(sec);
@@ -350,51 +559,8 @@ pub fn beam(
         CellKind::Line2 => {
             let axis = sub(x[1], x[0]);
             let r = beam::local_axes(axis, orientation)?;
-            let l = norm(axis);
-            let n = 2 * nd;
-            let f = axial[0];
             let mut kl = [0.0; 14 * 14];
-            let (e, g) = (mat.young, mat.shear_modulus());
-            let phi_y = 12.0 * e * sec.iz / (sec.ky * g * sec.area * l * l);
-            let phi_z = 12.0 * e * sec.iy / (sec.kz * g * sec.area * l * l);
-            for (d, rr, sr, phi) in [(1, 5, 1.0, phi_y), (2, 4, -1.0, phi_z)] {
-                let idx = [d, rr, nd + d, nd + rr];
-                let sgn = [1.0, sr, 1.0, sr];
-                for &(xi, w) in &GAUSS4 {
-                    let s = kosmatka_slopes(0.5 * (1.0 + xi), l, phi);
-                    let c = 0.5 * w * l * f;
-                    for i in 0..4 {
-                        for j in 0..4 {
-                            kl[idx[i] * n + idx[j]] += c * sgn[i] * sgn[j] * s[i] * s[j];
-                        }
-                    }
-                }
-            }
-            if nd == 6 {
-                let kt = f * wagner / l;
-                for (i, j, v) in [(3, 3, kt), (nd + 3, nd + 3, kt), (3, nd + 3, -kt), (nd + 3, 3, -kt)] {
-                    kl[i * n + j] += v;
-                }
-            } else {
-                // The twist's cubic Hermite interpolation in (θx, w) of the warping element.
-                let idx = [3, 6, nd + 3, nd + 6];
-                for &(xi, w) in &GAUSS4 {
-                    let t = 0.5 * (1.0 + xi);
-                    let t2 = t * t;
-                    let dh = [
-                        (6.0 * t2 - 6.0 * t) / l,
-                        1.0 - 4.0 * t + 3.0 * t2,
-                        (6.0 * t - 6.0 * t2) / l,
-                        3.0 * t2 - 2.0 * t,
-                    ];
-                    let c = 0.5 * w * l * f * wagner;
-                    for i in 0..4 {
-                        for j in 0..4 {
-                            kl[idx[i] * n + idx[j]] += c * dh[i] * dh[j];
-                        }
-                    }
-                }
-            }
+            line2_local(norm(axis), sec, mat, nd, res, &mut kl);
             let mut gt: NodeTransform = [[0.0; 7]; 7];
             for i in 0..3 {
                 for j in 0..3 {
@@ -415,7 +581,7 @@ pub fn beam(
             for (q, &(xi, w)) in GAUSS2.iter().enumerate() {
                 let (tan, jac, dn) = line3_metric(x, xi);
                 let t = beam::local_axes(tan, orientation)?[0];
-                let c = w * jac * axial[q];
+                let c = w * jac * res[q][0];
                 for a in 0..3 {
                     for b in 0..3 {
                         let v = c * (dn[a] / jac) * (dn[b] / jac);
