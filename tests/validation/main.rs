@@ -9,11 +9,15 @@
 //! - `prestress`: prestressed modes against the axially loaded beam's closed form, and the
 //!   geometric stiffness kernels' exact properties;
 //! - `haringx`: the coil spring buckling criterion against Shigley's form;
+//! - `beam_buckling_moments`: the beam geometric stiffness with moments, shears and torque:
+//!   rigid-body rule, lateral–torsional buckling (Timoshenko–Gere) and a coil spring's axial
+//!   buckling against Haringx;
 //! - `prestress_one_mode`: a prestressed request for a single mode passes its Sturm check.
 
 #[path = "../common/mod.rs"]
 mod common;
 
+mod beam_buckling_moments;
 mod buckling;
 mod fatigue;
 mod haringx;
