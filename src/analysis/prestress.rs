@@ -11,8 +11,9 @@
 //! of the stresses and of `K_σ` (an assembly without mass), and the modal run.
 //!
 //! What carries a geometric stiffness ([`crate::element::geometric`]): solids (the full Cauchy
-//! stress), shells (membrane forces on the translations of the mid-surface) and beams (the
-//! axial force on the transverse displacements and the twist). Discrete springs, point masses
+//! stress), shells (membrane forces on the translations of the mid-surface) and beams (line2:
+//! the axial force, bending moments, shear forces and torque of the static state; line3: the
+//! axial force). Discrete springs, point masses
 //! and rigid couplings carry none: a preloaded spring or a rigid link that rotates under load
 //! adds nothing here.
 //!

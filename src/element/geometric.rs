@@ -14,16 +14,29 @@
 //!   ([`solid_rule`]) at whose points the stress is given. A hex8 with incompatible modes gets
 //!   the geometric stiffness of its nodal (compatible) field: the condensed modes carry no
 //!   geometric term.
-//! - **Beams** (`Line2`, `Line3`): the axial force `N` acts on the transverse displacements,
-//!   `N ∫ v'δv' + w'δw' dx`, and on the twist through the Wagner term
-//!   `N (I_p/A) ∫ θ_x' δθ_x' dx` (`I_p = I_y + I_z` about the centroid). On `Line2` the
-//!   transverse slopes are those of the element's own interdependent interpolation
-//!   (Friedman and Kosmatka 1993), which for `Φ = 0` gives the classical consistent matrix
-//!   `N/(30L) [36, 3L, −36, 3L; 3L, 4L², −3L, −L²; …]` (Przemieniecki 1968, §15); the twist
-//!   uses the element's linear (or, with warping, cubic Hermite) interpolation. `Line3` uses
-//!   its quadratic interpolation at the 2 Gauss points of its stiffness, with the component of
-//!   `u'` across the tangent. Not included: the terms of bending moments and shear forces
-//!   (lateral–torsional buckling of a bent beam), and the axial term `N ∫ u'δu'`.
+//! - **Beams**, `Line2`: every stress resultant of the static state — axial force `N`, shear
+//!   forces `Q_y`, `Q_z`, torque `T`, bending moments `M_y`, `M_z` ([`beam_resultants`]: from
+//!   the element's end forces `K_e u_e` in local axes, `N`, `Q`, `T` constant and the moments
+//!   linear). `N` acts on the transverse displacements, `N ∫ v'δv' + w'δw' dx`, with the slopes
+//!   of the element's own interdependent interpolation (Friedman and Kosmatka 1993; for `Φ = 0`
+//!   the classical consistent matrix `N/(30L) [36, 3L, −36, 3L; 3L, 4L², −3L, −L²; …]`,
+//!   Przemieniecki 1968, §15), on the twist through the Wagner term `N (I_p/A) ∫ θ_x'δθ_x' dx`
+//!   (`I_p = I_y + I_z` about the centroid; linear twist, or cubic Hermite with warping), and
+//!   on the axial strain, `N ∫ u'δu' dx`. The moments, shears and torque enter through the
+//!   second-order energy of a section rotating rigidly with `R = I + Θ + ½Θ²` (the rotation
+//!   vector: **semitangential** moments), for a doubly symmetric section about its centroid:
+//!   `M_y[½(θxθz)' + u'θy' − v'θx'] − M_z[½(θxθy)' − u'θz' + w'θx'] + Q_y[½θxθy − u'θz + w'θx]
+//!   + Q_z[½θxθz + u'θy − v'θx] + ½T(θy'θz − θyθz')`, integrated with 4 Gauss points (exact) over
+//!   the element's deflections and rotations. With Hermite interpolation this is the 12 × 12
+//!   matrix of Yang and McGuire (J. Struct. Eng. 112(4), 1986; Yang and Kuo 1994) plus the
+//!   axial–rotation couplings (`u'θ` terms) that make the rigid-body rule exact in every row: a
+//!   rigid rotation `θ` gives `K_σ u = (θ × F, ½ θ × M)` at each node. Not included: the
+//!   Wagner coefficients of monosymmetric sections (shear-centre offsets act in `K_e` only),
+//!   `½N(I_z θz'² + I_y θy'²)/A`, and loads along the element.
+//! - **Beams**, `Line3`: the axial force only, `N` at the 2 Gauss points of its stiffness on
+//!   the component of `u'` across the tangent and on the twist (Wagner); its moments, shears
+//!   and torque carry no geometric stiffness (docs/buckling.md says to mesh such structures
+//!   with `Line2`).
 //! - **Shells** (MITC3/MITC4): the membrane forces `N_αβ` (per unit length, in the element
 //!   frame) act on the in-plane gradients of all three translations of the mid-surface,
 //!   `∫ N_αβ u_k,α δu_k,β dA` — the transverse component is the plate's buckling term, the
