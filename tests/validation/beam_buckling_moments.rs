@@ -335,3 +335,73 @@ fn beam_coil_spring_axial_buckling_against_haringx() {
     // helix represents): within the 1.1 % shear correction plus 0.5 % for the 16-chord helix.
     assert!(err_e < 0.0 && err_e > -0.016, "against the slender limit: {err_e}");
 }
+
+#[test]
+fn beam_kg_matches_the_published_yang_mcguire_matrix() {
+    // The 12 × 12 geometric stiffness of Yang and McGuire (1986) as printed in McGuire,
+    // Gallagher and Ziemian, Matrix Structural Analysis, 2nd ed. 2000, ch. 9 (Euler–Bernoulli
+    // element, end forces Fx2, Mx2, My1, Mz1, My2, Mz2 acting on the element). Ours adds the
+    // couplings of the axial displacement with the rotations (rows/columns 0 and 6 against
+    // 3–5, 9–11), which make its rigid-body rule exact; every other entry must agree. A long,
+    // thin element makes the shear parameter Φ ≤ 1.2e-5 (near the Hermite limit; the entries
+    // move by O(Φ)); tolerance 1e-4 of the largest entry, far below any wrong sign or factor.
+    let l = 10.0;
+    let x = [[0.0; 3], [l, 0.0, 0.0]];
+    let sec = BeamSection::rectangle(0.01, 0.02);
+    let mat = Material::steel();
+    let mut ue: Vec<f64> = (0..12).map(|i| 1e-3 * ((i as f64 * 2.3).cos() + 0.2)).collect();
+    // An axial stretch small enough that the N entries and the moment entries are of one size.
+    ue[0] = 0.0;
+    ue[6] = 1e-10;
+    let res = geometric::beam_resultants(CellKind::Line2, &x, [0.0, 1.0, 0.0], &sec, &mat, &ue).unwrap();
+    let mut kg = [0.0; 144];
+    geometric::beam(CellKind::Line2, &x, [0.0, 1.0, 0.0], &sec, &mat, &res, &mut kg).unwrap();
+    let (fx2, mx2, my1, mz1, my2, mz2) = (res[1][0], res[1][3], -res[0][4], -res[0][5], res[1][4], res[1][5]);
+    let ip = sec.polar() / sec.area;
+    let mut k = [[0.0; 12]; 12];
+    #[rustfmt::skip]
+    let upper = [
+        (0, 0, fx2 / l), (0, 6, -fx2 / l), (6, 6, fx2 / l),
+        (1, 1, 6.0 * fx2 / (5.0 * l)), (2, 2, 6.0 * fx2 / (5.0 * l)), (7, 7, 6.0 * fx2 / (5.0 * l)), (8, 8, 6.0 * fx2 / (5.0 * l)),
+        (3, 3, fx2 * ip / l), (9, 9, fx2 * ip / l),
+        (4, 4, 2.0 * fx2 * l / 15.0), (5, 5, 2.0 * fx2 * l / 15.0), (10, 10, 2.0 * fx2 * l / 15.0), (11, 11, 2.0 * fx2 * l / 15.0),
+        (1, 3, my1 / l), (1, 4, mx2 / l), (1, 5, fx2 / 10.0), (1, 7, -6.0 * fx2 / (5.0 * l)), (1, 9, my2 / l),
+        (1, 10, -mx2 / l), (1, 11, fx2 / 10.0),
+        (2, 3, mz1 / l), (2, 4, -fx2 / 10.0), (2, 5, mx2 / l), (2, 8, -6.0 * fx2 / (5.0 * l)), (2, 9, mz2 / l),
+        (2, 10, -fx2 / 10.0), (2, 11, -mx2 / l),
+        (3, 4, -(2.0 * mz1 - mz2) / 6.0), (3, 5, (2.0 * my1 - my2) / 6.0), (3, 7, -my1 / l), (3, 8, -mz1 / l),
+        (3, 9, -fx2 * ip / l), (3, 10, -(mz1 + mz2) / 6.0), (3, 11, (my1 + my2) / 6.0),
+        (4, 7, -mx2 / l), (4, 8, fx2 / 10.0), (4, 9, -(mz1 + mz2) / 6.0), (4, 10, -fx2 * l / 30.0), (4, 11, mx2 / 2.0),
+        (5, 7, -fx2 / 10.0), (5, 8, -mx2 / l), (5, 9, (my1 + my2) / 6.0), (5, 10, -mx2 / 2.0), (5, 11, -fx2 * l / 30.0),
+        (7, 9, -my2 / l), (7, 10, mx2 / l), (7, 11, -fx2 / 10.0),
+        (8, 9, -mz2 / l), (8, 10, fx2 / 10.0), (8, 11, mx2 / l),
+        (9, 10, (mz1 - 2.0 * mz2) / 6.0), (9, 11, -(my1 - 2.0 * my2) / 6.0),
+    ];
+    for (i, j, v) in upper {
+        k[i][j] = v;
+        k[j][i] = v;
+    }
+    let scale = kg.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let axial_rotation = |i: usize, j: usize| [0, 6].contains(&i) && [3, 4, 5, 9, 10, 11].contains(&j);
+    let mut coupled = 0.0f64;
+    for i in 0..12 {
+        for j in 0..12 {
+            if axial_rotation(i, j) || axial_rotation(j, i) {
+                coupled = coupled.max(kg[i * 12 + j].abs());
+                continue;
+            }
+            let d = kg[i * 12 + j] - k[i][j];
+            assert!(
+                d.abs() < 1e-4 * scale,
+                "entry ({i}, {j}): {} vs {}",
+                kg[i * 12 + j],
+                k[i][j]
+            );
+        }
+    }
+    eprintln!(
+        "Yang–McGuire entries agree; largest axial–rotation coupling {:.2e} of the largest entry",
+        coupled / scale
+    );
+    assert!(coupled > 1e-2 * scale, "the axial–rotation couplings are missing");
+}

@@ -10,7 +10,7 @@
 //!   geometric stiffness kernels' exact properties;
 //! - `haringx`: the coil spring buckling criterion against Shigley's form;
 //! - `beam_buckling_moments`: the beam geometric stiffness with moments, shears and torque:
-//!   rigid-body rule, lateral–torsional buckling (Timoshenko–Gere) and a coil spring's axial
+//!   the published Yang–McGuire matrix, the rigid-body rule, lateral–torsional buckling (Timoshenko–Gere) and a coil spring's axial
 //!   buckling against Haringx;
 //! - `prestress_one_mode`: a prestressed request for a single mode passes its Sturm check.
 
