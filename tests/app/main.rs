@@ -14,6 +14,7 @@ mod design_envelope;
 mod design_fatigue;
 mod design_inputs;
 mod design_machine;
+mod design_memo;
 mod dynamics;
 mod export_engine;
 mod harmonic;

@@ -936,6 +936,14 @@ fn base_key(d: &Design, rigid: bool) -> String {
     super::cache::key(if rigid { "machine_base_rigid" } else { "machine_base" }, &b)
 }
 
+/// The key under which [`analyse`] memoises design `d`'s machine without its leaves and magnets
+/// (see [`base_key`]): equal for designs that differ only in the leaves' thickness, material or
+/// clamping, the damping, the drive or the excitation; different when the geometry or the load
+/// differs.
+pub fn base_memo_key(d: &Design) -> String {
+    base_key(d, d.machine.table_model == "rigid")
+}
+
 /// Build the machine's [`Base`] for design `d` (the coil from `parts`).
 fn machine_base(d: &Design, parts: &Condensed, rigid: bool) -> Result<Base> {
     let layout = machine_layout(d, rigid)?;
