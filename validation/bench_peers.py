@@ -131,7 +131,7 @@ def run_tool(tool: str, mesh: str, args) -> dict:
                 "frequencies_hz": res["frequencies_hz"], "verified": ok,
                 "timings_s": tim, "memory_bytes": res.get("memory_bytes"),
                 "factor_gflops": res.get("factor_gflops"), "factorizations": res.get("factorizations"),
-                "operator_applications": res.get("operator_applications")}
+                "operator_applications": res.get("operator_applications"), "floor": res.get("floor")}
     if tool == "calculix":
         ccx = shutil.which("ccx") or shutil.which("ccx2.20")
         if not ccx:
@@ -252,6 +252,31 @@ def table(rows: list, dgemm) -> str:
                  "MUMPS), the whole process for CalculiX and scikit-fem. The peers' BLAS: "
                  f"{os.path.realpath('/usr/lib/x86_64-linux-gnu/libblas.so.3')}.")
     return "\n".join(lines)
+
+
+def floor_table(rows: list) -> str:
+    """vibrofem's phases against their floors (the `floor` of `modes --json`, from the median
+    run): factorisation flops at the DGEMM rate it measured, the block solves' bytes of factor
+    read at the read bandwidth it measured over the factor, operator applications per mode."""
+    lines = ["| DOFs | factorise: floor / measured [s] (× floor) | block solves: passes, GB, floor / measured [s] "
+             "(× floor) | applications per mode | DGEMM GFLOP/s, read GB/s | rest of the run [s] |",
+             "|---:|---|---|---:|---|---|"]
+    for row in rows:
+        fl = (row["tools"].get("vibrofem") or {}).get("floor")
+        if not fl:
+            continue
+        f, s, a, o = fl["factorisation"], fl["block_solves"], fl["applications"], fl["other_s"]
+        lines.append(
+            f"| {format(row['dofs'], ',').replace(',', ' ')} "
+            f"| {f['floor_s']:.2f} / {f['measured_s']:.2f} ({f['ratio']:.2f}) "
+            f"| {fl['solve_passes']}, {s['work'] / 1e9:.1f}, {s['floor_s']:.2f} / {s['measured_s']:.2f} ({s['ratio']:.2f}) "
+            f"| {a['per_mode']:.2f} ({a['applications']} for {a['modes']}) "
+            f"| {fl['dgemm_gflops']:.1f}, {fl['read_gbs']:.1f} "
+            f"| assemble+order {o['assemble_and_order']:.2f}, coarse+pack {o['coarse_estimate_and_packing']:.2f}, "
+            f"iteration besides solves {o['iteration_besides_solves']:.2f}, verify+post {o['verify_and_post']:.2f} |")
+    if len(lines) == 2:
+        return ""
+    return "vibrofem against its floor (docs/solver-floor.md):\n\n" + "\n".join(lines)
 
 
 def plot(rows: list, path: str) -> bool:
@@ -385,6 +410,9 @@ def main(argv=None) -> int:
     with open(os.path.join(OUT, "bench_peers.json"), "w") as fh:
         json.dump(report, fh, indent=1)
     text = table(rows, dgemm)
+    floors = floor_table(rows)
+    if floors:
+        text += "\n\n" + floors
     svg = os.path.join(OUT, "bench_peers.svg")
     if plot(rows, svg):
         # The link is relative to docs/performance.md, where --readme writes the table.

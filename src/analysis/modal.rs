@@ -1,6 +1,7 @@
 //! Orchestration of analyses: mesh → model → assembly → solve → report. No formatting here.
 
 use crate::linalg::eigen::{self, EigenParams, SturmCheck, Target};
+use crate::linalg::floor::{FloorReport, RunWork};
 use crate::linalg::ordering::Ordering;
 use crate::mesh::Mesh;
 use crate::model::{Model, ModelSpec};
@@ -183,6 +184,10 @@ pub struct ModalReport {
     pub factorizations: usize,
     /// Operator applications (vectors) in the iteration.
     pub operator_applications: usize,
+    /// Each phase against its floor (factorisation flops at the measured DGEMM rate, bytes
+    /// of factor read by the block solves at the measured bandwidth, operator applications per
+    /// mode); `None` when another engine solved.
+    pub floor: Option<FloorReport>,
     /// Notes and warnings for the user.
     pub notes: Vec<String>,
 }
@@ -266,7 +271,18 @@ pub fn run_modal(mesh: &Mesh, source: &str, opts: &ModalOptions, read_time: f64)
     tm.read = read_time;
     tm.assemble += t_model;
     tm.total += read_time + t_model;
+    retime_floor(&mut run.report);
     Ok(run)
+}
+
+/// The floor report's phases timed around the solve (reading, assembly and ordering, the whole
+/// run) from the report's timings, once the caller has added its own phases to them.
+pub fn retime_floor(report: &mut ModalReport) {
+    let tm = &report.timings_s;
+    let (read, assemble_and_order, total) = (tm.read, tm.assemble.max(tm.order), tm.total);
+    if let Some(f) = report.floor.as_mut() {
+        f.retime(read, assemble_and_order, total);
+    }
 }
 
 /// Natural frequencies and mode shapes of an assembled system, verified: residuals,
@@ -358,6 +374,7 @@ pub fn finish(
     // The factorisation this process analysed (none when another engine solved).
     let (factor_flops, factor_nnz) = sys.symbolic().map_or((0.0, 0), |s| (s.flops, s.nnz_l));
     let memory_bytes = memory_by_phase(sys, &sol)?;
+    let floor = floor_report(&sol, factor_flops, &tm);
     let report = ModalReport {
         mesh: sys.source().to_string(),
         nodes: model.n_mesh_nodes,
@@ -396,6 +413,7 @@ pub fn finish(
         factor_nnz,
         factorizations: sol.factorizations,
         operator_applications: sol.applications,
+        floor,
         notes,
     };
     Ok(ModalRun {
@@ -404,6 +422,34 @@ pub fn finish(
         lambda: sol.lambda,
         vectors: sol.vectors,
     })
+}
+
+/// The run's phases against their floors ([`FloorReport`]), when this process factorised.
+fn floor_report(sol: &eigen::EigenSolution, factor_flops: f64, tm: &Timings) -> Option<FloorReport> {
+    let mem = &sol.memory;
+    if mem.numeric_count == 0 || factor_flops <= 0.0 {
+        return None;
+    }
+    Some(FloorReport::new(&RunWork {
+        factor_flops,
+        factorisations: mem.numeric_count,
+        factor_seconds: mem.numeric_seconds,
+        solves: mem.solves,
+        read: mem.read_rate,
+        applications: sol.applications,
+        modes: sol.lambda.len(),
+        iteration: mem.iteration,
+        phases: [
+            tm.read,
+            tm.assemble,
+            tm.order,
+            tm.factor,
+            tm.solve,
+            tm.verify,
+            tm.post,
+            tm.total,
+        ],
+    }))
 }
 
 /// One row per mode: frequency, rigid or elastic, verification, participation.

@@ -30,6 +30,7 @@
 
 use super::coarse::Prolongation;
 use super::factor::{Factor, SymbolicFactor};
+use super::floor::SolveWork;
 use super::tall;
 use crate::linalg::sparse::SymMatrix;
 use crate::{Error, Result};
@@ -156,6 +157,18 @@ pub struct EigenMemory {
     /// Numeric factorisations counted in `numeric_seconds`.
     #[serde(skip)]
     pub numeric_count: usize,
+    /// The block solves with the factorisations of the solve (gathered from each factor
+    /// before it is dropped; a coarse estimate's are its own).
+    #[serde(skip)]
+    pub solves: SolveWork,
+    /// Read bandwidth over the iteration's factor (GB/s) and the seconds its measurement
+    /// took ([`Factor::read_rate`]), measured once, when that factor's solves are gathered.
+    #[serde(skip)]
+    pub read_rate: (f64, f64),
+    /// The Lanczos iteration's parts, seconds: block solves, M products, orthogonalisation,
+    /// normalisation, Rayleigh–Ritz and restarts.
+    #[serde(skip)]
+    pub iteration: [f64; 5],
 }
 
 impl EigenMemory {
@@ -167,6 +180,23 @@ impl EigenMemory {
         self.solve_workspace = self.solve_workspace.max(f.workspace_bytes() as u64);
         self.numeric_seconds += f.numeric_seconds;
         self.numeric_count += 1;
+        self.solves.add(&f.take_solve_work());
+    }
+
+    /// Gathers the block solves done with `f` so far; the first time, measures the read
+    /// bandwidth over it (for the floor report: its solves read it).
+    fn add_solves(&mut self, f: &Factor) {
+        self.solves.add(&f.take_solve_work());
+        if self.read_rate.0 == 0.0 {
+            self.read_rate = f.read_rate();
+        }
+    }
+
+    /// Gathers (and zeroes) the time of a Lanczos iteration's parts.
+    fn add_iteration(&mut self, times: &mut [f64; 5]) {
+        for (a, t) in self.iteration.iter_mut().zip(times.iter_mut()) {
+            *a += std::mem::take(t);
+        }
     }
 }
 
@@ -597,6 +627,7 @@ fn probe_spectrum(pb: &Problem<'_>, nm: usize, fa: Factor, sigma: f64, tally: &m
             "default shift {sigma:.3e} is far below the wanted modes (~{lam_est:.3e}): moving it to {s_new:.3e} (another factorisation)"
         );
         probe_lz = None;
+        tally.memory.add_solves(&fa);
         drop(fa);
         (fa, sigma) = factor_at(k, m, sym, s_new, &mut tally.factorizations)?;
         tally.memory.add_factor(&fa);
@@ -736,6 +767,9 @@ impl Rounds<'_> {
             };
             // Verify: Sturm counts around the modes found.
             let tv = Instant::now();
+            if let Some(f) = &fa {
+                self.tally.memory.add_solves(f);
+            }
             fa = None;
             let found = self.found(&lambda);
             let (upper_pt, lower_pt) = check_points(&found, p, self.band, self.sigma, &lz);
@@ -782,6 +816,7 @@ impl Rounds<'_> {
         };
         let (l, x) = res.ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
         let memory = &mut self.tally.memory;
+        memory.add_iteration(&mut lz.times);
         memory.lanczos_basis = memory.lanczos_basis.max(lz.peak_bytes());
         memory.solve_workspace = memory.solve_workspace.max(f.workspace_bytes() as u64);
         // The basis is not needed past this point (a second round starts a new one from the
@@ -952,7 +987,11 @@ fn check_points(
                 if let Some(nx) = lz.next_estimate_above(lam_max, sigma) {
                     step = step.min(0.5 * (nx - lam_max));
                 }
-                lam_max + step.max(1e-9 * scale)
+                // Not closer than 1e-6 of the scale (as the lower point below): the found λ is
+                // only as exact as its residual allows (a relative residual up to 1e-6 passes
+                // without a note), and the Lanczos estimate of that same mode, unrefined, can sit
+                // just above it and pass for the next one.
+                lam_max + step.max(1e-6 * scale)
             }
         },
     };
@@ -1100,6 +1139,7 @@ fn solve_below_bound(
         return Ok(None);
     }
     let (rel_residual, m_orthonormality, backward_error) = done.verified;
+    bb.memory.add_solves(&fa);
     Ok(Some(EigenSolution {
         lambda: done.lambda,
         vectors: done.vectors,
@@ -1258,6 +1298,7 @@ impl BelowBound<'_> {
         let (l, x) = lz
             .run(p, fa, m, self.u, &mut self.applications)?
             .ok_or_else(|| Error::EigenNotConverged("the iteration paused unexpectedly".into()))?;
+        self.memory.add_iteration(&mut lz.times);
         self.memory.lanczos_basis = self.memory.lanczos_basis.max(lz.peak_bytes());
         self.memory.solve_workspace = self.memory.solve_workspace.max(fa.workspace_bytes() as u64);
         log::debug!(

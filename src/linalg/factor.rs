@@ -5,6 +5,7 @@
 //! LDLᵀ without pivoting is used for both SPD and indefinite matrices; its count of negative
 //! pivots is the inertia that the Sturm-sequence check needs (Sylvester's law of inertia).
 
+use crate::linalg::floor::SolveWork;
 use crate::linalg::sparse::{Pattern, SymMatrix};
 use crate::linalg::supernodal;
 use crate::linalg::trisolve::{self, SolvePlan};
@@ -130,6 +131,8 @@ pub struct Factor {
     pub numeric_seconds: f64,
     /// Solve workspaces kept between calls (one per concurrent column group).
     scratch: Mutex<Vec<Vec<f64>>>,
+    /// The block solves done since the last [`Factor::take_solve_work`].
+    solves: Mutex<SolveWork>,
     /// A supernodal factor's values back in faer's layout, made at the first call of faer's
     /// own solve (a reference for tests and benchmarks) and kept for the next.
     unpacked: std::sync::OnceLock<Vec<f64>>,
@@ -312,6 +315,7 @@ impl Factor {
             shifted_matrix_bytes,
             numeric_seconds,
             scratch: Mutex::new(Vec::new()),
+            solves: Mutex::new(SolveWork::default()),
             unpacked: std::sync::OnceLock::new(),
         })
     }
@@ -360,8 +364,10 @@ impl Factor {
         if k == 0 {
             return;
         }
+        let t = std::time::Instant::now();
         let SymbolicCholeskyRaw::Supernodal(_) = self.sym.sym.raw() else {
-            return self.solve_faer(rhs);
+            self.solve_faer(rhs);
+            return self.count_solves(1, k, t);
         };
         let per = k.div_ceil(k.div_ceil(MAX_GROUP));
         let mut rhs = rhs;
@@ -371,6 +377,34 @@ impl Factor {
             self.solve_group(rhs.as_mut().subcols_mut(c0, cols));
             c0 += cols;
         }
+        self.count_solves(k.div_ceil(per), k, t);
+    }
+
+    /// Counts a solve of `columns` right-hand sides in `passes` passes over the factor (each
+    /// reads every value once forward and once backward), started at `t`.
+    fn count_solves(&self, passes: usize, columns: usize, t: std::time::Instant) {
+        if let Ok(mut w) = self.solves.lock() {
+            w.add(&SolveWork {
+                passes,
+                columns,
+                bytes: (2 * passes * self.bytes()) as f64,
+                seconds: t.elapsed().as_secs_f64(),
+            });
+        }
+    }
+
+    /// The block solves done with this factor since the last call (the counts restart).
+    pub fn take_solve_work(&self) -> SolveWork {
+        self.solves
+            .lock()
+            .map(|mut w| std::mem::take(&mut *w))
+            .unwrap_or_default()
+    }
+
+    /// Read bandwidth over this factor's values (GB/s) and the seconds its measurement took
+    /// ([`crate::linalg::floor::read_rate`]).
+    pub fn read_rate(&self) -> (f64, f64) {
+        crate::linalg::floor::read_rate(&self.values)
     }
 
     /// faer's own sequential supernodal solve (a reference for tests and benchmarks: it rounds

@@ -7,6 +7,7 @@ pub mod coarse;
 pub mod dense;
 pub mod eigen;
 pub mod factor;
+pub mod floor;
 pub mod graph;
 pub mod ordering;
 pub mod sparse;

@@ -176,3 +176,34 @@ pub fn surge_clearance(fs: f64, f: f64, harmonics: usize) -> Result<(usize, f64)
 pub fn spring_index(d: f64, big_d: f64) -> Result<f64> {
     index(d, big_d)
 }
+
+/// Critical deflection of a helical compression spring against lateral buckling (Haringx's
+/// theory, the criterion of EN 13906-1:2013 §9.2; the same closed form as Shigley 9th ed.,
+/// ch. 10 "Stability", y_cr = L0·C1·[1 − √(1 − C2/λ²)], C1 = E/(2(E − G)),
+/// C2 = 2π²(E − G)/(2G + E), λ = νL0/D):
+///
+/// s_k = L0 · 0.5/(1 − G/E) · [1 − √(1 − (1 − G/E)/(0.5 + G/E) · (πD/(νL0))²)]
+///
+/// with the free length `free` L0, the mean coil diameter `big_d` D, the seating coefficient
+/// `seating` ν (EN 13906-1 Fig. 6: 0.5 both ends clamped parallel, 0.7 one clamped one pinned,
+/// 1 both pinned or guided, 2 one clamped one free) and the moduli E, G. `Ok(None)`: the
+/// spring is stable at any deflection (the root is imaginary: L0 < πD/ν·√((1 − G/E)/(0.5 + G/E)),
+/// about 2.62 D/ν for steel).
+pub fn buckling_deflection(free: f64, big_d: f64, seating: f64, young: f64, shear: f64) -> Result<Option<f64>> {
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    if !(ok(free) && ok(big_d) && ok(seating) && ok(young) && ok(shear)) || shear >= young {
+        return Err(Error::param(
+            "spring",
+            format!(
+                "coil buckling: free length {free}, mean diameter {big_d}, seating coefficient {seating}, E {young}, \
+                 G {shear} must be positive with G < E"
+            ),
+        ));
+    }
+    let r = shear / young;
+    let x = (1.0 - r) / (0.5 + r) * (PI * big_d / (seating * free)).powi(2);
+    if x >= 1.0 {
+        return Ok(None);
+    }
+    Ok(Some(free * 0.5 / (1.0 - r) * (1.0 - (1.0 - x).sqrt())))
+}

@@ -100,15 +100,19 @@ fn machine_commands_exit_141_on_a_closed_stdout() {
     let dir = tmpdir("pipe");
     for args in commands(&dir) {
         let out = dir.join(format!("o-{}", args[0]));
+        // The pipe's read end is closed before the child starts: dropping it after `spawn`
+        // raced a fast command (balancer-data) that wrote everything into the pipe's buffer
+        // first and rightly exited 0.
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
         let mut child = bin()
             .args(&args)
             .arg("-o")
             .arg(&out)
-            .stdout(Stdio::piped())
+            .stdout(writer)
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        drop(child.stdout.take());
         let mut e = String::new();
         child.stderr.take().unwrap().read_to_string(&mut e).unwrap();
         let st = child.wait().unwrap();

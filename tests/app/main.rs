@@ -27,6 +27,7 @@ mod model_options;
 mod options;
 mod outputs;
 mod resource_limits;
+mod scene_buckling;
 mod scenes;
 mod slepc_import;
 mod solid_elements;

@@ -7,15 +7,19 @@
 //! - `buckling`: linear buckling against Euler columns (beams, hex20, tet10 with Engesser's
 //!   shear correction), the k = 4 plate and the prestressed beam's vanishing frequency;
 //! - `prestress`: prestressed modes against the axially loaded beam's closed form, and the
-//!   geometric stiffness kernels' exact properties.
+//!   geometric stiffness kernels' exact properties;
+//! - `haringx`: the coil spring buckling criterion against Shigley's form;
+//! - `prestress_one_mode`: a prestressed request for a single mode passes its Sturm check.
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod buckling;
 mod fatigue;
+mod haringx;
 mod harmonic;
 mod prestress;
+mod prestress_one_mode;
 mod published_shells_beams;
 mod skfem_modes;
 mod skfem_static;

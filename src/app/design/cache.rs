@@ -6,6 +6,10 @@
 //! exactly what the computation would: a corner run with memoised parts equals a run from
 //! scratch. The memo is process-wide and bounded ([`MAX_ENTRIES`]; when full it starts over);
 //! [`clear`] empties it and [`stats`] counts hits and misses.
+//!
+//! The 3D machine's assembled model without its leaves and magnets (one per geometry and load,
+//! tens of megabytes each) is kept in a second, smaller memo ([`get_or_large`], at most
+//! [`MAX_LARGE`] entries; [`large_stats`] counts it).
 
 use crate::Result;
 use std::any::Any;
@@ -22,7 +26,15 @@ struct Memo {
     misses: usize,
 }
 
+/// Entries kept at most in the memo of large models ([`get_or_large`]).
+pub const MAX_LARGE: usize = 8;
+
 fn memo() -> &'static Mutex<Memo> {
+    static M: OnceLock<Mutex<Memo>> = OnceLock::new();
+    M.get_or_init(|| Mutex::new(Memo::default()))
+}
+
+fn large() -> &'static Mutex<Memo> {
     static M: OnceLock<Mutex<Memo>> = OnceLock::new();
     M.get_or_init(|| Mutex::new(Memo::default()))
 }
@@ -42,8 +54,25 @@ where
     T: Any + Send + Sync,
     F: FnOnce() -> Result<T>,
 {
+    get_or_in(memo(), MAX_ENTRIES, key, compute)
+}
+
+/// [`get_or`] in the memo of large models (at most [`MAX_LARGE`] entries).
+pub fn get_or_large<T, F>(key: String, compute: F) -> Result<Arc<T>>
+where
+    T: Any + Send + Sync,
+    F: FnOnce() -> Result<T>,
+{
+    get_or_in(large(), MAX_LARGE, key, compute)
+}
+
+fn get_or_in<T, F>(memo: &Mutex<Memo>, max: usize, key: String, compute: F) -> Result<Arc<T>>
+where
+    T: Any + Send + Sync,
+    F: FnOnce() -> Result<T>,
+{
     {
-        let mut m = memo().lock().unwrap_or_else(|e| e.into_inner());
+        let mut m = memo.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(v) = m.map.get(&key).cloned() {
             if let Ok(v) = v.downcast::<T>() {
                 m.hits += 1;
@@ -53,8 +82,8 @@ where
         m.misses += 1;
     }
     let v = Arc::new(compute()?);
-    let mut m = memo().lock().unwrap_or_else(|e| e.into_inner());
-    if m.map.len() >= MAX_ENTRIES {
+    let mut m = memo.lock().unwrap_or_else(|e| e.into_inner());
+    if m.map.len() >= max {
         m.map.clear();
     }
     m.map.insert(key, v.clone());
@@ -63,13 +92,20 @@ where
 
 /// Empty the memo (the next parts are computed afresh).
 pub fn clear() {
-    let mut m = memo().lock().unwrap_or_else(|e| e.into_inner());
-    m.map.clear();
+    for memo in [memo(), large()] {
+        memo.lock().unwrap_or_else(|e| e.into_inner()).map.clear();
+    }
 }
 
 /// (hits, misses) since the process started.
 pub fn stats() -> (usize, usize) {
     let m = memo().lock().unwrap_or_else(|e| e.into_inner());
+    (m.hits, m.misses)
+}
+
+/// (hits, misses) of the memo of large models since the process started.
+pub fn large_stats() -> (usize, usize) {
+    let m = large().lock().unwrap_or_else(|e| e.into_inner());
     (m.hits, m.misses)
 }
 

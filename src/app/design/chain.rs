@@ -172,6 +172,25 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
     })
 }
 
+/// The paper's two-mass amplitude X1 (m) of `d`: work side `m1` (kg), leaves `c12` (N/m) all
+/// together, isolators `k_coil` (N/m) each, the rectified magnet drive at the excitation (the
+/// screen of the design search and the envelope's tuning chart).
+pub(super) fn two_mass_x1(d: &Design, m1: f64, c12: f64, k_coil: f64) -> Result<f64> {
+    use crate::app::dynamics::electromagnet::RectifiedDrive;
+    let omega = TAU * d.excitation_hz;
+    let tm = TwoMass::new(
+        m1,
+        d.masses.reactive,
+        c12,
+        d.coil.count as f64 * k_coil,
+        d.damping.mu1,
+        d.damping.mu12,
+        d.damping.mu13,
+    )?;
+    let f = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?.harmonic_amplitude();
+    Ok(tm.steady_state(omega, f)?.amp1())
+}
+
 /// m1 = FE table + other active parts + the load share; m2; the reduced mass; c13.
 fn masses(d: &Design, m_table: f64, k_coil: f64) -> Masses {
     let m1 = m_table + d.masses.active_extra + d.masses.load_share * d.masses.load;

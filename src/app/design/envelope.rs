@@ -458,6 +458,16 @@ fn run_point(e: &EnvelopeDesign, d: Design, label: String, case: &str, t: &[f64]
     })
 }
 
+/// [`run_point`] over independent `points` (design, label, band position) of load case `case`,
+/// on the worker threads (the FE memo is shared; each run is whole), in the given order.
+fn run_points(e: &EnvelopeDesign, points: Vec<(Design, String, Vec<f64>)>, case: &str) -> Result<Vec<EnvelopeRun>> {
+    use rayon::prelude::*;
+    points
+        .into_par_iter()
+        .map(|(d, label, t)| run_point(e, d, label, case, &t))
+        .collect()
+}
+
 /// The corner sign patterns of the checks' margins: per check with a gradient, the corner
 /// against it and the opposite one (each pattern once, the worst corners first).
 pub fn corner_patterns(grad: &[Vec<f64>]) -> Vec<Vec<f64>> {
@@ -603,13 +613,20 @@ fn sensitivities(
 ) -> Result<(Vec<(BTreeMap<String, f64>, BTreeMap<String, f64>)>, Vec<EnvelopeRun>)> {
     let nt = e.tolerances.len();
     let m0 = margins(&nominal.checks);
+    progress("envelope: sensitivities (one run per band, in parallel)");
+    let points: Vec<(Design, String, Vec<f64>)> = e
+        .tolerances
+        .iter()
+        .enumerate()
+        .map(|(i, tol)| {
+            let mut t = vec![0.0; nt];
+            t[i] = e.fd_step;
+            Ok((e.design_at(built, None, &t)?, format!("d {}", tol.id), t))
+        })
+        .collect::<Result<_>>()?;
+    let runs = run_points(e, points, "nominal")?;
     let mut out = vec![];
-    let mut runs = vec![];
-    for (i, tol) in e.tolerances.iter().enumerate() {
-        progress(&format!("envelope: sensitivity to {}", tol.name));
-        let mut t = vec![0.0; nt];
-        t[i] = e.fd_step;
-        let run = run_point(e, e.design_at(built, None, &t)?, format!("d {}", tol.id), "nominal", &t)?;
+    for (tol, run) in e.tolerances.iter().zip(&runs) {
         let step = e.fd_step * tol.plus;
         let dv = run
             .values
@@ -629,7 +646,6 @@ fn sensitivities(
             })
             .collect();
         out.push((dv, dm));
-        runs.push(run);
     }
     Ok((out, runs))
 }
@@ -651,16 +667,19 @@ fn corners(
         runs.push(run_point(e, e.design_at(built, Some(ci), &t)?, name.clone(), name, &t)?);
         return Ok(runs);
     }
-    for (k, p) in patterns.iter().enumerate() {
-        progress(&format!("envelope: {name}, corner {} of {}", k + 1, patterns.len()));
-        runs.push(run_point(
-            e,
-            e.design_at(built, Some(ci), p)?,
-            format!("{name} corner {}", k + 1),
-            name,
-            p,
-        )?);
-    }
+    progress(&format!("envelope: {name}, {} corners (in parallel)", patterns.len()));
+    let points: Vec<(Design, String, Vec<f64>)> = patterns
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            Ok((
+                e.design_at(built, Some(ci), p)?,
+                format!("{name} corner {}", k + 1),
+                p.clone(),
+            ))
+        })
+        .collect::<Result<_>>()?;
+    runs.extend(run_points(e, points, name)?);
     let mut crossings = vec![];
     for (a, ra) in runs.iter().enumerate() {
         for rb in runs.iter().skip(a + 1) {
@@ -687,10 +706,17 @@ fn corners(
             }
         }
     }
-    for (label, t) in crossings {
-        progress(&format!("envelope: {label}"));
-        runs.push(run_point(e, e.design_at(built, Some(ci), &t)?, label, name, &t)?);
+    if !crossings.is_empty() {
+        progress(&format!(
+            "envelope: {name}, {} resonance crossings (in parallel)",
+            crossings.len()
+        ));
     }
+    let points: Vec<(Design, String, Vec<f64>)> = crossings
+        .into_iter()
+        .map(|(label, t)| Ok((e.design_at(built, Some(ci), &t)?, label, t)))
+        .collect::<Result<_>>()?;
+    runs.extend(run_points(e, points, name)?);
     Ok(runs)
 }
 
@@ -861,24 +887,8 @@ fn sensitivity_section(e: &EnvelopeResult) -> Section {
 /// The two-mass amplitude X1 (m) of `d` with `load` kg moving with the table and leaves `h` m
 /// thick, the leaf stiffness scaled as h³ from the FE value `k0` at `h0`.
 fn two_mass_x1(d: &Design, m_table: f64, k_coil: f64, (k0, h0): (f64, f64), load: f64, h: f64) -> f64 {
-    use crate::app::dynamics::electromagnet::RectifiedDrive;
-    use crate::app::dynamics::two_mass::TwoMass;
-    let omega = std::f64::consts::TAU * d.excitation_hz;
     let c12 = d.leaf.count as f64 * d.leaf.clamping * k0 * (h / h0).powi(3);
-    let run = || -> Result<f64> {
-        let tm = TwoMass::new(
-            m_table + d.masses.active_extra + load,
-            d.masses.reactive,
-            c12,
-            d.coil.count as f64 * k_coil,
-            d.damping.mu1,
-            d.damping.mu12,
-            d.damping.mu13,
-        )?;
-        let f = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?.harmonic_amplitude();
-        Ok(tm.steady_state(omega, f)?.amp1())
-    };
-    run().unwrap_or(f64::NAN)
+    super::chain::two_mass_x1(d, m_table + d.masses.active_extra + load, c12, k_coil).unwrap_or(f64::NAN)
 }
 
 /// The tuning chart (`tuning_chart.svg`): the two-mass work-table amplitude against the load

@@ -36,6 +36,8 @@ use super::file::{Design, bad};
 use super::parts::{coil_stiffness, leaf_end_stiffness, leaf_matrix, table_parts};
 use crate::analysis::harmonic;
 use crate::analysis::modal::{ModalParams, ModalRun, ModalTarget};
+use crate::dof::DofMap;
+use crate::linalg::sparse::SymMatrix;
 use crate::mesh::{CellBlock, CellKind, CellRef, Group, Mesh};
 use crate::model::{
     CouplingSpec, Model, ModelSpec, PointMassSpec, ShellPart, SpringMatrixSpec, rigid_offset, transform_blocks,
@@ -247,14 +249,56 @@ struct Masses {
 /// Build and analyse the 3D machine for design `d` with leaves of thickness `h` (m): assemble
 /// it, find its modes, solve the forced response at the excitation (and at the force law's
 /// harmonics, for the floor force) and name the modes.
+///
+/// The model without the leaves' and the magnets' stiffness ([`Base`]: the mesh, the masses, the
+/// isolators, K and M assembled, the ordering) depends on neither the leaves' section, material
+/// and clamping nor the damping nor the drive: it is memoised per geometry and load
+/// ([`base_key`]), and each call adds the leaves' and magnets' 12×12 blocks to a copy of its K,
+/// on the same pattern. That is what the assembly does with their spring elements, so a call
+/// equals a build from scratch up to the order of the sums (rounding).
 pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     d.machine.validate(d)?;
     let rigid = d.machine.table_model == "rigid";
     let parts = condensed_parts(d, h)?;
-    let layout = machine_layout(d, rigid)?;
-    let masses = machine_masses(d, layout.armatures.len());
-    let springs = machine_springs(d, &parts, &layout, rigid);
-    let (sys, run, leaf_nodes, table_ref, magnet_nodes) = machine_modes(d, &layout, &springs, &masses, rigid)?;
+    let key = base_key(d, rigid);
+    let base: std::sync::Arc<Base> = super::cache::get_or_large(key, || machine_base(d, &parts, rigid))?;
+    let springs = machine_springs(d, &parts, &base.layout, rigid);
+    let (mut sys, k0) = base.take()?;
+    set_stiffness(d, &base, &springs, &mut sys, &k0, rigid)?;
+    let out = analyse_on(d, &parts, &base, &springs, &sys, rigid);
+    base.give_back(sys, k0);
+    out
+}
+
+/// The machine's modes on `sys` (24 with the shell table, 12 rigid), verified complete.
+fn machine_run(sys: &System, rigid: bool) -> Result<ModalRun> {
+    let want = sys.n_free().min(if rigid { 12 } else { 24 });
+    let run = crate::analysis::modal::solve(
+        sys,
+        &ModalParams {
+            target: ModalTarget::Modes(want),
+            ..Default::default()
+        },
+    )?;
+    if !run.report.complete {
+        return Err(Error::Verification("machine modal analysis: a mode was missed".into()));
+    }
+    Ok(run)
+}
+
+/// [`analyse`] on the system `sys` with the leaves and magnets in its K.
+fn analyse_on(
+    d: &Design,
+    parts: &Condensed,
+    base: &Base,
+    springs: &Springs,
+    sys: &System,
+    rigid: bool,
+) -> Result<MachineResult> {
+    let layout = &base.layout;
+    let masses = &base.masses;
+    let (leaf_nodes, table_ref, magnet_nodes) = (&base.leaf_nodes, base.table_ref, &base.magnet_nodes);
+    let run = machine_run(sys, rigid)?;
     let dofs = sys.dofs().n_free;
     let f_resp = d.machine.response_range * d.excitation_hz;
     let n_use = run
@@ -266,10 +310,10 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let shapes: Vec<Vec<f64>> = (0..n_use)
         .map(|k| dm.expand(&crate::linalg::eigen::column(&run.vectors, k), 6))
         .collect();
-    let pots = dashpots(d, &parts, &layout, &springs, &leaf_nodes);
+    let pots = dashpots(d, parts, layout, springs, leaf_nodes);
     let cr = modal_damping(&pots, &shapes);
     let omega = TAU * d.excitation_hz;
-    let full = forced_response(d, &layout, &sys, &run, &cr, 1)?;
+    let full = forced_response(d, layout, sys, &run, &cr, 1)?;
     let response: Vec<[Complex<f64>; 3]> = (0..layout.mesh.n_nodes())
         .map(|a| std::array::from_fn(|c| full[a][c]))
         .collect();
@@ -282,16 +326,16 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let mean = amps.iter().sum::<f64>() / amps.len() as f64;
     let min = amps.iter().copied().fold(f64::INFINITY, f64::min);
     let max = amps.iter().copied().fold(0.0, f64::max);
-    let modes = name_modes(d, &layout, &springs, &masses, &run, &shapes, &leaf_nodes, table_ref);
+    let modes = name_modes(d, layout, springs, masses, &run, &shapes, leaf_nodes, table_ref);
     let (working, nearest_other) = working_mode(d, modes.as_slice());
     let reactive_amplitude = response[layout.reactive as usize][2].norm();
     let table_mass = run.report.mass_kg - d.masses.reactive - d.masses.active_extra - masses.load_mass;
-    let (leaf_relative, magnet_relative) = relative_motions(d, &layout, &full, &leaf_nodes, &magnet_nodes, rigid);
-    let mut floor = vec![floor_force(d, &parts, &layout, &full, 1)];
+    let (leaf_relative, magnet_relative) = relative_motions(d, layout, &full, leaf_nodes, magnet_nodes, rigid);
+    let mut floor = vec![floor_force(d, parts, layout, &full, 1)];
     for k in 2..=3u32 {
         if d.magnet_drive()?.cos_coefficient(k) != 0.0 {
-            let uk = forced_response(d, &layout, &sys, &run, &cr, k)?;
-            floor.push(floor_force(d, &parts, &layout, &uk, k));
+            let uk = forced_response(d, layout, sys, &run, &cr, k)?;
+            floor.push(floor_force(d, parts, layout, &uk, k));
         }
     }
     let dissipated_power = 0.5 * omega * omega * pots.iter().map(|p| dissipation(p, &full)).sum::<f64>();
@@ -311,7 +355,7 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
         dofs,
         response_modes: (n_use, run.lambda[n_use - 1].max(0.0).sqrt() / TAU),
         surface,
-        mesh: layout.mesh,
+        mesh: layout.mesh.clone(),
         response,
         leaf_relative,
         magnet_relative,
@@ -774,50 +818,132 @@ fn magnet_matrix(d: &Design, m: [f64; 2], a_ref: [f64; 3], k: f64) -> Vec<f64> {
     transform_blocks(&kp, &[ta, tc])
 }
 
-/// Add the magnets' (negative) stiffness at the working gap to the system's K, between each
-/// armature end node and the reactive mass's node (their pair is in K's pattern through the
-/// empty springs of [`machine_springs`]).
-fn add_magnet_stiffness(d: &Design, layout: &Layout, sys: &mut System, ends: &[usize], rigid: bool) -> Result<()> {
-    let k_each = d.magnet_stiffness()? / d.machine.magnets.len() as f64;
-    if k_each == 0.0 {
-        return Ok(());
-    }
-    let mut k = sys.k().clone();
-    let dofs = sys.dofs().clone();
-    for (i, m) in d.machine.magnets.iter().enumerate() {
-        let a_ref = if rigid { layout.table_centre } else { [m[0], m[1], 0.0] };
-        let km = magnet_matrix(d, *m, a_ref, k_each);
-        let nodes = [ends[i], layout.reactive as usize];
-        for r in 0..12 {
-            for c in 0..12 {
-                let v = km[r * 12 + c];
-                if v == 0.0 {
-                    continue;
-                }
-                let (Some(er), Some(ec)) = (dofs.eq_of(nodes[r / 6], r % 6), dofs.eq_of(nodes[c / 6], c % 6)) else {
-                    continue;
-                };
-                let pos = k.pattern.position(er, ec).ok_or_else(|| {
-                    Error::Verification(format!("machine: magnet {} is not in the stiffness pattern", i + 1))
-                })?;
-                k.values[pos] += v;
+/// Add the 12×12 block `km` (global axes) between `nodes` to `k` on its pattern.
+fn add_block(k: &mut SymMatrix, dofs: &DofMap, nodes: [usize; 2], km: &[f64], what: &str) -> Result<()> {
+    for r in 0..12 {
+        for c in 0..12 {
+            let v = km[r * 12 + c];
+            if v == 0.0 {
+                continue;
             }
+            let (Some(er), Some(ec)) = (dofs.eq_of(nodes[r / 6], r % 6), dofs.eq_of(nodes[c / 6], c % 6)) else {
+                continue;
+            };
+            let pos = k
+                .pattern
+                .position(er, ec)
+                .ok_or_else(|| Error::Verification(format!("machine: {what} is not in the stiffness pattern")))?;
+            k.values[pos] += v;
+        }
+    }
+    Ok(())
+}
+
+/// K of `sys`: the base's `k0` with each leaf's matrix (clamping coefficient applied) and each
+/// magnet's (negative) stiffness at the working gap added between its end node and the reactive
+/// mass's node (their pairs are in K's pattern through the base's empty springs).
+fn set_stiffness(
+    d: &Design,
+    base: &Base,
+    springs: &Springs,
+    sys: &mut System,
+    k0: &SymMatrix,
+    rigid: bool,
+) -> Result<()> {
+    let layout = &base.layout;
+    let reactive = layout.reactive as usize;
+    let mut k = k0.clone();
+    let dofs = sys.dofs().clone();
+    for (i, (_, kf)) in springs.leaves.iter().enumerate() {
+        add_block(
+            &mut k,
+            &dofs,
+            [base.leaf_nodes[i], reactive],
+            kf,
+            &format!("leaf {}", i + 1),
+        )?;
+    }
+    let k_each = d.magnet_stiffness()? / d.machine.magnets.len() as f64;
+    if k_each != 0.0 {
+        for (i, m) in d.machine.magnets.iter().enumerate() {
+            let a_ref = if rigid { layout.table_centre } else { [m[0], m[1], 0.0] };
+            let km = magnet_matrix(d, *m, a_ref, k_each);
+            add_block(
+                &mut k,
+                &dofs,
+                [base.magnet_nodes[i], reactive],
+                &km,
+                &format!("magnet {}", i + 1),
+            )?;
         }
     }
     sys.replace_stiffness(k)?;
     Ok(())
 }
 
-/// The machine's model, system and verified modes (24 with the shell table, 12 rigid); the model
-/// node of each leaf's table end, of the rigid table's centre and of each magnet's armature end.
-#[allow(clippy::type_complexity)]
-fn machine_modes(
-    d: &Design,
-    layout: &Layout,
-    springs: &Springs,
-    masses: &Masses,
-    rigid: bool,
-) -> Result<(System, ModalRun, Vec<usize>, Option<usize>, Vec<usize>)> {
+/// The machine without the leaves' and the magnets' stiffness: its mesh and masses, the model
+/// with their springs empty (their pairs of nodes in K's pattern), systems of it (each with its K
+/// as assembled) ready for [`analyse`], and the model nodes of each leaf's table end, of the rigid
+/// table's centre and of each magnet's armature end.
+struct Base {
+    layout: Layout,
+    masses: Masses,
+    spec: ModelSpec,
+    leaf_nodes: Vec<usize>,
+    table_ref: Option<usize>,
+    magnet_nodes: Vec<usize>,
+    /// Systems not in use (at most one per thread that ran at once), with their K as assembled.
+    pool: std::sync::Mutex<Vec<(System, SymMatrix)>>,
+}
+
+impl Base {
+    /// A system of the base (from the pool, or built) and its K as assembled.
+    fn take(&self) -> Result<(System, SymMatrix)> {
+        if let Some(s) = self.pool.lock().unwrap_or_else(|e| e.into_inner()).pop() {
+            return Ok(s);
+        }
+        let model = Model::build(&self.layout.mesh, &self.spec, "machine")?;
+        let sys = System::build(model, &SystemOptions::default(), "machine")?;
+        let k0 = sys.k().clone();
+        Ok((sys, k0))
+    }
+
+    /// Return a system taken with [`Base::take`].
+    fn give_back(&self, sys: System, k0: SymMatrix) {
+        self.pool.lock().unwrap_or_else(|e| e.into_inner()).push((sys, k0));
+    }
+}
+
+/// The memo key of the machine's base: the design without what [`analyse`] applies on each call
+/// (the leaves' thickness, material and clamping, the damping, the excitation and the drive) and
+/// without what no part of the machine reads (its name, targets, tuning, search and envelope).
+fn base_key(d: &Design, rigid: bool) -> String {
+    let paper = Design::paper();
+    let mut b = d.clone();
+    b.name.clear();
+    b.excitation_hz = 0.0;
+    b.target_amplitude = 0.0;
+    b.target_detuning = 0.0;
+    b.tune.clear();
+    let (length, width) = (d.leaf.length, d.leaf.width);
+    b.leaf = paper.leaf;
+    b.leaf.length = length;
+    b.leaf.width = width;
+    b.drive = paper.drive;
+    b.damping = paper.damping;
+    b.search = paper.search;
+    b.envelope = paper.envelope;
+    super::cache::key(if rigid { "machine_base_rigid" } else { "machine_base" }, &b)
+}
+
+/// Build the machine's [`Base`] for design `d` (the coil from `parts`).
+fn machine_base(d: &Design, parts: &Condensed, rigid: bool) -> Result<Base> {
+    let layout = machine_layout(d, rigid)?;
+    let masses = machine_masses(d, layout.armatures.len());
+    let mut springs = machine_springs(d, parts, &layout, rigid);
+    for s in springs.specs.iter_mut().filter(|s| s.label.starts_with("leaf ")) {
+        s.k = vec![0.0; 144];
+    }
     let shells = layout
         .thick
         .iter()
@@ -854,20 +980,17 @@ fn machine_modes(
     let leaf_nodes: Vec<usize> = springs.leaves.iter().map(|(g, _)| node_of(g)).collect::<Result<_>>()?;
     let table_ref = if rigid { Some(node_of("table_body")?) } else { None };
     let magnet_nodes: Vec<usize> = layout.magnet_ends.iter().map(|g| node_of(g)).collect::<Result<_>>()?;
-    let mut sys = System::build(model, &SystemOptions::default(), "machine")?;
-    add_magnet_stiffness(d, layout, &mut sys, &magnet_nodes, rigid)?;
-    let want = sys.n_free().min(if rigid { 12 } else { 24 });
-    let run = crate::analysis::modal::solve(
-        &sys,
-        &ModalParams {
-            target: ModalTarget::Modes(want),
-            ..Default::default()
-        },
-    )?;
-    if !run.report.complete {
-        return Err(Error::Verification("machine modal analysis: a mode was missed".into()));
-    }
-    Ok((sys, run, leaf_nodes, table_ref, magnet_nodes))
+    let sys = System::build(model, &SystemOptions::default(), "machine")?;
+    let k0 = sys.k().clone();
+    Ok(Base {
+        layout,
+        masses,
+        spec,
+        leaf_nodes,
+        table_ref,
+        magnet_nodes,
+        pool: std::sync::Mutex::new(vec![(sys, k0)]),
+    })
 }
 
 /// Node `a`'s six components of shape `s`.

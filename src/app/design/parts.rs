@@ -37,8 +37,32 @@ pub struct LeafStresses {
 /// guided displacement (nodal stresses of the hex20 solid, clamped at one end).
 pub fn leaf_fe_stresses(d: &Design, h: f64) -> Result<LeafStresses> {
     let l = &d.leaf;
-    let key = super::cache::key("leaf_fe", &(l.length, l.width, h, l.material, l.divisions));
-    Ok(*super::cache::get_or(key, || leaf_fe_fresh(d, h))?)
+    let key = super::cache::key("leaf_fe", &(l.length, l.width, h, ref_material(d), l.divisions));
+    let s = *super::cache::get_or(key, || leaf_fe_fresh(&at_ref_young(d), h))?;
+    let f = l.material[0] / LEAF_REF_YOUNG;
+    Ok(LeafStresses {
+        k: f * s.k,
+        von_mises_per_m: f * s.von_mises_per_m,
+        principal_per_m: f * s.principal_per_m,
+    })
+}
+
+/// The Young's modulus the leaf's FE runs use, Pa: linear elasticity at a fixed Poisson's ratio
+/// gives stiffness and stress per metre of displacement proportional to E, so one run per
+/// geometry and ν serves every E (the envelope's temperature band), scaled by E / this value
+/// (1 for the paper's 2.1e11 Pa: its numbers are those of a run at its own E).
+pub const LEAF_REF_YOUNG: f64 = 2.1e11;
+
+/// The leaf's material with E at [`LEAF_REF_YOUNG`].
+fn ref_material(d: &Design) -> [f64; 3] {
+    [LEAF_REF_YOUNG, d.leaf.material[1], d.leaf.material[2]]
+}
+
+/// `d` with the leaf's E at [`LEAF_REF_YOUNG`].
+fn at_ref_young(d: &Design) -> Design {
+    let mut r = d.clone();
+    r.leaf.material = ref_material(d);
+    r
 }
 
 /// [`leaf_fe_stresses`] computed (not memoised).
@@ -386,8 +410,11 @@ pub fn estimate_dofs(d: &Design) -> Result<usize> {
 /// coupling prescribed each, the column the reaction it takes.
 pub fn leaf_end_stiffness(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
     let l = &d.leaf;
-    let key = super::cache::key("leaf_end", &(l.length, l.width, h, l.material, l.divisions));
-    Ok(*super::cache::get_or(key, || leaf_end_stiffness_fresh(d, h))?)
+    let key = super::cache::key("leaf_end", &(l.length, l.width, h, ref_material(d), l.divisions));
+    let k = *super::cache::get_or(key, || leaf_end_stiffness_fresh(&at_ref_young(d), h))?;
+    // Proportional to E, as [`leaf_fe_stresses`].
+    let f = l.material[0] / LEAF_REF_YOUNG;
+    Ok(k.map(|row| row.map(|v| f * v)))
 }
 
 /// [`leaf_end_stiffness`] computed (not memoised).

@@ -16,8 +16,6 @@ use super::file::{Design, MAX_SEARCH_VARIANTS, bad};
 use super::parts::{coil_fe, table_fe, table_mass};
 use super::results::DesignReport;
 use crate::Result;
-use crate::app::dynamics::electromagnet::RectifiedDrive;
-use crate::app::dynamics::two_mass::TwoMass;
 use crate::app::sweep::TableSpec;
 use serde::Serialize;
 use std::f64::consts::TAU;
@@ -91,17 +89,7 @@ fn screen_x1(d: &Design, m_table: f64, k_coil: f64) -> Result<f64> {
     let m2 = d.masses.reactive;
     let m_red = m1 * m2 / (m1 + m2);
     let c12 = m_red * (omega / d.target_detuning).powi(2);
-    let tm = TwoMass::new(
-        m1,
-        m2,
-        c12,
-        d.coil.count as f64 * k_coil,
-        d.damping.mu1,
-        d.damping.mu12,
-        d.damping.mu13,
-    )?;
-    let f = RectifiedDrive::from_magnets(d.drive.magnets, d.drive.pull, omega / 2.0)?.harmonic_amplitude();
-    Ok(tm.steady_state(omega, f)?.amp1())
+    super::chain::two_mass_x1(d, m1, c12, k_coil)
 }
 
 /// Every variant of `d`'s table that the `[search]` lists give (webs within 10 mm of the bottom
@@ -223,7 +211,22 @@ fn judge(
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<String>, Option<EnvelopeResult>)> {
     let margin = d.search.required_margin;
-    if d.search.over_envelope && d.envelope.enabled {
+    // The envelope contains the nominal point: a variant short of the margin there is short over
+    // the envelope, so its envelope is not run (the checks it misses are the nominal ones).
+    let short: Vec<String> = r
+        .checks
+        .iter()
+        .filter(|c| !(c.ok && c.margin >= margin))
+        .map(|c| {
+            format!(
+                "{} (nominal {} vs {})",
+                c.id,
+                crate::io::fmt_sig(c.value, 4),
+                crate::io::fmt_sig(c.limit, 4)
+            )
+        })
+        .collect();
+    if short.is_empty() && d.search.over_envelope && d.envelope.enabled {
         let mut v = v.clone();
         v.envelope = d.envelope.clone();
         let env = super::envelope::run_plan(&v, r, patterns, progress)?;
@@ -234,19 +237,6 @@ fn judge(
             .collect();
         return Ok((short, Some(env)));
     }
-    let short = r
-        .checks
-        .iter()
-        .filter(|c| !(c.ok && c.margin >= margin))
-        .map(|c| {
-            format!(
-                "{} ({} vs {})",
-                c.id,
-                crate::io::fmt_sig(c.value, 4),
-                crate::io::fmt_sig(c.limit, 4)
-            )
-        })
-        .collect();
     Ok((short, None))
 }
 
@@ -338,6 +328,38 @@ pub fn search_with(
     })
 }
 
+/// What stopped the variants run whole: the checks that stop every one of them, and how many
+/// each check stopped.
+fn stoppers(o: &SearchOutcome) -> String {
+    let runs: Vec<&Vec<String>> = o.candidates.iter().filter_map(|c| c.failed.as_ref()).collect();
+    if runs.is_empty() {
+        return "; no variant reached the whole chain".into();
+    }
+    let id = |f: &String| f.split(' ').next().unwrap_or("").to_string();
+    let mut counts: Vec<(String, usize)> = vec![];
+    for f in runs.iter().flat_map(|r| r.iter()) {
+        match counts.iter_mut().find(|c| c.0 == id(f)) {
+            Some(c) => c.1 += 1,
+            None => counts.push((id(f), 1)),
+        }
+    }
+    counts.sort_by(|a, b| b.1.cmp(&a.1));
+    let every = if o.never_met.is_empty() {
+        "no single check stops every variant run".to_string()
+    } else {
+        format!("the check(s) that stop every variant run: {}", o.never_met.join(", "))
+    };
+    format!(
+        "; {every}; checks failed (variants of {}): {} (a variant short at the nominal point is not run over the envelope)",
+        runs.len(),
+        counts
+            .iter()
+            .map(|(k, n)| format!("{k} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
 /// The search as text: what was tried, the spacers' effect and the outcome.
 pub fn search_text(d: &Design, o: &SearchOutcome) -> String {
     use std::fmt::Write;
@@ -400,11 +422,7 @@ pub fn search_text(d: &Design, o: &SearchOutcome) -> String {
                 s,
                 "\nno variant passes every check (within search.max_full_runs = {} whole chains){}",
                 d.search.max_full_runs,
-                if o.never_met.is_empty() {
-                    String::new()
-                } else {
-                    format!("; no variant run could meet: {}", o.never_met.join(", "))
-                }
+                stoppers(o)
             );
         }
     }

@@ -116,6 +116,7 @@ impl Engine {
         tm.read = before.read_s;
         tm.assemble += before.model_s;
         tm.total += before.read_s + before.model_s;
+        modal::retime_floor(&mut run.report);
         Ok(run)
     }
 

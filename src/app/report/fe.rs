@@ -83,6 +83,7 @@ pub fn modal_table(r: &ModalReport) -> String {
         // Another engine factorised (SLEPc + MUMPS): this process only assembled and verified.
         let _ = writeln!(s, "factor: by the external engine; peak memory of this process {peak}");
     }
+    s.push_str(&r.floor.as_ref().map_or(String::new(), |f| f.table()));
     s
 }
 

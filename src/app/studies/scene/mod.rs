@@ -77,6 +77,11 @@ pub struct Scene {
     pub parts: Vec<(String, Formulation)>,
     /// The modal analysis, if asked: target, shift (Hz), Lanczos block.
     pub modal: Option<(ModalTarget, Option<f64>, usize)>,
+    /// `[modal] prestress = N`: the modes of `K + K_σ` preloaded by load case N (0-based here).
+    pub prestress: Option<usize>,
+    /// `[buckling]`: the load case (0-based) whose multiples buckle the model, and the number
+    /// of load factors.
+    pub buckling: Option<(usize, usize)>,
     /// The static load cases, if a static analysis is asked.
     pub static_cases: Option<Vec<Vec<Load>>>,
     /// The harmonic analysis, if asked (`[harmonic]`).
@@ -114,6 +119,9 @@ pub struct SceneReport {
     /// Harmonic report, if asked.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub harmonic: Option<crate::app::harmonic::HarmonicReport>,
+    /// Buckling report, if asked (`[buckling]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub buckling: Option<crate::analysis::buckling::BucklingReport>,
     /// Files written.
     pub outputs: Vec<String>,
     /// Notes (ignored cells, model notes).
@@ -139,6 +147,7 @@ impl SceneReport {
     /// The modal solution (if any) passed its Sturm and residual checks.
     pub fn verified(&self) -> bool {
         self.modal.as_ref().is_none_or(|m| m.complete && m.accurate)
+            && self.buckling.as_ref().is_none_or(|b| b.complete && b.accurate)
     }
 
     /// Human-readable tables (the same as `vibrofem modes` and `vibrofem static`).

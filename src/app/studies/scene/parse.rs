@@ -49,6 +49,7 @@ struct RawScene {
     #[serde(rename = "static")]
     statics: Option<Spanned<RawStatic>>,
     harmonic: Option<Spanned<RawHarmonic>>,
+    buckling: Option<Spanned<RawBuckling>>,
     output: Option<Spanned<RawOutput>>,
 }
 
@@ -168,6 +169,14 @@ struct RawModal {
     block: Option<i64>,
     engine: Option<String>,
     ranks: Option<i64>,
+    prestress: Option<i64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawBuckling {
+    modes: Option<i64>,
+    case: Option<i64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -299,9 +308,21 @@ impl Scene {
         let static_cases = r.load_cases(&raw)?;
         let harmonic = r.harmonic(&raw.harmonic)?;
         let (modal, slepc_ranks) = r.modal(&raw.modal)?;
-        if modal.is_none() && static_cases.is_none() && harmonic.is_none() {
+        let n_cases = static_cases.as_ref().map_or(0, Vec::len);
+        let prestress = match &raw.modal {
+            Some(m) => r.case_number(m.get_ref().prestress, m.span(), "[modal] 'prestress'", n_cases)?,
+            None => None,
+        };
+        if prestress.is_some() && slepc_ranks.is_some() {
+            return r.ctx.err(
+                raw.modal.as_ref().map_or(0..0, |m| m.span()),
+                "prestressed modes are solved by engine = \"native\" only",
+            );
+        }
+        let buckling = r.buckling(&raw.buckling, n_cases)?;
+        if modal.is_none() && static_cases.is_none() && harmonic.is_none() && buckling.is_none() {
             return Err(r.ctx.whole(
-                "the scene asks for no analysis: add [modal], [harmonic], or [static] / [[load]] / [[displace]]",
+                "the scene asks for no analysis: add [modal], [harmonic], [buckling], or [static] / [[load]] / [[displace]]",
             ));
         }
         let (vtu, msh) = raw
@@ -317,6 +338,8 @@ impl Scene {
             spec: r.spec,
             parts,
             modal,
+            prestress,
+            buckling,
             static_cases,
             harmonic,
             vtu,
@@ -941,5 +964,44 @@ impl Reader<'_> {
             }
         };
         Ok((Some((target, r.shift_hz, block as usize)), slepc_ranks))
+    }
+
+    /// A 1-based load case number (`[[load]]` is case 1, `[[load_case]]` tables are numbered in
+    /// file order) checked against the `n_cases` cases of the scene; 0-based.
+    fn case_number(&self, n: Option<i64>, sp: Span, what: &str, n_cases: usize) -> Result<Option<usize>> {
+        let Some(n) = n else {
+            return Ok(None);
+        };
+        if n_cases == 0 {
+            return self.ctx.err(
+                sp,
+                format!("{what} names load case {n}, but the scene has no [[load]] or [[load_case]]"),
+            );
+        }
+        if n < 1 || n as usize > n_cases {
+            return self.ctx.err(
+                sp,
+                format!("{what} must be a load case number from 1 to {n_cases}, got {n}"),
+            );
+        }
+        Ok(Some(n as usize - 1))
+    }
+
+    /// `[buckling]`: the load case (`case`, default 1) and the number of load factors (`modes`,
+    /// default 4); (case 0-based, modes).
+    fn buckling(&self, raw: &Option<Spanned<RawBuckling>>, n_cases: usize) -> Result<Option<(usize, usize)>> {
+        let Some(b) = raw else {
+            return Ok(None);
+        };
+        let r = b.get_ref();
+        let case = self
+            .case_number(Some(r.case.unwrap_or(1)), b.span(), "[buckling] 'case'", n_cases)?
+            .unwrap_or(0);
+        let modes = match r.modes {
+            Some(n) if n < 1 => return self.ctx.err(b.span(), format!("'modes' must be at least 1, got {n}")),
+            Some(n) => n as usize,
+            None => 4,
+        };
+        Ok(Some((case, modes)))
     }
 }

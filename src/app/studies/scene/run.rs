@@ -159,6 +159,10 @@ impl Scene {
                 (Some(r), Some(s))
             }
         };
+        let buckling = match self.buckling {
+            None => None,
+            Some((case, modes)) => Some(run.buckling(case, modes)?),
+        };
         let statics = match &self.static_cases {
             None => None,
             Some(cases) => Some(run.statics(cases, modal.is_none(), out)?),
@@ -178,6 +182,7 @@ impl Scene {
             modal,
             statics,
             harmonic,
+            buckling,
             outputs: run.outputs,
             notes: run.notes,
             time_s: t0.elapsed().as_secs_f64(),
@@ -249,7 +254,27 @@ impl Run<'_> {
             read_s: self.read_time,
             model_s: self.model_time,
         };
-        let mut run = engine.solve(&self.sys, &params, before)?;
+        let mut run = match (scene.prestress, &scene.static_cases) {
+            (Some(c), Some(cases)) => {
+                // K + K_σ for the modal solve only: the static and harmonic analyses after it
+                // keep K.
+                let loads = cases.get(c).cloned().unwrap_or_default();
+                let k = self.sys.k().clone();
+                let (pre, case, _) = crate::analysis::prestress::prestress_system(&mut self.sys, &self.mesh, &loads)?;
+                let solved = engine.solve(&self.sys, &params, before);
+                self.sys.replace_stiffness(k)?;
+                let mut r = solved?;
+                r.report.notes.push(format!(
+                    "prestressed modes: K + K_σ from load case {} (applied force {:.4e} N); stress from {:.3} MPa to {:.3} MPa",
+                    c + 1,
+                    (case.applied.force.iter().map(|f| f * f).sum::<f64>()).sqrt(),
+                    pre.compression.value / 1e6,
+                    pre.tension.value / 1e6
+                ));
+                r
+            }
+            _ => engine.solve(&self.sys, &params, before)?,
+        };
         let tm = &run.report.timings_s;
         log::info!(
             "scene {}: modal: assemble {:.3} s, factor {:.3} s, eigen {:.3} s",
@@ -276,6 +301,26 @@ impl Run<'_> {
             shapes: std::mem::take(&mut run.shapes),
         };
         Ok((run.report, shapes))
+    }
+
+    /// Linear buckling under load case `case` (0-based): the `modes` lowest positive factors.
+    fn buckling(&mut self, case: usize, modes: usize) -> Result<crate::analysis::buckling::BucklingReport> {
+        let loads = self
+            .scene
+            .static_cases
+            .as_ref()
+            .and_then(|c| c.get(case))
+            .cloned()
+            .unwrap_or_default();
+        let opts = crate::analysis::buckling::BucklingOptions {
+            spec: self.scene.spec.clone(),
+            modes,
+            ..Default::default()
+        };
+        let run =
+            crate::analysis::buckling::solve(&self.sys, &self.mesh, &loads, &opts, self.read_time, self.model_time)?;
+        self.notes.extend(run.report.notes.iter().cloned());
+        Ok(run.report)
     }
 
     /// The static analysis of the load cases; `alone`: no modal analysis ran (the model build
