@@ -231,8 +231,8 @@ pub fn solve_mesh(
                 Err(e) => return Err(e),
             };
             let reason = format!(
-                "{refusal}; --solver auto takes the low-memory iterative path (SLEPc, multigrid-preconditioned) \
-                 instead (--solver direct refuses)"
+                "{refusal}; --solver auto takes the low-memory iterative path (SLEPc under mpirun) instead \
+                 (--solver direct refuses)"
             );
             if let Err(e) = slepc::check_available(&lm.slepc) {
                 // Both reasons: the direct path does not fit, the iterative one is not installed.
@@ -241,8 +241,10 @@ pub fn solve_mesh(
                      available either: {e}"
                 )));
             }
-            eprintln!("note: {reason}");
-            let (run, info) = solve_iterative((mesh, source), opts, read_s, lm, Some(reason))?;
+            // At once (the run may be long); the report's notes repeat it.
+            eprintln!("note: the direct solver does not fit the memory: taking the low-memory iterative path");
+            let (mut run, info) = solve_iterative((mesh, source), opts, read_s, lm, Some(reason.clone()))?;
+            run.report.notes.insert(0, reason);
             Ok((run, Some(info)))
         }
     }
@@ -431,6 +433,8 @@ fn solve_iterative(
         .fold(0.0, f64::max);
     run.report.peak_memory_bytes = Some((own_peak * MIB) as u64);
     if let Some(why) = &info.sturm_not_verified {
+        // Not a failed count: no count.
+        run.report.notes.retain(|n| !n.starts_with("Sturm check failed"));
         run.report.notes.push(format!("Sturm count not verified: {why}"));
     }
     Ok((run, info))
@@ -506,8 +510,7 @@ fn load(sys: &System, dir: &Path, nev: usize) -> Result<Loaded> {
     notes.insert(
         0,
         format!(
-            "solved by the low-memory iterative path: SLEPc {} ({}, multigrid-preconditioned, {} rigid-body motions \
-             deflated) on {} MPI ranks, {} iterations, {} pairs converged; residuals, backward errors (largest \
+            "solved by the low-memory iterative path: SLEPc {} (method {}, {} rigid-body motions deflated) on {} MPI ranks, {} iterations, {} pairs converged; residuals, backward errors (largest \
              {worst:.1e}) and M-orthonormality ({m_orth:.1e}) recomputed here with vibrofem's K and M",
             info.slepc,
             info.method.as_deref().unwrap_or("the script's default method"),
@@ -548,8 +551,8 @@ fn sturm_of(info: &LowMemOut, lambda: &[f64], nev: usize) -> (SturmCheck, Option
     let mut notes = Vec::new();
     let Some(upper) = info.upper else {
         let why = format!(
-            "{}: MUMPS's out-of-core inertia of K − sM did not run within the memory budget, so no mode \
-             is known to be missed or not",
+            "{}; whether a mode was missed is not known (MUMPS's out-of-core inertia of K − sM did not run \
+             within the memory budget)",
             info.sturm_skipped.as_deref().unwrap_or("the script did not count")
         );
         let sturm = SturmCheck {
