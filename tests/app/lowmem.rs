@@ -250,3 +250,21 @@ fn band_and_shift_need_the_direct_solver() {
     assert_eq!(code, 1, "{err}");
     assert!(err.contains("--solver 'cg'"), "{err}");
 }
+
+/// `--solver auto` when the factorisation does not fit and the iterative path is not installed
+/// (mpirun missing here, whatever the machine has): one error naming both reasons, the direct
+/// path's estimate against the budget and the SLEPc engine's remedy, exit 1 as the refusal's.
+#[test]
+fn auto_without_slepc_names_both_reasons() {
+    let (code, out, err) = crate::common::run_cmd(
+        crate::common::bin()
+            .args(["modes", "box:0.3,0.1,0.05:6,2,1:hex20", "--max-memory", "1M"])
+            .env("VIBROFEM_MPIRUN", "/nonexistent/mpirun"),
+    );
+    assert_eq!(code, 1, "{out}\n{err}");
+    assert!(
+        err.contains("needs at least") && err.contains("--max-memory is 1") && err.contains("not available either"),
+        "{err}"
+    );
+    assert!(err.contains("python3-slepc4py") && err.contains("openmpi-bin"), "{err}");
+}
