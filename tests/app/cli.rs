@@ -178,9 +178,15 @@ fn eigen_iteration_that_cannot_converge_is_a_numerical_failure() {
     );
 }
 
+/// Issue 31: the refusal is the direct solver's (`--solver auto`, the default, takes the
+/// low-memory iterative path instead: tests/app/lowmem.rs).
 #[test]
 fn too_little_memory_is_refused_with_the_estimate() {
-    expect_error(&["modes", &plate(), "--max-memory", "1M"], 1, &["MiB", "--max-memory"]);
+    expect_error(
+        &["modes", &plate(), "--max-memory", "1M", "--solver", "direct"],
+        1,
+        &["MiB", "--max-memory"],
+    );
 }
 
 #[test]

@@ -20,6 +20,7 @@ mod export_engine;
 mod harmonic;
 mod harmonic_fatigue;
 mod harmonic_inputs;
+mod lowmem;
 mod machine3d;
 mod machine_inputs;
 mod machines;

@@ -6,10 +6,19 @@ use crate::common::run;
 use std::process::Command;
 
 /// Item 14: a model far beyond `--max-memory` is refused from the estimate (exit 1, the
-/// estimate and the limit in the message), not aborted in assembly.
+/// estimate and the limit in the message), not aborted in assembly. Issue 31: with the direct
+/// solver only (`--solver auto`, the default, takes the iterative path instead: see
+/// tests/app/lowmem.rs).
 #[test]
 fn max_memory_refuses_before_assembly() {
-    let (code, _, err) = run(&["modes", "box:1,1,1:30,30,30:hex20", "--max-memory", "200M"]);
+    let (code, _, err) = run(&[
+        "modes",
+        "box:1,1,1:30,30,30:hex20",
+        "--max-memory",
+        "200M",
+        "--solver",
+        "direct",
+    ]);
     assert_eq!(code, 1, "{err}");
     assert!(
         err.contains("needs at least") && err.contains("--max-memory is 200 MiB"),

@@ -8,13 +8,17 @@
 //! - [`slepc`]: staging a SLEPc job (`params.json`, the script, K and M), running it under
 //!   mpirun, and importing its results (also of a job run on a cluster): checked against the
 //!   model and the request, then verified here as a native solution is.
+//! - [`lowmem`]: the low-memory iterative path (`--solver iterative|auto`): SLEPc with a
+//!   multigrid-preconditioned eigensolver under mpirun, verified here as the SLEPc engine is.
 //! - [`export`]: K, M, the DOF map and a model summary for another solver.
 
 pub mod export;
 mod job;
+pub mod lowmem;
 mod results;
 pub mod slepc;
 
+pub use lowmem::{LowMemOptions, Solver};
 pub use slepc::SlepcOptions;
 
 use crate::analysis::modal::{self, ModalOptions, ModalParams, ModalRun};

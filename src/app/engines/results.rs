@@ -110,7 +110,7 @@ fn read_exact_file(path: &Path, len: u64) -> Result<Vec<u8>> {
 }
 
 /// A small JSON file of the job folder as text.
-fn read_text(path: &Path) -> Result<String> {
+pub(super) fn read_text(path: &Path) -> Result<String> {
     let len = regular_len(path)?;
     if len > MAX_JSON_BYTES {
         return Err(engine_err(format!(
@@ -123,7 +123,7 @@ fn read_text(path: &Path) -> Result<String> {
 
 /// `count` little-endian f64 values from `path`, whose size must be exactly theirs (`what` says
 /// what `slepc.json` announced, for the message).
-fn read_f64s(path: &Path, count: Option<usize>, what: &str) -> Result<Vec<f64>> {
+pub(super) fn read_f64s(path: &Path, count: Option<usize>, what: &str) -> Result<Vec<f64>> {
     let len = regular_len(path)?;
     let want = count.and_then(|c| c.checked_mul(8)).ok_or_else(|| {
         engine_err(format!(
@@ -316,7 +316,7 @@ fn select(lam: &[f64], info: &SlepcOut, job: &Job, want: &Job) -> Vec<usize> {
 
 /// The pairs `idx` (of `n` entries each in `x`), M-normalised here (SLEPc's B-normalisation,
 /// re-done in our arithmetic).
-fn normalised(m: &SymMatrix, lam: &[f64], x: &[f64], n: usize, idx: &[usize]) -> (Vec<f64>, Mat<f64>) {
+pub(super) fn normalised(m: &SymMatrix, lam: &[f64], x: &[f64], n: usize, idx: &[usize]) -> (Vec<f64>, Mat<f64>) {
     let mut out = Mat::zeros(n, idx.len());
     let mut lambda = Vec::with_capacity(idx.len());
     for (c, &i) in idx.iter().enumerate() {
@@ -391,7 +391,7 @@ fn sturm_check(
 }
 
 /// Refuse a non-finite eigenvalue or vector entry, naming the file, the pair and the row.
-fn check_finite(lam: &[f64], x: &[f64], n: usize, dir: &Path) -> Result<()> {
+pub(super) fn check_finite(lam: &[f64], x: &[f64], n: usize, dir: &Path) -> Result<()> {
     if let Some(i) = lam.iter().position(|v| !v.is_finite()) {
         return Err(engine_err(format!(
             "{}: the eigenvalue of pair {} is {}: the SLEPc run failed (run the job again)",

@@ -36,7 +36,8 @@ pub const DEBIAN_PETSC_DIR: &str = "/usr/lib/petscdir/petsc3.18/x86_64-linux-gnu
 /// See [`DEBIAN_PETSC_DIR`].
 pub const DEBIAN_SLEPC_DIR: &str = "/usr/lib/slepcdir/slepc3.18/x86_64-linux-gnu-real";
 
-const INSTALL: &str = "install Debian's python3-slepc4py and openmpi-bin (as root: `bash validation/setup_slepc.sh`)";
+pub(super) const INSTALL: &str =
+    "install Debian's python3-slepc4py and openmpi-bin (as root: `bash validation/setup_slepc.sh`)";
 
 /// How to run SLEPc.
 #[derive(Clone, Debug)]
@@ -67,14 +68,14 @@ impl Default for SlepcOptions {
     }
 }
 
-fn python(o: &SlepcOptions) -> String {
+pub(super) fn python(o: &SlepcOptions) -> String {
     o.python
         .clone()
         .or_else(|| std::env::var("VIBROFEM_SLEPC_PYTHON").ok())
         .unwrap_or_else(|| "/usr/bin/python3".into())
 }
 
-fn mpirun(o: &SlepcOptions) -> String {
+pub(super) fn mpirun(o: &SlepcOptions) -> String {
     o.mpirun
         .clone()
         .or_else(|| std::env::var("VIBROFEM_MPIRUN").ok())
@@ -140,8 +141,8 @@ pub fn check_available(o: &SlepcOptions) -> Result<String> {
 }
 
 /// A work folder that removes itself unless the user asked to keep it.
-struct WorkDir {
-    path: PathBuf,
+pub(super) struct WorkDir {
+    pub(super) path: PathBuf,
     remove: bool,
 }
 
@@ -153,7 +154,7 @@ impl Drop for WorkDir {
     }
 }
 
-fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
+pub(super) fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
     let (path, remove) = match &o.workdir {
         Some(p) => (p.clone(), false),
         None => {
@@ -253,8 +254,9 @@ pub fn write_job(sys: &System, params: &ModalParams, dir: &Path, matrices: bool)
     Ok(job.sigma)
 }
 
-/// Run the job in `dir` under mpirun (Open MPI's flags only for Open MPI's launchers).
-fn run_mpi(o: &SlepcOptions, dir: &Path, versions: &str) -> Result<()> {
+/// Run the job in `dir` (its script `script`, a file in `dir` unless a path is given) under
+/// mpirun (Open MPI's flags only for Open MPI's launchers).
+pub(super) fn run_mpi(o: &SlepcOptions, dir: &Path, script: &Path, versions: &str) -> Result<()> {
     let mpi = mpirun(o);
     let mut c = Command::new(&mpi);
     let open_mpi = matches!(
@@ -269,7 +271,7 @@ fn run_mpi(o: &SlepcOptions, dir: &Path, versions: &str) -> Result<()> {
         c.arg("--oversubscribe");
     }
     c.args(["-n", &o.ranks.to_string(), &python(o)])
-        .arg(dir.join("slepc_modes.py"))
+        .arg(dir.join(script))
         .arg(dir)
         // One thread per rank: the ranks are the parallelism.
         .env("OMP_NUM_THREADS", "1")
@@ -320,7 +322,7 @@ pub fn solve(sys: &System, params: &ModalParams, o: &SlepcOptions) -> Result<Mod
             write_job(sys, params, &wd.path, true)?;
             let t_export = t.elapsed().as_secs_f64();
             let t = Instant::now();
-            run_mpi(o, &wd.path, &versions)?;
+            run_mpi(o, &wd.path, Path::new("slepc_modes.py"), &versions)?;
             (wd, (want, Vec::new()), t_export, t.elapsed().as_secs_f64())
         }
     };
