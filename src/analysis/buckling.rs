@@ -448,6 +448,31 @@ fn relative_residuals(k: &SymMatrix, g: &SymMatrix, lambda: &[f64], vectors: &Ma
         .collect()
 }
 
+/// The answer for a load without a positive factor (no compressive part).
+fn no_buckling(
+    n: usize,
+    applications: usize,
+    factorizations: usize,
+    factor_err: f64,
+    times: [f64; 3],
+) -> PencilSolution {
+    PencilSolution {
+        lambda: vec![],
+        vectors: Mat::zeros(n, 0),
+        rel_residual: vec![],
+        backward_error: vec![],
+        sturm: BucklingSturm {
+            complete: true,
+            ..Default::default()
+        },
+        no_buckling: true,
+        applications,
+        factorizations,
+        factor_backward_error: factor_err,
+        times,
+    }
+}
+
 /// The lowest `nev` positive load factors of `(K + λK_σ)φ = 0`, verified (module doc). `k`
 /// must be positive definite; `kg` is `K_σ` on K's pattern; `sym` the symbolic factorisation
 /// of that pattern; `k_factor` a factorisation of `k` already made on `sym` (the static
@@ -479,21 +504,7 @@ pub fn solve_pencil(
     let mut factor_err = fk.probe_residual;
     let t_factor = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let empty = |applications, times| PencilSolution {
-        lambda: vec![],
-        vectors: Mat::zeros(n, 0),
-        rel_residual: vec![],
-        backward_error: vec![],
-        sturm: BucklingSturm {
-            complete: true,
-            ..Default::default()
-        },
-        no_buckling: true,
-        applications,
-        factorizations: own_factorizations,
-        factor_backward_error: factor_err,
-        times,
-    };
+    let empty = |applications, times| no_buckling(n, applications, own_factorizations, factor_err, times);
     if g.values.iter().all(|&x| x == 0.0) {
         return Ok(empty(0, [t_factor, 0.0, 0.0]));
     }
