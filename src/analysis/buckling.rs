@@ -34,10 +34,10 @@
 //!
 //! # Cost
 //! One static solve (a factorisation of K, which also proves K positive definite), the stresses
-//! and `K_σ` (an assembly without mass), one more factorisation of K for the iteration and one
-//! of `K + σK_σ` for the Sturm count, all on the same ordering and symbolic factorisation: the
-//! cost of a static plus a modal run, whose Lanczos run also factors twice (shift and Sturm
-//! point).
+//! and `K_σ` (an assembly without mass), the iteration with the static solve's factor of K
+//! (not factored again) and one factorisation of `K + σK_σ` for the Sturm count, all on the
+//! same ordering and symbolic factorisation: two numeric factorisations in all, fewer than a
+//! static plus a modal run (whose Lanczos run factors twice: shift and Sturm point).
 //!
 //! A load whose `K_σ` has no compressive part has no positive factor: the run says so ("no
 //! buckling under this load") with an empty list, not an error. A model that is not supported
@@ -123,7 +123,8 @@ pub struct BucklingTimings {
     pub statics: f64,
     /// Stresses and K_σ.
     pub geometric: f64,
-    /// Factorisation of K for the iteration.
+    /// Factorisation of K for the iteration: 0 since the static solve's factor is reused
+    /// (kept for the key's stability).
     pub factor: f64,
     /// The iteration.
     pub solve: f64,
@@ -168,7 +169,8 @@ pub struct BucklingReport {
     pub tension: StressExtreme,
     /// Largest compressive stress of the load case.
     pub compression: StressExtreme,
-    /// Numeric factorisations (static, iteration, Sturm).
+    /// Numeric factorisations: K (the static solve's, reused by the iteration) and K + σK_σ
+    /// for the Sturm count (none under a load without compression).
     pub factorizations: usize,
     /// Operator applications (vectors).
     pub operator_applications: usize,
@@ -205,7 +207,7 @@ pub struct PencilSolution {
     pub no_buckling: bool,
     /// Operator applications.
     pub applications: usize,
-    /// Factorisations (iteration, Sturm).
+    /// Factorisations made here (K unless it was given, the Sturm point).
     pub factorizations: usize,
     /// Worst probe backward error of the factorisations.
     pub factor_backward_error: f64,
@@ -446,13 +448,40 @@ fn relative_residuals(k: &SymMatrix, g: &SymMatrix, lambda: &[f64], vectors: &Ma
         .collect()
 }
 
+/// The answer for a load without a positive factor (no compressive part).
+fn no_buckling(
+    n: usize,
+    applications: usize,
+    factorizations: usize,
+    factor_err: f64,
+    times: [f64; 3],
+) -> PencilSolution {
+    PencilSolution {
+        lambda: vec![],
+        vectors: Mat::zeros(n, 0),
+        rel_residual: vec![],
+        backward_error: vec![],
+        sturm: BucklingSturm {
+            complete: true,
+            ..Default::default()
+        },
+        no_buckling: true,
+        applications,
+        factorizations,
+        factor_backward_error: factor_err,
+        times,
+    }
+}
+
 /// The lowest `nev` positive load factors of `(K + λK_σ)φ = 0`, verified (module doc). `k`
 /// must be positive definite; `kg` is `K_σ` on K's pattern; `sym` the symbolic factorisation
-/// of that pattern.
+/// of that pattern; `k_factor` a factorisation of `k` already made on `sym` (the static
+/// solve's, proved positive definite there), or `None` to factor `k` here.
 pub fn solve_pencil(
     k: &SymMatrix,
     kg: &SymMatrix,
     sym: &Arc<SymbolicFactor>,
+    k_factor: Option<&Factor>,
     nev: usize,
     max_applications: usize,
 ) -> Result<PencilSolution> {
@@ -464,25 +493,18 @@ pub fn solve_pencil(
     let mut g = kg.clone();
     g.values.iter_mut().for_each(|a| *a = -*a);
     let t0 = Instant::now();
-    let fk = factor_positive_definite(sym, k)?;
+    let own;
+    let (fk, own_factorizations) = match k_factor {
+        Some(f) => (f, 0),
+        None => {
+            own = factor_positive_definite(sym, k)?;
+            (&own, 1)
+        }
+    };
     let mut factor_err = fk.probe_residual;
     let t_factor = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let empty = |applications, times| PencilSolution {
-        lambda: vec![],
-        vectors: Mat::zeros(n, 0),
-        rel_residual: vec![],
-        backward_error: vec![],
-        sturm: BucklingSturm {
-            complete: true,
-            ..Default::default()
-        },
-        no_buckling: true,
-        applications,
-        factorizations: 1,
-        factor_backward_error: factor_err,
-        times,
-    };
+    let empty = |applications, times| no_buckling(n, applications, own_factorizations, factor_err, times);
     if g.values.iter().all(|&x| x == 0.0) {
         return Ok(empty(0, [t_factor, 0.0, 0.0]));
     }
@@ -593,7 +615,7 @@ pub fn solve_pencil(
         sturm,
         no_buckling: false,
         applications,
-        factorizations: 2,
+        factorizations: own_factorizations + 1,
         factor_backward_error: factor_err,
         times: [t_factor, t_solve, t2.elapsed().as_secs_f64()],
     })
@@ -635,7 +657,7 @@ pub fn solve(
     t_asm: f64,
 ) -> Result<BucklingRun> {
     let t = Instant::now();
-    let st = statics::solve(sys, mesh, &[loads.to_vec()]).map_err(|e| match e {
+    let (st, fk) = statics::solve_keeping_factor(sys, mesh, &[loads.to_vec()]).map_err(|e| match e {
         Error::Factorization(m) => Error::Factorization(format!("buckling needs a supported model: {m}")),
         e => e,
     })?;
@@ -649,8 +671,15 @@ pub fn solve(
     let pre = InitialStress::from_displacements(sys.model(), &st.u[0])?;
     let kg = pre.geometric_stiffness(sys)?;
     let t_geo = t.elapsed().as_secs_f64();
-    let sol = solve_pencil(sys.k(), &kg, sys.symbolic()?, opts.modes, opts.max_applications)
-        .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
+    let sol = solve_pencil(
+        sys.k(),
+        &kg,
+        sys.symbolic()?,
+        Some(&fk),
+        opts.modes,
+        opts.max_applications,
+    )
+    .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
     let model = sys.model();
     let shapes = node_shapes(model, &sol.vectors);
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));

@@ -680,6 +680,12 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
 /// assembled system; `mesh` is the one the model was built from (its groups carry the loads).
 /// An empty `cases` means one case with no loads (e.g. only prescribed displacements).
 pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun> {
+    solve_keeping_factor(sys, mesh, cases).map(|(run, _)| run)
+}
+
+/// [`solve`], handing back the factorisation of K it made (positive definite, on the system's
+/// symbolic factorisation) for a caller that solves with K again (buckling's iteration).
+pub(crate) fn solve_keeping_factor(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<(StaticRun, Factor)> {
     let model = sys.model();
     let sets = model.element_sets();
     let t_asm = sys.timings.assemble;
@@ -757,7 +763,7 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
         us.push(u);
     }
     let t_post = t.elapsed().as_secs_f64();
-    Ok(StaticRun {
+    let run = StaticRun {
         dofs: n,
         cases: reports,
         u: us,
@@ -768,5 +774,6 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
             solve: t_sol,
             post: t_post,
         },
-    })
+    };
+    Ok((run, fa))
 }

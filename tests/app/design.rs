@@ -43,7 +43,9 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
     ] {
         assert!(dir.join(f).exists() || f == "report.md", "{f} missing");
     }
-    assert_eq!(r.checks.len(), 13);
+    // 14 checks: `coil_buckling` (issue 30) joined the 13 others.
+    assert_eq!(r.checks.len(), 14);
+    coil_buckling_of_the_paper_design(&r);
     assert!(r.table_frequencies_hz.len() == 6 && r.table_frequencies_hz[0] > 50.0);
     report_formats(&r, &dir);
 }
@@ -51,6 +53,34 @@ fn paper_design_runs_and_reproduces_the_lumped_numbers() {
 /// The report as an engineer reads it (issue 13, item 4): every quantity and check under a
 /// stable id in JSON, numbers with four significant digits and the checks first in the text,
 /// Markdown and a self-contained HTML page.
+/// The built-in coil (L0 = 72 mm, D = 32 mm, seating ν = 1) is stable at any deflection by
+/// Haringx's criterion (EN 13906-1 §9.2; Shigley 9th ed. ch. 10: absolute stability for steel
+/// when L0 < 2.63 D/α, here 2.25 D): its critical deflection is taken at the stability limit,
+/// 0.5·L0/(1 − G/E) with E = 2.6 G, i.e. 58.5 mm. The check's deflection is the binding check's
+/// (travel 24 mm / (1 + ξ)), so the value is exact to rounding.
+fn coil_buckling_of_the_paper_design(r: &vibrofem::app::design::DesignReport) {
+    let check = |id: &str| {
+        r.checks
+            .iter()
+            .find(|c| c.id == id)
+            .unwrap_or_else(|| panic!("no {id}"))
+    };
+    let (bind, buck) = (check("coil_binding"), check("coil_buckling"));
+    let deflection = 0.024 / (1.0 + bind.value);
+    let critical: f64 = 0.5 * 0.072 / (1.0 - 1.0 / 2.6);
+    assert!((critical - 0.0585).abs() < 1e-4);
+    assert!(
+        (buck.value - (critical / deflection - 1.0)).abs() < 1e-9,
+        "{buck:?} {bind:?}"
+    );
+    assert!(
+        buck.name.contains("stable at any deflection") && buck.name.contains("ν = 1"),
+        "{buck:?}"
+    );
+    assert_eq!(buck.limit, 0.15);
+    assert!(buck.ok, "{buck:?}");
+}
+
 fn report_formats(r: &vibrofem::app::design::DesignReport, dir: &std::path::Path) {
     use vibrofem::app::design::{report_html, report_markdown, verdict_text};
     let json: serde_json::Value = serde_json::to_value(r).unwrap();
@@ -171,6 +201,12 @@ fn design_files_are_strict() {
     let e = Design::from_toml(&write("nu.toml", "version = 1\nsteel = [2.1e11, 0.6, 7850.0]\n")).unwrap_err();
     assert!(
         e.to_string().contains("nu.toml, line 2, key 'steel'") && e.to_string().contains("Poisson"),
+        "{e}"
+    );
+    // The coil's seating coefficient ν (EN 13906-1: 0.5 … 2) is checked before any FE work.
+    let e = Design::from_toml(&write("seat.toml", "version = 1\n[coil.fatigue]\nseating = 3.0\n")).unwrap_err();
+    assert!(
+        e.to_string().contains("seat.toml, line 3, key 'coil.fatigue.seating'") && e.to_string().contains("0.5"),
         "{e}"
     );
     let e = Design::from_toml(&write("z.toml", "version = 1\ntarget_detuning = 0.0\n")).unwrap_err();

@@ -19,6 +19,7 @@ pub fn all(d: &Design, v: &ChainValues) -> Vec<Check> {
         super::fatigue::leaf_fatigue,
         super::fatigue::coil_fatigue,
         super::fatigue::coil_binding,
+        super::fatigue::coil_buckling,
         super::fatigue::coil_surge,
     ]
     .iter()

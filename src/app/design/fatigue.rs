@@ -1,7 +1,8 @@
 //! The fatigue checks of the design: the leaves (mean stress from the static sag under the
 //! active part's weight and the magnets' constant pull, alternating stress from the relative
 //! amplitude), the coil isolators (Wahl-corrected mean and alternating shear against Zimmerli's
-//! data), the coils' binding margin and their surge frequency against the force harmonics.
+//! data), the coils' binding margin, their buckling margin (Haringx, EN 13906-1 §9.2) and their
+//! surge frequency against the force harmonics.
 //!
 //! Every check reads the chain's values by name ([`ChainValues`]: `rel`, `x2`, `offset`,
 //! `c12`, `tau`, `k_coil`, …), so it follows whichever model the chain makes the model of
@@ -16,8 +17,8 @@ use crate::post::fatigue::{
     Endurance, FatigueMaterial, MeanStress, PartCondition, equivalent_diameter_rect, finite_life_strength, safety,
 };
 use crate::post::spring::{
-    Ends, SpringCriterion, ZIMMERLI_PEENED, ZIMMERLI_UNPEENED, binding, lengths, shear_stress, spring_safety,
-    surge_clearance, surge_frequency, torsional_ultimate, wahl_factor, zimmerli_endurance,
+    Ends, SpringCriterion, ZIMMERLI_PEENED, ZIMMERLI_UNPEENED, binding, buckling_deflection, lengths, shear_stress,
+    spring_safety, surge_clearance, surge_frequency, torsional_ultimate, wahl_factor, zimmerli_endurance,
 };
 
 /// Standard gravity (m/s²), as the chain uses it.
@@ -206,6 +207,69 @@ pub fn coil_binding(d: &Design, v: &ChainValues) -> Check {
             b.deflection * 1e3
         ),
         b.overrun,
+        d.coil.fatigue.overrun,
+        false,
+    )
+}
+
+/// The coil's buckling numbers (m): the critical deflection and the working deflection.
+#[derive(Clone, Debug)]
+pub struct CoilBucklingValues {
+    /// Critical deflection s_k (Haringx, EN 13906-1 §9.2) for the design's seating coefficient ν;
+    /// for a coil stable at any deflection, its value at the stability limit, 0.5·L0/(1 − G/E)
+    /// (the formula's limit there: continuous across it, ≈ 0.81 L0 for steel).
+    pub critical: f64,
+    /// The coil is stable at any deflection (L0 < πD/ν·√((1 − G/E)/(0.5 + G/E))).
+    pub stable: bool,
+    /// Static + dynamic + start-up deflection, as the binding check takes it.
+    pub deflection: f64,
+}
+
+/// The coil's critical buckling deflection against the binding check's deflection; E = 2G(1 + 0.3)
+/// as the coil's FE part takes it.
+pub fn coil_buckling_values(d: &Design, v: &ChainValues) -> Result<CoilBucklingValues> {
+    let c = &d.coil;
+    let (free, _, _) = coil_lengths(d);
+    let shear = c.shear_modulus;
+    let young = 2.0 * shear * (1.0 + 0.3);
+    let sk = buckling_deflection(free, c.mean_diameter, c.fatigue.seating, young, shear)?;
+    Ok(CoilBucklingValues {
+        critical: sk.unwrap_or(0.5 * free / (1.0 - shear / young)),
+        stable: sk.is_none(),
+        deflection: coil_binding_values(d, v).deflection,
+    })
+}
+
+/// Coil buckling: fractional reserve s_k/(static + dynamic + start-up) − 1 against the binding
+/// check's least overrun (`coil.fatigue.overrun`).
+pub fn coil_buckling(d: &Design, v: &ChainValues) -> Check {
+    let b = coil_buckling_values(d, v);
+    let (value, what) = match &b {
+        Ok(b) => (
+            b.critical / b.deflection - 1.0,
+            format!(
+                "{} s_k {:.1} mm / (static + dynamic + start-up {:.2} mm)",
+                if b.stable {
+                    "stable at any deflection;"
+                } else {
+                    "critical deflection"
+                },
+                b.critical * 1e3,
+                b.deflection * 1e3
+            ),
+        ),
+        Err(_) => (
+            f64::NAN,
+            "critical deflection s_k / (static + dynamic + start-up)".to_string(),
+        ),
+    };
+    Check::new(
+        "coil_buckling",
+        &format!(
+            "coil buckling (Haringx, EN 13906-1, seating ν = {}): {what} − 1 ≥ limit",
+            d.coil.fatigue.seating
+        ),
+        value,
         d.coil.fatigue.overrun,
         false,
     )

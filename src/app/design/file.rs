@@ -147,8 +147,14 @@ pub struct CoilFatigue {
     pub peened: bool,
     /// End type: `plain`, `plain_ground`, `squared`, `squared_ground` (free and solid lengths).
     pub ends: String,
-    /// Least fractional overrun to closure ξ = travel/deflection − 1 (Shigley: 0.15).
+    /// Least fractional overrun to closure ξ = travel/deflection − 1 (Shigley: 0.15); also the
+    /// least reserve of the critical buckling deflection over the same deflection.
     pub overrun: f64,
+    /// Seating (end-condition) coefficient ν of the buckling check (EN 13906-1 §9.2, Fig. 6):
+    /// 0.5 both ends clamped parallel, 0.7 one clamped and one pinned, 1 both pinned, or both
+    /// clamped parallel with one end free to move sideways (an isolator under a swaying body:
+    /// the default), 2 one end clamped and the other free.
+    pub seating: f64,
     /// Least clearance of the surge frequency from every force harmonic (fraction).
     pub surge_clearance: f64,
 }
@@ -162,6 +168,7 @@ impl Default for CoilFatigue {
             peened: false,
             ends: "squared_ground".into(),
             overrun: 0.15,
+            seating: 1.0,
             surge_clearance: 0.10,
         }
     }
@@ -667,6 +674,7 @@ impl Design {
             ),
             ("coil.fatigue.safety", cf.safety, Range::Positive),
             ("coil.fatigue.overrun", cf.overrun, Range::NonNegative),
+            ("coil.fatigue.seating", cf.seating, Range::Between(0.5, 2.0, true)),
             (
                 "coil.fatigue.surge_clearance",
                 cf.surge_clearance,
