@@ -711,9 +711,12 @@ pub fn solve(
             sol.factor_backward_error
         ));
     }
+    if !model.beams.is_empty() {
+        notes.push(crate::analysis::prestress::beam_geometric_note(model));
+    }
     if !model.beams.is_empty() || !model.discrete.is_empty() || !model.references.is_empty() {
         notes.push(
-            "geometric stiffness: solids (full stress), shells (membrane forces), beams (axial force); springs, \
+            "geometric stiffness: solids (full stress), shells (membrane forces); springs, \
              point masses and couplings carry none"
                 .to_string(),
         );

@@ -451,12 +451,33 @@ fn preload_note(pre: &InitialStress, case: &CaseReport, loads: &[Load], model: &
         },
     );
     if !model.beams.is_empty() {
-        s.push_str("; beams: axial stress N/A");
+        s.push_str("; beams: axial stress N/A; ");
+        s.push_str(&beam_geometric_note(model));
     }
     if !model.discrete.is_empty() || !model.references.is_empty() {
         s.push_str("; springs, point masses and couplings carry no geometric stiffness");
     }
     s
+}
+
+/// What the beams' geometric stiffness carries in this model: line2 cells the full resultants
+/// of the static state, line3 cells the axial force only (named by group).
+pub(crate) fn beam_geometric_note(model: &Model) -> String {
+    let line3: Vec<&str> = model
+        .beams
+        .iter()
+        .filter(|b| b.kinds.contains(&crate::mesh::CellKind::Line3))
+        .map(|b| b.group.as_str())
+        .collect();
+    if line3.is_empty() {
+        "beam geometric stiffness from the axial force, shear forces, bending moments and torque".to_string()
+    } else {
+        format!(
+            "beam geometric stiffness: line2 cells from the axial force, shears, moments and torque; line3 cells \
+             (group(s) {}) from the axial force only (no lateral–torsional or coil buckling there: mesh them with line2)",
+            line3.join(", ")
+        )
+    }
 }
 
 fn norm3(v: [f64; 3]) -> f64 {
