@@ -107,6 +107,8 @@ def rayleigh_ritz(K, M, X):
     KX, MX = products(K, X), products(M, X)
     Kr = np.array([[x.dot(y) for y in KX] for x in X])
     Mr = np.array([[x.dot(y) for y in MX] for x in X])
+    for v in KX + MX:
+        v.destroy()
     Kr, Mr = 0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T)
     d = 1.0 / np.sqrt(np.diag(Mr))
     Li = np.linalg.inv(np.linalg.cholesky(Mr * np.outer(d, d)))
@@ -137,7 +139,10 @@ class Pencil:
         mx = self.M.createVecLeft()
         self.M.mult(x, mx)
         r.axpy(-(lam - self.sigma), mx)
-        return r.norm() / ((self.normK + abs(lam) * self.normM) * x.norm())
+        eta = r.norm() / ((self.normK + abs(lam) * self.normM) * x.norm())
+        r.destroy()
+        mx.destroy()
+        return eta
 
     def shift(self, s: float) -> None:
         """Make K's storage hold K − sM."""
@@ -156,8 +161,11 @@ def rigid_pairs(pen: Pencil):
     for j in range(nr_all):
         v = pen.K.createVecRight()
         v.setArray(np.array(raw[j, lo:hi]))
-        R.append(v)
+        if v.norm() > 0.0:  # a zero row (a motion the caller left out) is not a motion
+            R.append(v)
     del raw
+    if not R:
+        return [], [], []
     theta, Z = rayleigh_ritz(pen.K, pen.M, R)
     lam, vecs = [], []
     for j in range(len(R)):
@@ -330,11 +338,17 @@ def refine(pen: Pencil, ksp, X, theta, want_el: int, rigid_vecs):
             ksp.solve(mx, y)
             its += ksp.getIterationNumber()
             Y.append(y)
-        Y, _ = m_orthonormal(pen.M, rigid_vecs + X, Mr + MX, Y)
+        Y, MY = m_orthonormal(pen.M, rigid_vecs + X, Mr + MX, Y)
+        for v in MY:
+            v.destroy()
         rounds += 1
         B = X + Y
         th, Z = rayleigh_ritz(pen.K, pen.M, B)
         X = [combine(B, Z[:, j]) for j in range(len(X))]
+        for v in B + MX:
+            v.destroy()
+        if hasattr(PETSc, "garbage_cleanup"):
+            PETSc.garbage_cleanup(COMM)
         theta = th[:len(X)]
         err = errors(theta, X)
         history.append(max(err, default=0.0))
