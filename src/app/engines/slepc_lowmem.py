@@ -314,7 +314,7 @@ def refine(pen: Pencil, ksp, X, theta, want_el: int, rigid_vecs):
     per round: a block Lanczos step, much faster than plain block inverse iteration for the pairs
     at the block's end."""
     Mr = products(pen.M, rigid_vecs)
-    tol = float(P.get("refine_tol", 1e-12))
+    tol = float(P.get("refine_tol", 1e-11))
 
     def errors(th, XX):
         return [pen.backward(XX[j], th[j] + pen.sigma) for j in range(min(want_el, len(XX)))]
