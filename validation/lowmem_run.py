@@ -2,8 +2,9 @@
 """Drive the low-memory modal path (src/app/engines/slepc_lowmem.py) on a mesh and compare it
 with vibrofem's direct path.
 
-    /usr/bin/python3 validation/lowmem_run.py MESH [--modes 18] [--method lobpcg|ks-cg]
-        [--ranks 1] [--sturm-budget BYTES] [--direct] [--vibrofem target/release/vibrofem]
+    /usr/bin/python3 validation/lowmem_run.py MESH [--modes 18] [--method lobpcg|ks-cg|ks-mumps]
+        [--ranks 1] [--sturm-budget BYTES] [--param KEY=JSON ...] [--direct] [--check]
+        [--kill-above GIB] [--vibrofem target/release/vibrofem] [--workdir DIR]
 
 1. ``vibrofem export MESH`` writes K and M (PETSc binary) and dofs.csv (equation, node,
    component, coordinates) into a work folder;
@@ -11,7 +12,10 @@ with vibrofem's direct path.
    coordinates in dofs.csv (translations; rotations about the centroid);
 3. ``mpirun -n RANKS python3 slepc_lowmem.py DIR`` runs while a poller sums the resident memory of
    the whole process tree every 0.2 s (mpirun, its ranks);
-4. with ``--direct``, ``vibrofem modes MESH --json`` gives the reference frequencies and the
+   and kills it when that sum passes ``--kill-above`` GiB (default 10);
+4. with ``--check``, validation/lowmem_check.py recomputes every pair's backward error with the
+   direct path's definition from K.petsc and M.petsc (numpy, row chunks), in its own process;
+5. with ``--direct``, ``vibrofem modes MESH --json`` gives the reference frequencies and the
    largest relative difference of the elastic ones is printed.
 
 Prints one JSON document: the job's slepc.json, the tree's peak memory, wall times, and the
@@ -58,15 +62,21 @@ def tree_rss(root: int) -> int:
     return total
 
 
-def run_polled(cmd: list, cwd=None) -> dict:
-    """Run `cmd`, polling its process tree's resident memory; wall time and the tree's peak."""
+def run_polled(cmd: list, cwd=None, kill_above: float = 10 * 2**30) -> dict:
+    """Run `cmd`, polling its process tree's resident memory; wall time and the tree's peak. The
+    tree is killed when its resident memory passes `kill_above` bytes (a watchdog for big runs)."""
     t = time.perf_counter()
-    proc = subprocess.Popen(cmd, cwd=cwd, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(cmd, cwd=cwd, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
     peak = [0]
 
     def poll():
         while proc.poll() is None:
             peak[0] = max(peak[0], tree_rss(proc.pid))
+            if peak[0] > kill_above:
+                os.killpg(proc.pid, 9)
+                sys.stderr.write(f"lowmem_run: process tree above {kill_above / 2**30:.1f} GiB, killed\n")
+                return
             time.sleep(0.2)
 
     th = threading.Thread(target=poll)
@@ -106,7 +116,11 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("mesh")
     ap.add_argument("--modes", type=int, default=18)
-    ap.add_argument("--method", default="lobpcg", choices=["lobpcg", "ks-cg"])
+    ap.add_argument("--method", default="ks-cg", choices=["lobpcg", "ks-cg", "ks-mumps"])
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=JSON",
+                    help="extra params.json key (e.g. inner_rtol=1e-9, petsc_options={\"eps_monitor\":\"\"})")
+    ap.add_argument("--check", action="store_true", help="recompute the backward errors (validation/lowmem_check.py)")
+    ap.add_argument("--kill-above", type=float, default=10.0, help="GiB: kill the process tree above this")
     ap.add_argument("--ranks", type=int, default=1)
     ap.add_argument("--sturm-budget", type=float, default=0.0, help="bytes for MUMPS's out-of-core Sturm count")
     ap.add_argument("--material", default="2.1e11,0.3,7850")
@@ -129,20 +143,33 @@ def main(argv=None) -> int:
     with open(os.path.join(wd, "params.json")) as fh:
         p = json.load(fh)
     p.update({"nev": a.modes, "rigid": 6, "block_size": 3, "method": a.method, "sturm_budget": a.sturm_budget})
+    for kv in a.param:
+        k, v = kv.split("=", 1)
+        p[k] = json.loads(v)
     with open(os.path.join(wd, "params.json"), "w") as fh:
         json.dump(p, fh)
     del R
     mpi = ["mpirun", "--allow-run-as-root"] if os.geteuid() == 0 else ["mpirun"]
-    run = run_polled(mpi + ["-n", str(a.ranks), "/usr/bin/python3", SCRIPT, wd])
+    res["loadavg_before_engine"] = os.getloadavg()
+    run = run_polled(["/usr/bin/time", "-v"] + mpi + ["-n", str(a.ranks), "/usr/bin/python3", SCRIPT, wd],
+                     kill_above=a.kill_above * 2**30)
+    res["loadavg_after_engine"] = os.getloadavg()
+    for line in run["stderr"].splitlines():
+        if "Maximum resident set size" in line:
+            res["time_v_max_rss_kib"] = int(line.split()[-1])  # the largest single process (GNU time)
     res["engine"] = {"wall_s": run["wall_s"], "tree_peak_bytes": run["tree_peak_bytes"],
                      "returncode": run["returncode"]}
     if run["returncode"]:
-        res["engine"]["stderr"] = run["stderr"][-2000:]
+        res["engine"]["stderr"] = run["stderr"][-3000:]
     with open(os.path.join(wd, "slepc.json")) as fh:
         res["job"] = json.load(fh)
     if "error" not in res["job"]:
         lam = np.fromfile(os.path.join(wd, "lambda.bin"), dtype="<f8")
         res["frequencies_hz"] = list(np.sqrt(np.abs(lam)) / (2 * np.pi) * np.sign(lam))
+        if a.check:
+            c = run_polled(["/usr/bin/python3", os.path.join(HERE, "lowmem_check.py"), wd])
+            res["check"] = json.loads(c["stdout"]) if c["returncode"] == 0 else {"error": c["stderr"][-2000:]}
+            res["check"]["tree_peak_bytes"] = c["tree_peak_bytes"]
     if a.direct and "frequencies_hz" in res:
         d = run_polled(["/usr/bin/time", "-v", a.vibrofem, "modes", a.mesh, "--modes", str(a.modes), "--json",
                         "--material", a.material])

@@ -3,26 +3,27 @@ folder it wrote (K.petsc, M.petsc, R.bin, params.json).
 
     mpirun -n N python3 slepc_lowmem.py DIR
 
-The lowest modes of K x = λ M x without a factorisation of K: memory grows with the matrices.
+The lowest modes of K x = λ M x without an in-core factorisation of K (docs/lowmem.md).
 
 1. The rigid-body motions R (n × 6, from the node coordinates, written by vibrofem in R.bin) are
    tried on K by Rayleigh–Ritz: the combinations K annihilates (a free body: six; a body on
    partial supports: fewer) are eigenpairs at λ ≈ 0, returned as such and deflated.
-2. A = K − σM with σ < 0 slightly below the spectrum (SPD: no copy of K, the eigenvalues move
-   by σ), preconditioned by PETSc's smoothed-aggregation multigrid (GAMG) with R as its
-   near-null space and the nodes' block size.
+2. A = K − σM with σ < 0 below the spectrum (SPD; in K's storage, no copy; eigenvalues λ − σ).
+   The iterative methods precondition it with PETSc's smoothed-aggregation multigrid (GAMG),
+   R as its near-null space and the nodes' block size 3; one hierarchy serves the whole run.
 3. The remaining modes by SLEPc's `method` (params.json): "lobpcg" (LOBPCG, one multigrid cycle
-   per vector and iteration) or "ks-cg" (Krylov–Schur, shift-and-invert with an inexact
-   inverse: CG preconditioned by GAMG), deflated against the rigid-body pairs.
-4. Block inverse iteration (CG + GAMG to 1e-12) with Rayleigh–Ritz until every kept pair's
-   backward error is at rounding level.
+   per vector and iteration), "ks-cg" (Krylov–Schur, shift-and-invert whose inverse is CG +
+   GAMG to `inner_rtol`) or "ks-mumps" (Krylov–Schur, shift-and-invert with MUMPS's
+   out-of-core LDLᵀ of A, whose inertia also checks that σ is below the spectrum).
+4. Refinement: block inverse iteration (A⁻¹M by the same inverse) with Rayleigh–Ritz until
+   every kept pair's backward error is below `refine_tol`.
 5. Completeness: MUMPS's inertia of K − sM above the last mode (out-of-core factor, ICNTL(22))
-   only when MUMPS's own estimate of its memory fits `sturm_budget` bytes; otherwise the count
-   is skipped and slepc.json says why (vibrofem then reports the modes as not verified complete).
+   when `sturm_budget` bytes are given; otherwise the count is skipped and slepc.json says why.
 
-A mode at λ ≈ 0 that is not a rigid-body motion (a mechanism) stops the run with an error: the
-multigrid's near-null space does not hold it and its iteration would not be trustworthy.
-Rank 0 writes lambda.bin, vectors.bin and slepc.json as slepc_modes.py does.
+Every failure (no convergence, a mode at λ ≈ 0 that is not deflated, a refinement that does not
+reach its bar, a shift that is not below the spectrum) writes {"error": …} to slepc.json and
+exits with status 3: never a silent unconverged answer. Rank 0 writes lambda.bin, vectors.bin
+and slepc.json in the layout of slepc_modes.py, with the peak resident memory after each phase.
 """
 import json
 import os
@@ -31,76 +32,58 @@ import sys
 import time
 
 import numpy as np
-import petsc4py
 import slepc4py
 
 slepc4py.init(sys.argv[:1])
 from petsc4py import PETSc  # noqa: E402
 from slepc4py import SLEPc  # noqa: E402
 
-wd = sys.argv[1]
-comm = PETSc.COMM_WORLD
-rank = comm.getRank()
-with open(os.path.join(wd, "params.json")) as f:
-    p = json.load(f)
-opts = PETSc.Options()
-timings = {}
-memory = {}
+WD = sys.argv[1]
+COMM = PETSc.COMM_WORLD
+RANK = COMM.getRank()
+with open(os.path.join(WD, "params.json")) as _f:
+    P = json.load(_f)
+OPTS = PETSc.Options()
+for _k, _v in P.get("petsc_options", {}).items():
+    OPTS[_k] = _v
+PETSc.Log.begin()
+TIMINGS: dict = {}
+MEMORY: dict = {}
+EVENTS = ("MatMult", "PCApply", "KSPSolve", "PCSetUp", "MatSolve", "MatCholFctrNum")
 
 
-def peak_mb():
+def peak_mb() -> float:
     """Peak resident memory of this rank so far, summed over ranks (MiB)."""
     own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return comm.tompi4py().allreduce(own) if comm.getSize() > 1 else own
+    return COMM.tompi4py().allreduce(own) if COMM.getSize() > 1 else own
 
 
-def mark(phase, t0):
-    timings[phase] = time.perf_counter() - t0
-    memory[phase] = peak_mb()
+def mark(phase: str, t0: float) -> None:
+    TIMINGS[phase] = time.perf_counter() - t0
+    MEMORY[phase] = peak_mb()
 
 
-def fail(msg):
-    if rank == 0:
-        with open(os.path.join(wd, "slepc.json"), "w") as fh:
-            json.dump({"error": msg}, fh)
-    PETSc.Sys.Print("error: " + msg, comm=comm)
+def counts() -> dict:
+    """How many times each PETSc operation ran so far (operator and preconditioner applications)."""
+    return {e: PETSc.Log.Event(e).getPerfInfo()["count"] for e in EVENTS}
+
+
+def fail(msg: str) -> None:
+    if RANK == 0:
+        with open(os.path.join(WD, "slepc.json"), "w") as fh:
+            json.dump({"error": msg, "timings_s": TIMINGS, "memory_mib": MEMORY, "counts": counts()}, fh)
+    PETSc.Sys.Print("error: " + msg, comm=COMM)
     sys.exit(3)
 
 
-t = time.perf_counter()
-bs = int(p.get("block_size", 1))
-if bs > 1:
-    opts["matload_block_size"] = bs
-
-
-def load(name):
-    v = PETSc.Viewer().createBinary(os.path.join(wd, name), "r", comm=comm)
-    a = PETSc.Mat().create(comm=comm)
-    a.setType(PETSc.Mat.Type.AIJ)
+def load(name: str):
+    v = PETSc.Viewer().createBinary(os.path.join(WD, name), "r", comm=COMM)
+    a = PETSc.Mat().create(comm=COMM)
+    a.setType(P.get("mat_type", "aij"))  # "sbaij": the upper triangle only (ks-mumps; GAMG needs aij)
     a.load(v)
     v.destroy()
     a.setOption(PETSc.Mat.Option.SYMMETRIC, True)
     return a
-
-
-K = load("K.petsc")
-M = load("M.petsc")
-n = K.getSize()[0]
-lo_r, hi_r = K.getOwnershipRange()
-nr_all = int(p.get("rigid", 0))
-Rraw = np.memmap(os.path.join(wd, "R.bin"), dtype="<f8", mode="r", shape=(nr_all, n)) if nr_all else None
-R = []
-for j in range(nr_all):
-    v = K.createVecRight()
-    v.setArray(np.array(Rraw[j, lo_r:hi_r]))
-    R.append(v)
-del Rraw
-normK, normM = K.norm(PETSc.NormType.INFINITY), M.norm(PETSc.NormType.INFINITY)
-mark("load", t)
-
-
-def gram(X, Y):
-    return np.array([[x.dot(y) for y in Y] for x in X])
 
 
 def products(A, X):
@@ -119,11 +102,13 @@ def combine(X, z):
     return x
 
 
-def rayleigh_ritz(X, KX=None, MX=None):
+def rayleigh_ritz(K, M, X):
     """Ritz values (ascending) and coefficients of span(X) for K, M."""
-    KX = KX if KX is not None else products(K, X)
-    MX = MX if MX is not None else products(M, X)
-    Kr, Mr = gram(X, KX), gram(X, MX)
+    KX, MX = products(K, X), products(M, X)
+    Kr = np.array([[x.dot(y) for y in KX] for x in X])
+    Mr = np.array([[x.dot(y) for y in MX] for x in X])
+    for v in KX + MX:
+        v.destroy()
     Kr, Mr = 0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T)
     d = 1.0 / np.sqrt(np.diag(Mr))
     Li = np.linalg.inv(np.linalg.cholesky(Mr * np.outer(d, d)))
@@ -132,210 +117,270 @@ def rayleigh_ritz(X, KX=None, MX=None):
     return theta, (Li.T @ W) * d[:, None]
 
 
-def backward(x, lam):
-    r = K.createVecLeft()
-    K.mult(x, r)
-    mx = M.createVecLeft()
-    M.mult(x, mx)
-    r.axpy(-lam, mx)
-    return r.norm() / ((normK + abs(lam) * normM) * x.norm())
+class Pencil:
+    """K (then A = K − σM in the same storage), M, their norms, and the backward error of a pair."""
+
+    def __init__(self) -> None:
+        bs = int(P.get("block_size", 1))
+        if bs > 1:
+            OPTS["matload_block_size"] = bs
+        self.bs = bs
+        self.K = load("K.petsc")
+        self.M = load("M.petsc")
+        self.n = self.K.getSize()[0]
+        self.normK = max(self.K.norm(PETSc.NormType.INFINITY), 1e-300)
+        self.normM = self.M.norm(PETSc.NormType.INFINITY)
+        self.sigma = 0.0  # the shift already applied to K's storage
+
+    def backward(self, x, lam: float) -> float:
+        """‖Kx − λMx‖ / ((‖K‖∞ + |λ|‖M‖∞)‖x‖), whatever shift K's storage holds."""
+        r = self.K.createVecLeft()
+        self.K.mult(x, r)
+        mx = self.M.createVecLeft()
+        self.M.mult(x, mx)
+        r.axpy(-(lam - self.sigma), mx)
+        eta = r.norm() / ((self.normK + abs(lam) * self.normM) * x.norm())
+        r.destroy()
+        mx.destroy()
+        return eta
+
+    def shift(self, s: float) -> None:
+        """Make K's storage hold K − sM."""
+        self.K.axpy(-(s - self.sigma), self.M, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.sigma = s
 
 
-# 1. The rigid-body motions K annihilates: Ritz pairs of span(R) with a backward error at rounding.
-t = time.perf_counter()
-rigid_lam, rigid_vecs = [], []
-if R:
-    theta, Z = rayleigh_ritz(R)
+def rigid_pairs(pen: Pencil):
+    """The rigid-body motions K annihilates: Ritz pairs of span(R) with a backward error at rounding."""
+    nr_all = int(P.get("rigid", 0))
+    if not nr_all:
+        return [], [], []
+    lo, hi = pen.K.getOwnershipRange()
+    raw = np.memmap(os.path.join(WD, "R.bin"), dtype="<f8", mode="r", shape=(nr_all, pen.n))
+    R = []
+    for j in range(nr_all):
+        v = pen.K.createVecRight()
+        v.setArray(np.array(raw[j, lo:hi]))
+        if v.norm() > 0.0:  # a zero row (a motion the caller left out) is not a motion
+            R.append(v)
+    del raw
+    if not R:
+        return [], [], []
+    theta, Z = rayleigh_ritz(pen.K, pen.M, R)
+    lam, vecs = [], []
     for j in range(len(R)):
         x = combine(R, Z[:, j])
-        if backward(x, theta[j]) <= 1e-11:
-            rigid_lam.append(theta[j])
-            rigid_vecs.append(x)
-mark("rigid", t)
-
-# 2. A = K − σM (in place: K's storage, eigenvalues λ − σ), its multigrid preconditioner.
-sigma = float(p["sigma"])
-if not sigma < 0.0:
-    fail(f"the iterative solver needs a shift below the spectrum (sigma = {sigma} is not negative)")
-t = time.perf_counter()
-K.axpy(-sigma, M, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-A = K
-if R:
-    near = [r.copy() for r in R]
-    # GAMG wants an orthonormal basis.
-    for i in range(len(near)):
-        for j in range(i):
-            near[i].axpy(-near[j].dot(near[i]), near[j])
-        near[i].normalize()
-    A.setNearNullSpace(PETSc.NullSpace().create(vectors=near, comm=comm))
-opts["pc_gamg_threshold"] = p.get("gamg_threshold", 0.01)
-opts["pc_gamg_square_graph"] = 1
-opts["mg_levels_ksp_type"] = "chebyshev"
-opts["mg_levels_pc_type"] = "jacobi"
-opts["mg_levels_ksp_max_it"] = 2
+        if pen.backward(x, theta[j]) <= 1e-11:
+            lam.append(theta[j])
+            vecs.append(x)
+    return R, lam, vecs
 
 
-def gamg_ksp(rtol, prefix):
-    ksp = PETSc.KSP().create(comm=comm)
-    ksp.setOptionsPrefix(prefix)
-    ksp.setOperators(A)
-    ksp.setType(PETSc.KSP.Type.CG)
-    ksp.getPC().setType(PETSc.PC.Type.GAMG)
-    ksp.setTolerances(rtol=rtol, atol=0.0, max_it=int(p.get("ksp_max_it", 2000)))
-    ksp.setFromOptions()
-    return ksp
+def multigrid(pen: Pencil, R) -> None:
+    """GAMG's options and near-null space on A (params: gamg_threshold, near_null_space)."""
+    if R and P.get("near_null_space", True):
+        near = [r.copy() for r in R]
+        for i in range(len(near)):  # GAMG wants an orthonormal basis
+            for j in range(i):
+                near[i].axpy(-near[j].dot(near[i]), near[j])
+            near[i].normalize()
+        pen.K.setNearNullSpace(PETSc.NullSpace().create(vectors=near, comm=COMM))
+    defaults = {
+        "pc_gamg_threshold": P.get("gamg_threshold", 0.01),
+        "pc_gamg_square_graph": 1,
+        "mg_levels_ksp_type": "chebyshev",
+        "mg_levels_pc_type": "jacobi",
+        "mg_levels_ksp_max_it": 2,
+    }
+    for k, v in defaults.items():
+        if not OPTS.hasName(k):
+            OPTS[k] = v
 
 
-# Normalise the backward errors after the shift: the residual is that of K (Ax − θMx = Kx − λMx).
-normK = max(normK, 1e-300)
-mark("shift", t)
-
-# 3. The elastic modes, deflated against the rigid-body pairs.
-method = p.get("method", "lobpcg")
-nr = len(rigid_lam)
-nev = int(p["nev"])
-want_el = max(0, nev - nr)
-extra = max(4, want_el // 3)
-t = time.perf_counter()
-eps = SLEPc.EPS().create(comm=comm)
-eps.setOperators(A, M)
-eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
-if rigid_vecs:
-    eps.setDeflationSpace(rigid_vecs)
-st = eps.getST()
-inner_its = [0]
-if method == "lobpcg":
-    eps.setType(SLEPc.EPS.Type.LOBPCG)
-    eps.setWhichEigenpairs(SLEPc.EPS.Which.SMALLEST_REAL)
-    st.setType(SLEPc.ST.Type.PRECOND)
-    st.setShift(0.0)
-    sksp = st.getKSP()
-    sksp.setType(PETSc.KSP.Type.PREONLY)
-    sksp.getPC().setType(PETSc.PC.Type.GAMG)
-    eps.setDimensions(want_el + extra)
-    eps.setLOBPCGBlockSize(want_el + extra)
-    tol = float(p.get("eig_tol", 1e-9))
-else:
-    eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
-    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
-    eps.setTarget(0.0)
-    st.setType(SLEPc.ST.Type.SINVERT)
-    st.setShift(0.0)
-    sksp = st.getKSP()
-    sksp.setType(PETSc.KSP.Type.CG)
-    sksp.getPC().setType(PETSc.PC.Type.GAMG)
-    sksp.setTolerances(rtol=float(p.get("inner_rtol", 1e-10)), atol=0.0, max_it=2000)
-    eps.setDimensions(want_el + extra)
-    tol = float(p.get("eig_tol", 1e-10))
-eps.setConvergenceTest(SLEPc.EPS.Conv.NORM)
-eps.setTolerances(tol, int(p.get("max_it", 2000)))
-eps.setFromOptions()
-if want_el:
-    eps.solve()
-    nconv = eps.getConverged()
-    its = eps.getIterationNumber()
-else:
-    nconv, its = 0, 0
-mark("solve", t)
-reason = eps.getConvergedReason() if want_el else 0
-if want_el and nconv < want_el:
-    fail(
-        f"{method}: {nconv} of {want_el} elastic modes converged in {its} iterations (reason {reason}): "
-        "the multigrid-preconditioned iteration stalled; solve with --solver direct"
-    )
-
-# 4. Refinement: block inverse iteration with Rayleigh–Ritz (every converged pair takes part).
-t = time.perf_counter()
-X, theta = [], []
-for i in range(nconv):
-    x = A.createVecRight()
-    eps.getEigenvector(i, x)
-    X.append(x)
-    theta.append(eps.getEigenvalue(i).real)
-order = np.argsort(theta, kind="stable")
-X = [X[i] for i in order]
-theta = np.array(theta)[order]
-scale = -sigma / 1e-7
-if nconv and theta[0] + sigma <= 1e-9 * scale:
-    fail(
-        f"a mode at λ = {theta[0] + sigma:.3e} rad²/s², {nr} rigid-body motions deflated: the model has a "
-        "mechanism (a zero-energy motion that is not a rigid-body motion), which the multigrid's near-null "
-        "space does not hold; solve with --solver direct, or constrain the mechanism"
-    )
-eps.destroy()
-refinements, solves = 0, 0
-rksp = None
-
-
-def kept_worst(th, XX):
-    return max((backward(XX[j], th[j] + sigma) for j in range(min(want_el, len(XX)))), default=0.0)
-
-
-worst = kept_worst(theta, X)
-for _ in range(int(p.get("max_refine", 4))):
-    if worst <= float(p.get("refine_tol", 1e-13)) or not X:
-        break
-    if rksp is None:
-        rksp = gamg_ksp(1e-12, "refine_")
-    Y = []
-    for x in X:
-        y = x.duplicate()
-        mx = x.duplicate()
-        M.mult(x, mx)
-        rksp.solve(mx, y)
-        solves += rksp.getIterationNumber()
-        Y.append(y)
-    refinements += 1
-    # A's Ritz values: K now holds A.
-    th, Z = rayleigh_ritz(Y)
-    X = [combine(Y, Z[:, j]) for j in range(len(Y))]
-    theta = th
-    worst = kept_worst(theta, X)
-lam = np.concatenate([np.array(rigid_lam), theta[:want_el] + sigma])
-Xk = rigid_vecs + X[:want_el]
-m = len(lam)
-mark("refine", t)
-
-t = time.perf_counter()
-xr = A.createVecRight()
-scatter, x0 = PETSc.Scatter.toZero(xr)
-vecs = []
-for j in range(m):
-    Xk[j].copy(xr)
-    scatter.scatter(xr, x0, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
-    if rank == 0:
-        vecs.append(x0.getArray().copy())
-mark("gather", t)
-
-# 5. Sturm count above the last mode with an out-of-core MUMPS factorisation, if it fits.
-t = time.perf_counter()
-lam_max = float(lam[-1]) if m else 0.0
-above = theta[want_el:] + sigma if nconv > want_el else np.array([])
-step = 1e-4 * max(abs(lam_max), 1.0)
-if len(above):
-    step = min(step, 0.5 * (above[0] - lam_max))
-upper_pt = lam_max + max(step, 1e-9 * abs(lam_max))
-# Below σ < 0 no eigenvalue: K is positive semidefinite (elastic elements, no prestress), so
-# K − σM is positive definite.
-lower_pt = sigma
-sturm = {"lower": [lower_pt, 0]}
-budget_mb = int(float(p.get("sturm_budget", 0)) / 2**20 / comm.getSize())
-if budget_mb <= 0:
-    sturm["sturm_skipped"] = "no memory was left in the budget for a factorisation"
-else:
-    # K − s·M = A − (s − σ)M in A's storage (A is not needed any more); MUMPS out of core
-    # (ICNTL(22)) with its working memory capped at the budget (ICNTL(23), MB per rank): a
-    # factorisation that needs more stops at the analysis and the count is skipped.
-    A.axpy(-(upper_pt - sigma), M, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-    os.environ.setdefault("MUMPS_OOC_TMPDIR", wd)
-    pc = PETSc.PC().create(comm=comm)
-    pc.setOperators(A)
+def mumps_factor(pc, ooc_mb: int) -> None:
+    """Make `pc` an out-of-core MUMPS LDLᵀ (ICNTL(22) = 1, files in params' ooc_dir or DIR) with
+    its working memory capped at `ooc_mb` MB per rank (ICNTL(23); 0: MUMPS's estimate)."""
+    os.environ.setdefault("MUMPS_OOC_TMPDIR", P.get("ooc_dir", WD))
     pc.setType(PETSc.PC.Type.CHOLESKY)
     pc.setFactorSolverType("mumps")
     pc.setFactorSetUpSolverType()
     F = pc.getFactorMatrix()
-    for key, val in ((13, 1), (24, 1), (22, 1), (23, budget_mb)):
+    for key, val in ((13, 1), (24, 1), (22, 1), (23, ooc_mb)):
         F.setMumpsIcntl(key, val)
+
+
+def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
+    """Step 3: the elastic pairs of A (values λ − σ), ascending, and the inner KSP for step 4."""
+    method = P.get("method", "lobpcg")
+    A, M = pen.K, pen.M
+    eps = SLEPc.EPS().create(comm=COMM)
+    eps.setOperators(A, M)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+    if rigid_vecs:
+        eps.setDeflationSpace(rigid_vecs)
+    st = eps.getST()
+    ksp = st.getKSP()
+    nev = want_el + max(4, want_el // 3)
+    eps.setDimensions(nev)
+    if method == "lobpcg":
+        eps.setType(SLEPc.EPS.Type.LOBPCG)
+        eps.setWhichEigenpairs(SLEPc.EPS.Which.SMALLEST_REAL)
+        st.setType(SLEPc.ST.Type.PRECOND)
+        ksp.setType(PETSc.KSP.Type.PREONLY)
+        ksp.getPC().setType(PETSc.PC.Type.GAMG)
+        # Stop when the wanted pairs converge; the extra vectors only widen the block.
+        eps.setDimensions(want_el, 3 * nev)  # LOBPCG holds X, W, P: ncv = 3 × block
+        eps.setLOBPCGBlockSize(nev)
+        # Locking converged pairs made SLEPc 3.18's LOBPCG stagnate at 1e-9–3e-8 on the clustered
+        # pairs at the block's end (120k plate, the 1983-DOF box); without it the box converges.
+        eps.setLOBPCGLocking(False)
+        tol = float(P.get("eig_tol", 1e-10))
+    elif method in ("ks-cg", "ks-mumps"):
+        eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
+        eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+        eps.setTarget(0.0)
+        st.setType(SLEPc.ST.Type.SINVERT)
+        if method == "ks-cg":
+            ksp.setType(PETSc.KSP.Type.CG)
+            ksp.getPC().setType(PETSc.PC.Type.GAMG)
+            ksp.setTolerances(rtol=float(P.get("inner_rtol", 1e-9)), atol=0.0, max_it=int(P.get("ksp_max_it", 1000)))
+            tol = float(P.get("eig_tol", 1e-8))
+        else:
+            ksp.setType(PETSc.KSP.Type.PREONLY)
+            ksp.setOperators(A)
+            mumps_factor(ksp.getPC(), int(P.get("ooc_mb", 0)))
+            tol = float(P.get("eig_tol", 1e-12))
+    else:
+        fail(f"params.json: method {method!r} is not one of lobpcg, ks-cg, ks-mumps")
+    st.setShift(0.0)
+    eps.setConvergenceTest(SLEPc.EPS.Conv.NORM)
+    eps.setTolerances(tol, int(P.get("max_it", 300)))
+    eps.setFromOptions()
+    info = {"method": method, "eig_tol": tol}
+    if method == "ks-mumps":
+        try:
+            ksp.setUp()
+        except PETSc.Error:
+            pass
+        F = ksp.getPC().getFactorMatrix()
+        if F.getMumpsInfog(1) < 0:
+            fail(f"ks-mumps: MUMPS's out-of-core LDLᵀ of K − σM failed (INFOG(1) = {F.getMumpsInfog(1)}, "
+                 f"INFOG(2) = {F.getMumpsInfog(2)}; estimated {F.getMumpsInfog(26)} MB out of core)")
+        neg, zero, _ = F.getInertia()
+        info["factor_inertia_negative"] = int(neg) + int(zero)
+        info["factor_mb"] = [F.getMumpsInfog(26), F.getMumpsInfog(16)]
+        info["factor_entries"] = F.getMumpsInfog(29)
+        if neg + zero:
+            fail(f"ks-mumps: K − σM has {neg} negative and {zero} zero pivots at σ = {pen.sigma:.6e}: the shift "
+                 "is not below the spectrum (K is not positive semidefinite)")
+    if want_el:
+        eps.solve()
+    nconv = eps.getConverged() if want_el else 0
+    info["iterations"] = eps.getIterationNumber() if want_el else 0
+    reason = eps.getConvergedReason() if want_el else 0
+    if want_el and nconv < want_el:
+        fail(f"{method}: {nconv} of {want_el} elastic modes converged in {info['iterations']} iterations "
+             f"(reason {reason}): the preconditioned iteration stalled; solve with --solver direct")
+    X, theta = [], []
+    for i in range(nconv):
+        x = A.createVecRight()
+        eps.getEigenvector(i, x)
+        X.append(x)
+        theta.append(eps.getEigenvalue(i).real)
+    order = np.argsort(theta, kind="stable")
+    info["converged"] = nconv
+    # eps stays alive until the refinement is done: destroying it resets the inverse's KSP.
+    return [X[i] for i in order], np.array(theta)[order], ksp, info, eps
+
+
+def m_orthonormal(M, V, MV, Y):
+    """Y made M-orthogonal to V (M-orthonormal, MV = M·V) and M-orthonormal itself (Gram–Schmidt
+    twice); vectors that vanish relative to their start are dropped. Returns (Y, M·Y)."""
+    out, Mout = [], []
+    for y in Y:
+        y0 = y.norm()
+        for _ in range(2):
+            for b, mb in zip(V + out, MV + Mout):
+                y.axpy(-mb.dot(y), b)
+        my = products(M, [y])[0]
+        nrm = np.sqrt(max(my.dot(y), 0.0))
+        if y.norm() > 1e-10 * y0 and nrm > 0.0:
+            y.scale(1.0 / nrm)
+            my.scale(1.0 / nrm)
+            out.append(y)
+            Mout.append(my)
+    return out, Mout
+
+
+def refine(pen: Pencil, ksp, X, theta, want_el: int, rigid_vecs):
+    """Step 4: Rayleigh–Ritz on span(X, A⁻¹MX), the correction M-orthogonal to the rigid-body pairs
+    (A⁻¹ magnifies them by (λ − σ)/(−σ)) and to X, until the kept pairs' backward errors are at most
+    refine_tol (the inner solve to refine_rtol, with the multigrid or factor of step 3). Two blocks
+    per round: a block Lanczos step, much faster than plain block inverse iteration for the pairs
+    at the block's end."""
+    Mr = products(pen.M, rigid_vecs)
+    tol = float(P.get("refine_tol", 2e-11))
+
+    def errors(th, XX):
+        return [pen.backward(XX[j], th[j] + pen.sigma) for j in range(min(want_el, len(XX)))]
+
+    if X:  # M-orthonormal Ritz vectors of the eigensolver's span (the rounds below rely on it)
+        theta, Z = rayleigh_ritz(pen.K, pen.M, X)
+        X = [combine(X, Z[:, j]) for j in range(len(X))]
+    err = errors(theta, X)
+    history = [max(err, default=0.0)]
+    rounds, its = 0, 0
+    if ksp.getType() == PETSc.KSP.Type.PREONLY and ksp.getPC().getType() != PETSc.PC.Type.CHOLESKY:
+        ksp.setType(PETSc.KSP.Type.CG)
+    ksp.setTolerances(rtol=float(P.get("refine_rtol", 1e-8)), atol=0.0, max_it=int(P.get("ksp_max_it", 1000)))
+    for _ in range(int(P.get("max_refine", 10))):
+        if history[-1] <= tol or (len(history) > 2 and history[-1] > 0.5 * history[-2]):
+            break  # reached, or stalled (the inner solves' accuracy limits it)
+        MX = products(pen.M, X)
+        Y = []
+        for mx in MX:
+            y = mx.duplicate()
+            ksp.solve(mx, y)
+            its += ksp.getIterationNumber()
+            Y.append(y)
+        Y, MY = m_orthonormal(pen.M, rigid_vecs + X, Mr + MX, Y)
+        for v in MY:
+            v.destroy()
+        rounds += 1
+        B = X + Y
+        th, Z = rayleigh_ritz(pen.K, pen.M, B)
+        X = [combine(B, Z[:, j]) for j in range(len(X))]
+        for v in B + MX:
+            v.destroy()
+        if hasattr(PETSc, "garbage_cleanup"):
+            PETSc.garbage_cleanup(COMM)
+        theta = th[:len(X)]
+        err = errors(theta, X)
+        history.append(max(err, default=0.0))
+    if history[-1] > tol:
+        fail(f"refinement: largest backward error {history[-1]:.2e} above {tol:.0e} after {rounds} rounds "
+             f"(history {', '.join('%.1e' % h for h in history)}): the modes are not accurate; solve with "
+             "--solver direct")
+    return X, theta, err, {"refinements": rounds, "refine_ksp_iterations": its, "refine_history": history}
+
+
+def sturm_upper(pen: Pencil, lam_max: float, above) -> dict:
+    """Step 5: the number of eigenvalues below a point just above the last mode, from MUMPS's
+    inertia of K − sM out of core, within the memory budget (params' sturm_budget bytes)."""
+    step = 1e-4 * max(abs(lam_max), 1.0)
+    if len(above):
+        step = min(step, 0.5 * (above[0] - lam_max))
+    upper_pt = lam_max + max(step, 1e-9 * abs(lam_max))
+    sturm: dict = {"lower": [pen.sigma, 0]}
+    budget_mb = int(float(P.get("sturm_budget", 0)) / 2**20 / COMM.getSize())
+    if budget_mb <= 0:
+        sturm["sturm_skipped"] = "no memory was left in the budget for a factorisation"
+        return sturm
+    pen.shift(upper_pt)
+    pc = PETSc.PC().create(comm=COMM)
+    pc.setOperators(pen.K)
+    mumps_factor(pc, budget_mb)
+    F = pc.getFactorMatrix()
     try:
         pc.setUp()
         err = F.getMumpsInfog(1)
@@ -345,36 +390,90 @@ else:
         sturm["sturm_skipped"] = (
             f"MUMPS's out-of-core factorisation of K − sM needs more than the {budget_mb} MB per rank left in "
             f"the memory budget (INFOG(1) = {err}; estimated {F.getMumpsInfog(26)} MB out of core, "
-            f"{F.getMumpsInfog(16)} MB in core)"
-        )
+            f"{F.getMumpsInfog(16)} MB in core)")
     else:
-        neg, zero, pos = F.getInertia()
+        neg, zero, _ = F.getInertia()
         sturm["upper"] = [upper_pt, int(neg)]
         sturm["zero_pivots"] = [0, int(zero)]
         sturm["sturm_mb"] = [F.getMumpsInfog(26), F.getMumpsInfog(16)]
     pc.destroy()
-mark("sturm", t)
+    return sturm
 
-if rank == 0:
-    lam.astype("<f8").tofile(os.path.join(wd, "lambda.bin"))
-    np.asarray(vecs, dtype="<f8").reshape(-1).tofile(os.path.join(wd, "vectors.bin"))
-    info = {
-        "n": n,
-        "nconv": m,
-        "converged": nconv + nr,
-        "iterations": its,
-        "ranks": comm.getSize(),
-        "sigma": sigma,
-        "method": method,
-        "rigid": nr,
-        "refinements": refinements,
-        "refine_cg_iterations": solves,
-        "block_size": bs,
-        "timings_s": timings,
-        "memory_mib": memory,
-        "slepc": "%d.%d.%d" % SLEPc.Sys.getVersion()[:3],
-        "petsc": "%d.%d.%d" % PETSc.Sys.getVersion()[:3],
-    }
-    info.update(sturm)
-    with open(os.path.join(wd, "slepc.json"), "w") as fh:
-        json.dump(info, fh)
+
+def gather(X):
+    """The vectors on rank 0 (numpy arrays; empty list elsewhere)."""
+    xr = X[0].duplicate() if X else None
+    out = []
+    if xr is None:
+        return out
+    scatter, x0 = PETSc.Scatter.toZero(xr)
+    for x in X:
+        x.copy(xr)
+        scatter.scatter(xr, x0, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        if RANK == 0:
+            out.append(x0.getArray().copy())
+    return out
+
+
+def main() -> None:
+    t = time.perf_counter()
+    pen = Pencil()
+    mark("load", t)
+    t = time.perf_counter()
+    R, rigid_lam, rigid_vecs = rigid_pairs(pen)
+    mark("rigid", t)
+    sigma = float(P["sigma"])
+    if not sigma < 0.0:
+        fail(f"params.json: sigma = {sigma} is not negative; the iterative solver needs a shift below the spectrum")
+    t = time.perf_counter()
+    pen.shift(sigma)
+    multigrid(pen, R)
+    mark("shift", t)
+    nr, nev = len(rigid_lam), int(P["nev"])
+    want_el = max(0, nev - nr)
+    t = time.perf_counter()
+    X, theta, ksp, info, eps = eigensolve(pen, rigid_vecs, want_el)
+    mark("solve", t)
+    info["solve_counts"] = counts()
+    # A mode at λ ≈ 0 left after the deflation: a mechanism, or rigid-body motions not given.
+    if len(theta) and theta[0] + sigma <= 1e-9 * (-sigma) / 1e-7:
+        fail(f"a mode at λ = {theta[0] + sigma:.3e} rad²/s² with {nr} rigid-body motions deflated: the model has a "
+             "mechanism (a zero-energy motion that is not a rigid-body motion) or its rigid-body motions were not "
+             "given (R.bin); the multigrid's near-null space does not hold it. Solve with --solver direct, or "
+             "constrain the mechanism")
+    t = time.perf_counter()
+    X, theta, err, rinfo = refine(pen, ksp, X, theta, want_el, rigid_vecs)
+    info.update(rinfo)
+    eps.destroy()
+    ksp.destroy()
+    mark("refine", t)
+    lam = np.concatenate([np.array(rigid_lam), theta[:want_el] + sigma])
+    back = [pen.backward(x, lr) for x, lr in zip(rigid_vecs, rigid_lam)] + list(err)
+    t = time.perf_counter()
+    vecs = gather(rigid_vecs + X[:want_el])
+    mark("gather", t)
+    t = time.perf_counter()
+    sturm = sturm_upper(pen, float(lam[-1]) if len(lam) else 0.0, theta[want_el:] + sigma)
+    mark("sturm", t)
+    if RANK == 0:
+        lam.astype("<f8").tofile(os.path.join(WD, "lambda.bin"))
+        np.asarray(vecs, dtype="<f8").reshape(-1).tofile(os.path.join(WD, "vectors.bin"))
+        out = {
+            "n": pen.n, "nconv": len(lam), "converged": info["converged"] + nr, "iterations": info["iterations"],
+            "ranks": COMM.getSize(), "sigma": sigma, "rigid": nr, "block_size": pen.bs,
+            "backward_errors": back, "max_backward_error": max(back, default=0.0),
+            "timings_s": TIMINGS, "memory_mib": MEMORY, "counts": counts(),
+            "slepc": "%d.%d.%d" % SLEPc.Sys.getVersion()[:3], "petsc": "%d.%d.%d" % PETSc.Sys.getVersion()[:3],
+        }
+        out.update(info)
+        out.update(sturm)
+        with open(os.path.join(WD, "slepc.json"), "w") as fh:
+            json.dump(out, fh)
+
+
+try:
+    main()
+except PETSc.Error as e:  # a PETSc failure (memory, a breakdown): an error, never a silent answer
+    fail(f"PETSc error {e.ierr} after the {list(TIMINGS)[-1] if TIMINGS else 'start'} phase: {e}")
+except (np.linalg.LinAlgError, ValueError, OSError) as e:
+    fail(f"{type(e).__name__} after the {list(TIMINGS)[-1] if TIMINGS else 'start'} phase: {e}")
