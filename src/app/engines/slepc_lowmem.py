@@ -55,7 +55,15 @@ EVENTS = ("MatMult", "PCApply", "KSPSolve", "PCSetUp", "MatSolve", "MatCholFctrN
 def peak_mb() -> float:
     """Peak resident memory of this rank so far, summed over ranks (MiB)."""
     own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    return COMM.tompi4py().allreduce(own) if COMM.getSize() > 1 else own
+    if COMM.getSize() == 1:
+        return own
+    # The sum over ranks through a PETSc vector (one entry per rank): no mpi4py needed.
+    v = PETSc.Vec().createMPI((1, PETSc.DECIDE), comm=COMM)
+    v.setValue(RANK, own)
+    v.assemble()
+    total = v.sum()
+    v.destroy()
+    return total
 
 
 def mark(phase: str, t0: float) -> None:
@@ -432,7 +440,16 @@ def main() -> None:
     nr, nev = len(rigid_lam), int(P["nev"])
     want_el = max(0, nev - nr)
     t = time.perf_counter()
-    X, theta, ksp, info, eps = eigensolve(pen, rigid_vecs, want_el)
+    try:
+        X, theta, ksp, info, eps = eigensolve(pen, rigid_vecs, want_el)
+    except PETSc.Error as e:
+        # LOBPCG's Rayleigh-Ritz breaks down (LAPACK sygvd) on a basis that holds zero-energy
+        # motions the deflation does not: a mechanism is the usual cause, named as such.
+        fail(f"the eigensolver ({P.get('method', 'lobpcg')}) broke down (PETSc error {e.ierr}) with {nr} "
+             "rigid-body motions deflated: the model likely has a mechanism (a zero-energy motion that is not a "
+             "rigid-body motion: unconnected parts, a free hinge), which the multigrid's near-null space does not "
+             "hold. Solve with --solver direct, which finds and reports zero-energy modes, or constrain the "
+             "mechanism")
     mark("solve", t)
     info["solve_counts"] = counts()
     # A mode at λ ≈ 0 left after the deflation: a mechanism, or rigid-body motions not given.
