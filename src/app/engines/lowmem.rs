@@ -510,12 +510,13 @@ fn load(sys: &System, dir: &Path, nev: usize) -> Result<Loaded> {
     notes.insert(
         0,
         format!(
-            "solved by the low-memory iterative path: SLEPc {} (method {}, {} rigid-body motions deflated) on {} MPI ranks, {} iterations, {} pairs converged; residuals, backward errors (largest \
+            "solved by the low-memory iterative path: SLEPc {} (method {}, {} rigid-body motions deflated) on {} MPI rank{}, {} iterations, {} pairs converged; residuals, backward errors (largest \
              {worst:.1e}) and M-orthonormality ({m_orth:.1e}) recomputed here with vibrofem's K and M",
             info.slepc,
             info.method.as_deref().unwrap_or("the script's default method"),
             info.rigid,
             info.ranks,
+            if info.ranks == 1 { "" } else { "s" },
             info.iterations,
             info.converged
         ),
