@@ -9,6 +9,14 @@ use std::path::PathBuf;
 /// Result alias used across the crate.
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// The words that make a memory refusal's message, shared by the constructors of those
+/// errors and [`Error::is_memory_refusal`] (they stay `InvalidInput`, exit 1).
+pub(crate) const MEMORY_REFUSALS: [&str; 3] = [
+    "the model needs at least",
+    "the factorisation needs about",
+    "cannot allocate",
+];
+
 /// All errors vibrofem reports.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -258,10 +266,18 @@ impl Error {
     /// process may use (an input error, exit 1, like a refusal by the memory estimate).
     pub fn out_of_memory(what: &str, bytes: u64) -> Self {
         Error::InvalidInput(format!(
-            "cannot allocate {} for {what}: not enough memory for this model (a coarser mesh, or \
+            "{} {} for {what}: not enough memory for this model (a coarser mesh, or \
              more memory: --max-memory, ulimit -v and cgroup limits are honoured)",
+            MEMORY_REFUSALS[2],
             crate::util::fmt::fmt_bytes(bytes)
         ))
+    }
+
+    /// Whether this is a refusal for memory: the model's estimate before assembly, the
+    /// factorisation's after the ordering ([`crate::system`]) or an allocation that failed
+    /// ([`Error::out_of_memory`]). `modes --solver auto` answers these with the low-memory path.
+    pub fn is_memory_refusal(&self) -> bool {
+        matches!(self, Error::InvalidInput(m) if MEMORY_REFUSALS.iter().any(|k| m.contains(k)))
     }
 
     /// Name the equation of a [`Error::Singular`] in the user's terms with `describe` (an

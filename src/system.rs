@@ -360,7 +360,8 @@ pub fn describe_equation(model: &Model, eq: usize) -> String {
 fn check_estimate(source: &str, budget: &Option<MemoryBudget>, bytes: u64, detail: impl Fn() -> String) -> Result<()> {
     match budget {
         Some(b) if bytes > b.bytes => Err(Error::InvalidInput(format!(
-            "{source}: the model needs at least {} ({}) but {} {}",
+            "{source}: {} {} ({}) but {} {}",
+            crate::error::MEMORY_REFUSALS[0],
             fmt_bytes(bytes),
             detail(),
             b.what,
@@ -383,7 +384,8 @@ pub fn check_memory(source: &str, sym: &SymbolicFactor, pattern: &Pattern, limit
     };
     if need > lim {
         return Err(Error::InvalidInput(format!(
-            "{source}: the factorisation needs about {} (factor {}, {} entries) but {what} {}",
+            "{source}: {} {} (factor {}, {} entries) but {what} {}",
+            crate::error::MEMORY_REFUSALS[1],
             fmt_bytes(need),
             fmt_bytes(sym.factor_bytes() as u64),
             sym.nnz_l,

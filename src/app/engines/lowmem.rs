@@ -190,18 +190,6 @@ fn block_size(model: &Model) -> usize {
     }
 }
 
-/// Whether `e` is the in-core path's refusal for memory (the estimate before assembly, the
-/// factorisation's after the ordering, or an allocation that failed), which `--solver auto`
-/// answers with the iterative path.
-pub fn is_memory_refusal(e: &Error) -> bool {
-    match e {
-        Error::InvalidInput(m) => {
-            m.contains("needs at least") || m.contains("the factorisation needs about") || m.contains("cannot allocate")
-        }
-        _ => false,
-    }
-}
-
 /// A modal analysis of `mesh` with `solver` (and the direct path's `engine`): the run and, when
 /// the iterative path solved, what it adds to the JSON report.
 pub fn solve_mesh(
@@ -227,7 +215,7 @@ pub fn solve_mesh(
                 Ok(sys) => {
                     return Ok((engine.solve(&sys, &opts.params(), Before { read_s, model_s })?, None));
                 }
-                Err(e) if is_memory_refusal(&e) => e,
+                Err(e) if e.is_memory_refusal() => e,
                 Err(e) => return Err(e),
             };
             let reason = format!(
