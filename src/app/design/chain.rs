@@ -169,6 +169,7 @@ pub fn run_design(d: &Design, out_dir: Option<&std::path::Path>, progress: &dyn 
         inputs: reference::inputs(d, &v),
         timings_s: clock.0,
         notes: notes(d, &v),
+        machine_modal: v.machine.modal.clone(),
     })
 }
 

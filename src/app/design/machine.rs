@@ -126,6 +126,9 @@ pub struct MachineResult {
     /// Where the leaves' table ends, the magnets and the isolators are (plan, m), for the maps.
     #[serde(skip)]
     pub positions: [Vec<[f64; 2]>; 3],
+    /// The machine in the modal coordinates of its forced response, for the start-up.
+    #[serde(skip)]
+    pub modal: MachineModal,
 }
 
 /// The force the isolators put on the floor at one harmonic kΩ of the drive.
@@ -340,6 +343,7 @@ fn analyse_on(
     }
     let dissipated_power = 0.5 * omega * omega * pots.iter().map(|p| dissipation(p, &full)).sum::<f64>();
     Ok(MachineResult {
+        modal: machine_modal(d, parts, base, sys, &run, &shapes, &cr, &full, &modes, rigid)?,
         modes,
         working,
         nearest_other,
@@ -1467,4 +1471,169 @@ pub fn write_amplitude_vtu(path: &std::path::Path, r: &MachineResult) -> Result<
             PointField::new("displacement_im", 3, &im),
         ],
     )
+}
+
+/// One output of the machine in its modal coordinates q (the modes that carry the forced
+/// response): u = Σ_k `shape[k]`·q_k + `residual`·p, with p the pull per magnet (N) and
+/// `residual` the static correction of the modes left out per newton of it.
+#[derive(Clone, Debug, Default)]
+pub struct ModalOutput {
+    /// Its value per unit of each modal coordinate (the mass-normalised shapes).
+    pub shape: Vec<f64>,
+    /// The left-out modes' static part per newton of pull per magnet.
+    pub residual: f64,
+}
+
+/// The 3D machine reduced to the modes that carry its forced response (up to
+/// `machine.response_range` × the excitation), for transients:
+/// q'' + C_r q' + Λ q = Φᵀf·p(t), with f the magnets' pull pattern of one newton per magnet (all
+/// in phase: down on each armature, up at each core on the reactive mass) and p(t) the pull per
+/// magnet; C_r = Φᵀ C Φ the coupled modal damping of the harmonic response. The outputs the
+/// start-up reads are rows over the modes plus the static correction the harmonic response
+/// adds for the modes left out, so a steady transient has the harmonic response's amplitudes.
+#[derive(Clone, Debug, Default)]
+pub struct MachineModal {
+    /// Eigenvalues ω_k² of the modes used, (rad/s)².
+    pub lambda: Vec<f64>,
+    /// Their names (the listed modes' names; modes above `machine.mode_range` are numbered).
+    pub names: Vec<String>,
+    /// C_r = Φᵀ C Φ, n×n row-major, 1/s.
+    pub damping: Vec<f64>,
+    /// Φᵀ f for one newton of pull per magnet.
+    pub force: Vec<f64>,
+    /// The reactive mass's vertical displacement at each isolator (order of `machine.isolators`).
+    pub isolators: Vec<ModalOutput>,
+    /// Vertical motion across each leaf, table end less clamp (order of `machine.leaves`).
+    pub leaves: Vec<ModalOutput>,
+    /// Vertical motion across each magnet's gap, armature centre less core (order of
+    /// `machine.magnets`).
+    pub magnets: Vec<ModalOutput>,
+    /// One isolator's axial stiffness, N/m.
+    pub k_isolator: f64,
+    /// One isolator's share of μ13, N s/m (its floor force is k u_z + c u_z').
+    pub c_isolator: f64,
+}
+
+/// A linear functional of the nodes' six components: Σ weights · u(node).
+type Functional = Vec<(usize, [f64; 6])>;
+
+/// u_z at plan point `p` of the body whose node `a` at `r` moves rigidly (see [`uz_at`]).
+fn uz_functional(a: usize, r: [f64; 3], p: [f64; 2], sign: f64) -> (usize, [f64; 6]) {
+    (a, [0.0, 0.0, sign, sign * (p[1] - r[1]), -sign * (p[0] - r[0]), 0.0])
+}
+
+/// The machine's [`MachineModal`] from its run: `shapes` (expanded per model node) and `cr` of
+/// the modes used, `full` the harmonic response at the excitation (for the static correction,
+/// which is the part of it the modes do not give).
+#[allow(clippy::too_many_arguments)]
+fn machine_modal(
+    d: &Design,
+    parts: &Condensed,
+    base: &Base,
+    sys: &System,
+    run: &ModalRun,
+    shapes: &[Vec<f64>],
+    cr: &DMatrix<f64>,
+    full: &[[Complex<f64>; 6]],
+    modes: &[MachineMode],
+    rigid: bool,
+) -> Result<MachineModal> {
+    let (layout, md) = (&base.layout, &d.machine);
+    let (n, rc, reactive) = (shapes.len(), md.reactive_centre, layout.reactive as usize);
+    // The first harmonic per magnet the response `full` was solved for.
+    let f1 = d.magnet_drive()?.cos_coefficient(1).abs() / md.magnets.len() as f64;
+    if !(f1 > 0.0 && f1.is_finite()) {
+        return Err(bad("drive.pull", "gives no pull at the excitation".into()));
+    }
+    let unit: Vec<(usize, [c64; 6])> = magnet_forces(d, layout, 1)?
+        .into_iter()
+        .map(|(a, f)| (a, f.map(|x| x / f1)))
+        .collect();
+    let load = harmonic::load_vector(sys, &unit)?;
+    let force: Vec<f64> = (0..n)
+        .map(|j| load.iter().enumerate().map(|(i, l)| l.re * run.vectors[(i, j)]).sum())
+        .collect();
+    // The modal coordinates at the excitation per newton, as the harmonic response solves them.
+    let omega = TAU * d.excitation_hz;
+    let a = DMatrix::from_fn(n, n, |i, j| {
+        let diag = if i == j { run.lambda[i] - omega * omega } else { 0.0 };
+        Complex::new(diag, omega * cr[(i, j)])
+    });
+    let rhs = nalgebra::DVector::from_fn(n, |j, _| Complex::new(force[j], 0.0));
+    let x = a
+        .lu()
+        .solve(&rhs)
+        .ok_or_else(|| Error::Verification("machine modal model: singular at the excitation".into()))?;
+    let output = |fun: &Functional| -> ModalOutput {
+        let shape: Vec<f64> = shapes
+            .iter()
+            .map(|s| {
+                fun.iter()
+                    .map(|(a, w)| (0..6).map(|c| w[c] * s[6 * a + c]).sum::<f64>())
+                    .sum()
+            })
+            .collect();
+        let whole: Complex<f64> = fun
+            .iter()
+            .map(|(a, w)| (0..6).map(|c| full[*a][c] * w[c]).sum::<Complex<f64>>())
+            .sum();
+        let modal: Complex<f64> = shape.iter().zip(x.iter()).map(|(s, q)| q * *s).sum();
+        ModalOutput {
+            shape,
+            residual: (whole / f1 - modal).re,
+        }
+    };
+    let isolators = md
+        .isolators
+        .iter()
+        .map(|p| output(&vec![uz_functional(reactive, rc, [p[0], p[1]], 1.0)]))
+        .collect();
+    let leaves = md
+        .leaves
+        .iter()
+        .zip(&base.leaf_nodes)
+        .map(|(l, &a)| {
+            let nl = (l[2] * l[2] + l[3] * l[3]).sqrt();
+            let clamp = [l[0] + d.leaf.length * l[2] / nl, l[1] + d.leaf.length * l[3] / nl];
+            let a_ref = if rigid {
+                layout.table_centre
+            } else {
+                [l[0], l[1], md.leaf_level]
+            };
+            output(&vec![
+                uz_functional(a, a_ref, [l[0], l[1]], 1.0),
+                uz_functional(reactive, rc, clamp, -1.0),
+            ])
+        })
+        .collect();
+    let magnets = md
+        .magnets
+        .iter()
+        .zip(&base.magnet_nodes)
+        .map(|(m, &a)| {
+            let a_ref = if rigid { layout.table_centre } else { [m[0], m[1], 0.0] };
+            output(&vec![
+                uz_functional(a, a_ref, *m, 1.0),
+                uz_functional(reactive, rc, *m, -1.0),
+            ])
+        })
+        .collect();
+    Ok(MachineModal {
+        lambda: run.lambda[..n].to_vec(),
+        names: (0..n)
+            .map(|k| {
+                modes.get(k).map_or_else(
+                    || format!("mode {} (above {} × the excitation)", k + 1, md.mode_range),
+                    |m| m.name.clone(),
+                )
+            })
+            .collect(),
+        damping: (0..n * n).map(|i| cr[(i / n, i % n)]).collect(),
+        force,
+        isolators,
+        leaves,
+        magnets,
+        k_isolator: parts.k_ax,
+        c_isolator: d.damping.mu13 / d.coil.count as f64,
+    })
 }

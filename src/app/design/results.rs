@@ -312,4 +312,7 @@ pub struct DesignReport {
     pub timings_s: Vec<(String, f64)>,
     /// Notes.
     pub notes: Vec<String>,
+    /// The 3D machine in the modal coordinates of its forced response (for the start-up study).
+    #[serde(skip)]
+    pub machine_modal: super::machine::MachineModal,
 }

@@ -17,7 +17,7 @@
 //! output, so periods align with samples and averages over whole periods are exact for the
 //! harmonics below the sampling rate.
 
-use super::electromagnet::RectifiedDrive;
+use super::electromagnet::{ForceLaw, RectifiedDrive};
 use super::ode::{Dopri5Options, OdeStats, integrate};
 use super::two_mass::TwoMass;
 use crate::{Error, Result};
@@ -339,6 +339,47 @@ impl Ramp {
     }
 }
 
+impl Ramp {
+    /// The pull at `t` of a peak total `p_em` under `law`: P·|sin φ| (paper) or P·sin²φ (flux),
+    /// zero before the start and once the supply is off.
+    pub fn pull(&self, law: ForceLaw, p_em: f64, t: f64) -> f64 {
+        self.phase(t).map_or(0.0, |ph| {
+            let s = ph.sin();
+            match law {
+                ForceLaw::Paper => p_em * s.abs(),
+                ForceLaw::Flux => p_em * s * s,
+            }
+        })
+    }
+
+    /// The pull's rate of change dP/dt at `t` (the one-sided value at a kink of |sin φ|).
+    pub fn pull_rate(&self, law: ForceLaw, p_em: f64, t: f64) -> f64 {
+        self.phase(t).map_or(0.0, |ph| {
+            let (s, c) = ph.sin_cos();
+            let w = self.omega_at(t);
+            match law {
+                ForceLaw::Paper => p_em * s.signum() * c * w,
+                ForceLaw::Flux => p_em * 2.0 * s * c * w,
+            }
+        })
+    }
+
+    /// Where the pull under `law` is not smooth, up to `t_end`: the switching times and, under
+    /// the paper's law, the zeros of sin φ ([`Ramp::kinks`]); sin²φ is smooth in φ.
+    pub fn breakpoints(&self, law: ForceLaw, t_end: f64) -> Vec<f64> {
+        match law {
+            ForceLaw::Paper => self.kinks(t_end),
+            ForceLaw::Flux => {
+                let mut out = vec![self.up_s, self.up_s + self.hold_s, self.off()];
+                out.retain(|&t| t > 1e-9 && t < t_end - 1e-9);
+                out.sort_by(f64::total_cmp);
+                out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+                out
+            }
+        }
+    }
+}
+
 /// A linear system's transient: `x[k]` and `v[k]` are the displacements and velocities at `t[k]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinearTransient {
@@ -365,6 +406,26 @@ pub fn simulate_linear(
     dt: f64,
     ode: &Dopri5Options,
 ) -> Result<LinearTransient> {
+    simulate_linear_law(m, c, k, b, ForceLaw::Paper, p_em, ramp, t_end, dt, ode)
+}
+
+/// [`simulate_linear`] under either force law: P(t) = `p_em`·|sin φ(t)| (paper) or
+/// `p_em`·sin²φ(t) (flux), with steps stopped at the switching times and, under the paper's
+/// law, at the zeros of sin φ ([`Ramp::breakpoints`]). With M = I, C = C_r, K = Λ and b = Φᵀf
+/// it integrates a structure's modal coordinates.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_linear_law(
+    m: &[f64],
+    c: &[f64],
+    k: &[f64],
+    b: &[f64],
+    law: ForceLaw,
+    p_em: f64,
+    ramp: &Ramp,
+    t_end: f64,
+    dt: f64,
+    ode: &Dopri5Options,
+) -> Result<LinearTransient> {
     let n = b.len();
     if m.len() != n * n || c.len() != n * n || k.len() != n * n || n == 0 {
         return Err(Error::param("b", format!("linear transient: matrices must be {n}×{n}")));
@@ -379,7 +440,7 @@ pub fn simulate_linear(
         .try_inverse()
         .ok_or_else(|| Error::param("m", "linear transient: the mass matrix is singular"))?;
     let rhs = |t: f64, y: &[f64], dy: &mut [f64]| {
-        let p = ramp.phase(t).map_or(0.0, |ph| p_em * ph.sin().abs());
+        let p = ramp.pull(law, p_em, t);
         let f: Vec<f64> = (0..n)
             .map(|i| {
                 b[i] * p
@@ -395,7 +456,14 @@ pub fn simulate_linear(
     };
     let n_out = (t_end / dt - 1e-9).ceil() as usize;
     let t_out: Vec<f64> = (0..=n_out).map(|i| i as f64 * dt).collect();
-    let sol = integrate(rhs, 0.0, &vec![0.0; 2 * n], &t_out, &ramp.kinks(t_out[n_out]), ode)?;
+    let sol = integrate(
+        rhs,
+        0.0,
+        &vec![0.0; 2 * n],
+        &t_out,
+        &ramp.breakpoints(law, t_out[n_out]),
+        ode,
+    )?;
     Ok(LinearTransient {
         t: sol.t,
         x: sol.y.iter().map(|y| y[..n].to_vec()).collect(),
