@@ -14,10 +14,23 @@
 //! null space of `K_σ` (all DOFs it does not touch) is `μ = 0`, the bottom of the wanted side,
 //! and a tensile part gives negative `μ` (factors of the reversed load), which are skipped.
 //!
-//! The basis is a block Krylov space of `Op`, kept K-orthonormal (classical Gram–Schmidt,
-//! twice) together with its images `K V` and `G V`; the Rayleigh quotient `T = VᵀGV` gives the
-//! Ritz pairs. Each step applies `Op` to the best unconverged Ritz vectors (one block solve
-//! with the factor of K). A pair has converged when its backward error
+//! The basis is a block Krylov space, kept K-orthonormal (block classical Gram–Schmidt, twice)
+//! together with its images `K V` and `G V`; the Rayleigh quotient `T = VᵀGV` gives the Ritz
+//! pairs, and by Courant–Fischer the j-th Ritz factor is never below the j-th true one. Two
+//! operators grow it, both applied to the best unconverged Ritz vectors as one block solve:
+//! 1. **estimates**, `K⁻¹G` with the static solve's factor of K, until the lowest `nev + 1`
+//!    Ritz factors move by less than 1e-3 in a step;
+//! 2. the **spectral shift** σ placed from them (above the `nev`-th, midway to the next one at
+//!    least 2 % further up), then `(K − σG)⁻¹G = (K + σK_σ)⁻¹G`, whose eigenvalues
+//!    `1/(λ − σ)` put the factors just below σ at the far end of the spectrum (Grimes, Lewis
+//!    and Simon's buckling transform with a shift). Its one factorisation serves the
+//!    iteration and the Sturm count: the count at σ, known before the iteration, is how many
+//!    factors it must converge. A count below `nev` (a factor the estimates overrated) moves σ
+//!    above the factors then found, midway to the next, and factors again (at most
+//!    [`MAX_SHIFTS`] shifts); a count above `nev` (estimates that were too high) converges them
+//!    all and reports the lowest `nev`.
+//!
+//! A pair has converged when its backward error
 //! `‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖)` is at rounding level (1e-12), or below the
 //! acceptance 1e-10 once its value has settled (a residual in the K⁻¹ norm, natural for the
 //! operator, loses half its digits to cancellation on slender models: not used).
@@ -29,15 +42,16 @@
 //! - a Sturm count: by Sylvester's law of inertia the number of negative pivots of an LDLᵀ of
 //!   `K + σK_σ` (σ > 0) is the number of load factors in `(0, σ)` when K is positive definite
 //!   (`K + σK_σ` is congruent to `I − σ K^{-1/2} G K^{-1/2}`, whose eigenvalues `1 − σμ` are
-//!   negative exactly for `0 < λ < σ`). σ is placed between the last reported factor and the
-//!   next one; the count must equal the factors found.
+//!   negative exactly for `0 < λ < σ`). σ is the shift of the iteration; every factor found
+//!   below it is counted, and the count must equal them.
 //!
 //! # Cost
 //! One static solve (a factorisation of K, which also proves K positive definite), the stresses
-//! and `K_σ` (an assembly without mass), the iteration with the static solve's factor of K
-//! (not factored again) and one factorisation of `K + σK_σ` for the Sturm count, all on the
-//! same ordering and symbolic factorisation: two numeric factorisations in all, fewer than a
-//! static plus a modal run (whose Lanczos run factors twice: shift and Sturm point).
+//! and `K_σ` (an assembly without mass), a few block solves with the static factor for the
+//! estimates, one factorisation of `K + σK_σ` for both the iteration and the count, all on the
+//! same ordering and symbolic factorisation: two numeric factorisations, as a static plus a
+//! modal run. Products with K and G are made by blocks, and the backward errors' passes over
+//! `|K|` and `|G|` only for pairs whose values have settled.
 //!
 //! A load whose `K_σ` has no compressive part has no positive factor: the run says so ("no
 //! buckling under this load") with an empty list, not an error. A model that is not supported
@@ -123,12 +137,11 @@ pub struct BucklingTimings {
     pub statics: f64,
     /// Stresses and K_σ.
     pub geometric: f64,
-    /// Factorisation of K for the iteration: 0 since the static solve's factor is reused
-    /// (kept for the key's stability).
+    /// Factorisation of K + σK_σ (the shifted iteration's and the Sturm count's).
     pub factor: f64,
-    /// The iteration.
+    /// The iteration (estimates and shifted).
     pub solve: f64,
-    /// Residuals and the Sturm factorisation.
+    /// Residuals.
     pub verify: f64,
     /// Total.
     pub total: f64,
@@ -169,8 +182,9 @@ pub struct BucklingReport {
     pub tension: StressExtreme,
     /// Largest compressive stress of the load case.
     pub compression: StressExtreme,
-    /// Numeric factorisations: K (the static solve's, reused by the iteration) and K + σK_σ
-    /// for the Sturm count (none under a load without compression).
+    /// Numeric factorisations: K (the static solve's, reused for the estimates) and K + σK_σ
+    /// for the iteration and the Sturm count (none under a load without compression; one more
+    /// per new shift when the count shows fewer factors than asked).
     pub factorizations: usize,
     /// Operator applications (vectors).
     pub operator_applications: usize,
@@ -221,6 +235,13 @@ const ZERO_MU: f64 = 1e-10;
 const TOL: f64 = 1e-12;
 /// Backward error accepted.
 const VERIFY_TOL: f64 = 1e-10;
+/// Backward errors are computed exactly (a pass over |K| and |G|) for Ritz values that moved
+/// by less than this (relative to the largest) in a step.
+const EXACT_GATE: f64 = 1e-8;
+/// Estimates for the shift: Ritz values that moved by less than this (relative) in a step.
+const ESTIMATE_TOL: f64 = 1e-3;
+/// Estimates closer than this ratio form a cluster the shift is not placed in.
+const CLUSTER: f64 = 1.02;
 
 /// Small deterministic generator for start vectors (xorshift64*).
 struct Rng(u64);
@@ -246,63 +267,66 @@ struct Basis<'a> {
 
 impl Basis<'_> {
     /// Orthogonalise the columns of `w` against the basis and each other in the K inner
-    /// product and append those that keep a part of their norm; returns how many were added.
-    fn append(&mut self, w: MatRef<'_, f64>, rng: &mut Rng) -> usize {
-        let mut added = 0;
-        for j in 0..w.ncols() {
-            if self.cols == self.v.ncols() {
-                break;
-            }
-            let mut x: Vec<f64> = w.col(j).iter().copied().collect();
-            for attempt in 0..3 {
-                if attempt > 0 {
-                    x.iter_mut().for_each(|e| *e = rng.next());
-                }
-                if self.add_one(&mut x) {
-                    added += 1;
-                    break;
-                }
-            }
+    /// product and append the directions that keep more than 1e-7 of their K-norm; returns
+    /// how many were added. Block classical Gram–Schmidt, twice: each pass projects out the
+    /// basis (with the kept `K V`: no product with K) and orthonormalises the block through the
+    /// eigen decomposition of its K-Gram matrix, `K W` coming from one block product with K per
+    /// pass (sparse products by blocks read the matrix once for all the columns).
+    fn append(&mut self, w: MatRef<'_, f64>) -> usize {
+        let m = w.ncols().min(self.v.ncols() - self.cols);
+        if m == 0 {
+            return 0;
         }
-        added
-    }
-
-    /// Add one vector (twice orthogonalised); false when it lies in the basis' span.
-    fn add_one(&mut self, x: &mut [f64]) -> bool {
-        let n = x.len();
-        let c = self.cols;
-        let kx0 = self.k.mul_vec(x);
-        let norm0 = dot(x, &kx0).max(0.0).sqrt();
-        if !(norm0 > 0.0) {
-            return false;
-        }
-        for _ in 0..2 {
+        let (n, c) = (w.nrows(), self.cols);
+        let mut x = w.subcols(0, m).to_owned();
+        // The K-norms of the columns as given: Σ coef² + ‖projected‖²_K (the basis is
+        // K-orthonormal).
+        let mut norm0 = vec![0.0f64; m];
+        let mut kx = Mat::zeros(n, m);
+        for pass in 0..2 {
             if c > 0 {
-                let xm = MatRef::from_column_major_slice(x, n, 1);
-                let coef = tall::gram(self.kv.as_ref().subcols(0, c), xm);
-                let mut xm = faer::MatMut::from_column_major_slice_mut(x, n, 1);
+                let coef = tall::gram(self.kv.as_ref().subcols(0, c), x.as_ref());
+                if pass == 0 {
+                    for (j, nj) in norm0.iter_mut().enumerate() {
+                        *nj = (0..c).map(|i| coef[(i, j)].powi(2)).sum();
+                    }
+                }
                 tall::mul(
-                    xm.as_mut(),
+                    x.as_mut(),
                     Accum::Add,
                     self.v.as_ref().subcols(0, c),
                     coef.as_ref(),
                     -1.0,
                 );
             }
+            kx = Mat::zeros(n, x.ncols());
+            self.k.mul_block(x.as_ref(), kx.as_mut());
+            let h = tall::gram(x.as_ref(), kx.as_ref());
+            let scale: Vec<f64> = if pass == 0 {
+                (0..x.ncols())
+                    .map(|j| {
+                        let s2 = norm0[j] + h[(j, j)].max(0.0);
+                        if s2 > 0.0 { 1.0 / s2.sqrt() } else { 0.0 }
+                    })
+                    .collect()
+            } else {
+                vec![1.0; x.ncols()]
+            };
+            let q = match orthonormalizer(&h, &scale, if pass == 0 { 1e-14 } else { 0.5 }) {
+                Some(q) => q,
+                None => return 0,
+            };
+            x = &x * &q;
+            kx = &kx * &q;
         }
-        let kx = self.k.mul_vec(x);
-        let norm = dot(x, &kx).max(0.0).sqrt();
-        if !(norm > 1e-8 * norm0) {
-            return false;
-        }
-        let gx = self.g.mul_vec(x);
-        for i in 0..n {
-            self.v[(i, c)] = x[i] / norm;
-            self.kv[(i, c)] = kx[i] / norm;
-            self.gv[(i, c)] = gx[i] / norm;
-        }
-        self.cols += 1;
-        true
+        let k = x.ncols();
+        let mut gx = Mat::zeros(n, k);
+        self.g.mul_block(x.as_ref(), gx.as_mut());
+        self.v.as_mut().subcols_mut(c, k).copy_from(&x);
+        self.kv.as_mut().subcols_mut(c, k).copy_from(&kx);
+        self.gv.as_mut().subcols_mut(c, k).copy_from(&gx);
+        self.cols += k;
+        k
     }
 
     /// Ritz pairs of the basis, μ descending: values and the coefficient matrix.
@@ -335,13 +359,28 @@ impl Basis<'_> {
     }
 }
 
+/// The coefficients `Q` that make `X Q` K-orthonormal, from `h = XᵀKX`: the eigenvectors of
+/// `D h D` (`D = diag(scale)`, the columns' K-norms as given brought to 1) whose eigenvalue
+/// exceeds `floor` (the square of the fraction of its norm a direction keeps), each times
+/// `D λ^{-1/2}`. `None` when no direction is kept.
+fn orthonormalizer(h: &Mat<f64>, scale: &[f64], floor: f64) -> Option<Mat<f64>> {
+    let m = h.nrows();
+    let hs = Mat::from_fn(m, m, |i, j| 0.5 * (h[(i, j)] + h[(j, i)]) * scale[i] * scale[j]);
+    let e = hs.self_adjoint_eigen(faer::Side::Lower).ok()?;
+    // Descending, the strongest directions first.
+    let keep: Vec<usize> = (0..m).rev().filter(|&i| e.S()[i] > floor).collect();
+    if keep.is_empty() {
+        return None;
+    }
+    let u = e.U();
+    Some(Mat::from_fn(m, keep.len(), |i, j| {
+        scale[i] * u[(i, keep[j])] / e.S()[keep[j]].sqrt()
+    }))
+}
+
 /// The Ritz value `j` moved by at most 1e-10 of the largest |μ| since the previous step.
 fn prev_settled(prev: &[f64], vals: &[f64], j: usize, top: f64) -> bool {
     prev.get(j).is_some_and(|&p| (p - vals[j]).abs() <= 1e-10 * top)
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// K factored, refused unless positive definite (a supported model).
@@ -357,38 +396,45 @@ fn factor_positive_definite(sym: &Arc<SymbolicFactor>, k: &SymMatrix) -> Result<
     Ok(fk)
 }
 
-/// The Sturm check of the `reported` lowest of the `computed` positive factors (ascending):
-/// the negative pivots of K − σG at a point σ between the last reported factor and the next
-/// (if one was computed), else well above the last, against the factors found below σ. Returns
-/// the check and the factorisation's probe residual.
-fn sturm_check(
-    sym: &Arc<SymbolicFactor>,
-    k: &SymMatrix,
-    g: &SymMatrix,
-    computed: &[f64],
-    reported: usize,
-) -> Result<(BucklingSturm, f64)> {
+/// A check point above the `reported` lowest of the `computed` positive factors (ascending):
+/// between the last reported factor and the next (if one was computed), else twice the last;
+/// at least 1e-6 of the last above it.
+fn point_above(computed: &[f64], reported: usize) -> f64 {
     let last = computed[reported - 1];
     let point = match computed.get(reported) {
         Some(&next) => 0.5 * (last + next),
         None => 2.0 * last,
     };
-    let point = if point > last * (1.0 + 1e-6) {
+    if point > last * (1.0 + 1e-6) {
         point
     } else {
         last * (1.0 + 1e-6)
-    };
-    let fs = Factor::new_shifted(sym.clone(), k, Some((g, point)))?;
-    // Found below the point: every positive factor computed (the one beyond the reported
-    // ones included, should it fall below the point).
-    let found = computed.iter().filter(|&&l| l < point).count();
-    let sturm = BucklingSturm {
-        point,
-        count: fs.negative_pivots,
-        found,
-        complete: fs.negative_pivots == found,
-    };
-    Ok((sturm, fs.probe_residual))
+    }
+}
+
+/// The spectral shift σ from `est`, estimates of the lowest factors (ascending; Ritz values,
+/// so upper bounds of the true ones): midway between the `nev`-th estimate (or the first after
+/// it) and the next one at least [`CLUSTER`] above it, so that σ keeps about 1 % from every
+/// estimate; 1 % above the last estimate if no gap is found; twice the last when fewer than
+/// `nev + 1` estimates exist (then they are all the positive factors there are).
+fn shift_from_estimates(est: &[f64], nev: usize) -> f64 {
+    let last = est[est.len() - 1];
+    if est.len() <= nev {
+        return 2.0 * last;
+    }
+    (nev - 1..est.len() - 1)
+        .find(|&j| est[j + 1] > CLUSTER * est[j])
+        .map(|j| 0.5 * (est[j] + est[j + 1]))
+        .unwrap_or(last * (0.5 + 0.5 * CLUSTER))
+}
+
+/// The positive factors λ = 1/μ among the first `want` Ritz values (μ descending), ascending.
+fn positive_factors(vals: &[f64], cols: usize, want: usize) -> Vec<f64> {
+    let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
+    (0..cols.min(want))
+        .filter(|&j| vals[j] > ZERO_MU * top)
+        .map(|j| 1.0 / vals[j])
+        .collect()
 }
 
 /// The Ritz vectors `v[:, ..c] · s[:, ..cols]` (of V, KV or GV).
@@ -406,7 +452,10 @@ fn combine(v: &Mat<f64>, s: &Mat<f64>, c: usize, cols: usize) -> Mat<f64> {
 
 /// The backward errors of the Ritz pairs (μ_j, y_j), ‖Gy − μKy‖ / (‖|G||y|‖ + |μ|‖|K||y|‖):
 /// free of the cancellation a residual in the K⁻¹ norm suffers on ill-conditioned (slender)
-/// models.
+/// models. The products with |G| and |K| (a pass over both matrices) are made only for the
+/// pairs that `settled` admits (values that have nearly stopped moving) and that the bound
+/// `‖Gy − μKy‖ / (‖Gy‖ + |μ|‖Ky‖)` (never below the backward error) does not already pass;
+/// the others get that bound.
 fn ritz_backward_errors(
     k: &SymMatrix,
     g: &SymMatrix,
@@ -414,19 +463,31 @@ fn ritz_backward_errors(
     y: &Mat<f64>,
     ky: &Mat<f64>,
     gy: &Mat<f64>,
+    settled: impl Fn(usize) -> bool,
 ) -> Vec<f64> {
-    let ag = g.abs_mul_norms(y.as_ref());
-    let ak = k.abs_mul_norms(y.as_ref());
-    (0..y.ncols())
+    let norm = |m: &Mat<f64>, j: usize| m.col(j).iter().map(|v| v * v).sum::<f64>().sqrt();
+    let r: Vec<f64> = (0..y.ncols())
         .map(|j| {
             let mu = vals[j];
-            let r: f64 = (0..y.nrows())
+            (0..y.nrows())
                 .map(|i| (gy[(i, j)] - mu * ky[(i, j)]).powi(2))
                 .sum::<f64>()
-                .sqrt();
-            r / (ag[j] + mu.abs() * ak[j]).max(f64::MIN_POSITIVE)
+                .sqrt()
         })
-        .collect()
+        .collect();
+    let mut eta: Vec<f64> = (0..y.ncols())
+        .map(|j| r[j] / (norm(gy, j) + vals[j].abs() * norm(ky, j)).max(f64::MIN_POSITIVE))
+        .collect();
+    let exact: Vec<usize> = (0..y.ncols()).filter(|&j| eta[j] > TOL && settled(j)).collect();
+    if !exact.is_empty() {
+        let ys = Mat::from_fn(y.nrows(), exact.len(), |i, t| y[(i, exact[t])]);
+        let ag = g.abs_mul_norms(ys.as_ref());
+        let ak = k.abs_mul_norms(ys.as_ref());
+        for (t, &j) in exact.iter().enumerate() {
+            eta[j] = r[j] / (ag[t] + vals[j].abs() * ak[t]).max(f64::MIN_POSITIVE);
+        }
+    }
+    eta
 }
 
 /// ‖Kφ − λGφ‖ / ‖Kφ‖ per factor.
@@ -473,17 +534,162 @@ fn no_buckling(
     }
 }
 
+/// Basis capacity for `want` pairs grown by blocks of `b`.
+fn capacity(n: usize, want: usize, b: usize) -> usize {
+    (2 * want + 4 * b).max(40).min(n)
+}
+
+/// Where an iteration stops.
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Goal {
+    /// The first `want` Ritz values positive and settled to [`ESTIMATE_TOL`] (or converged).
+    Estimates,
+    /// The first `want` positive Ritz pairs converged (and the boundary, when fewer are
+    /// positive).
+    Converged,
+}
+
+/// The block Krylov iteration: the K-orthonormal basis, its generator and its work so far.
+/// The basis is kept from one operator to the next (a rational Krylov space): the
+/// Rayleigh–Ritz step on `(G, K)` does not depend on how its vectors were made.
+struct Iteration<'a> {
+    basis: Basis<'a>,
+    rng: Rng,
+    prev: Vec<f64>,
+    applications: usize,
+    b: usize,
+    max_applications: usize,
+}
+
+impl Iteration<'_> {
+    /// Room for `want` pairs and the expansion blocks.
+    fn reserve(&mut self, want: usize) {
+        let n = self.basis.v.nrows();
+        let nb = capacity(n, want, self.b);
+        if nb > self.basis.v.ncols() {
+            for m in [&mut self.basis.v, &mut self.basis.kv, &mut self.basis.gv] {
+                m.resize_with(n, nb, |_, _| 0.0);
+            }
+        }
+    }
+
+    /// Iterate with `f`, a factorisation of `K − σG` (σ = 0: K), the operator being
+    /// `(K − σG)⁻¹G` applied to the best unconverged Ritz vectors, until `goal` holds for the
+    /// first `want` Ritz pairs. Returns the Ritz values μ (descending) and their coefficients.
+    fn run(&mut self, f: &Factor, want: usize, goal: Goal) -> Result<(Vec<f64>, Mat<f64>)> {
+        self.reserve(want);
+        let (k, g, n, b) = (self.basis.k, self.basis.g, self.basis.v.nrows(), self.b);
+        let nb = self.basis.v.ncols();
+        let keep = (want + b).min(nb / 2).max(1);
+        loop {
+            let (vals, s) = self.basis.ritz()?;
+            let c = self.basis.cols;
+            let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
+            // Ritz vectors to test and expand: the wanted (positive) ones first.
+            let n_test = want.min(c);
+            let pos = vals.iter().take(n_test).filter(|&&m| m > ZERO_MU * top).count();
+            let cand = (pos.max(1) + b).min(c);
+            let y = combine(&self.basis.v, &s, c, cand);
+            let ky = combine(&self.basis.kv, &s, c, cand);
+            let gy = combine(&self.basis.gv, &s, c, cand);
+            let prev = &self.prev;
+            let eta = ritz_backward_errors(k, g, &vals, &y, &ky, &gy, |j| {
+                prev.get(j).is_some_and(|&p| (p - vals[j]).abs() <= EXACT_GATE * top)
+            });
+            let converged: Vec<bool> = (0..cand)
+                .map(|j| {
+                    let still = self
+                        .prev
+                        .get(j)
+                        .is_some_and(|&p: &f64| (p - vals[j]).abs() <= 1e-14 * top);
+                    eta[j] <= TOL || (eta[j] <= VERIFY_TOL && still)
+                })
+                .collect();
+            log::debug!(
+                "buckling: basis {c}, μ {:?}, backward errors {:?}",
+                &vals[..cand.min(4)],
+                &eta[..cand.min(4)]
+            );
+            let prev_before = std::mem::replace(&mut self.prev, vals.clone());
+            let all_wanted = (0..pos.min(want)).all(|j| converged[j]);
+            // Done: the wanted positive ones converged and, when fewer than wanted are positive,
+            // the first non-positive one (the top of the null space) converged too.
+            // (At the null space of K_σ the backward error of a Ritz pair need not fall: its settled
+            // value is what is asked there.)
+            let boundary_ok = pos >= want
+                || converged.get(pos).copied().unwrap_or(true)
+                || prev_settled(&prev_before, &vals, pos, top)
+                || c == n;
+            if (all_wanted && boundary_ok) || c == n {
+                return Ok((vals, s));
+            }
+            let settled = |j: usize| {
+                prev_before
+                    .get(j)
+                    .is_some_and(|&p| (p - vals[j]).abs() <= ESTIMATE_TOL * vals[j])
+            };
+            if goal == Goal::Estimates && pos >= want && (0..want).all(settled) {
+                return Ok((vals, s));
+            }
+            if self.applications > self.max_applications {
+                return Err(Error::Factorization(format!(
+                    "buckling: no convergence after {} operator applications ({} of {} load factors converged)",
+                    self.applications,
+                    converged.iter().take(pos.min(want)).filter(|&&x| x).count(),
+                    pos.min(want)
+                )));
+            }
+            // Expand with the operator applied to the best unconverged Ritz vectors.
+            let pick: Vec<usize> = (0..cand).filter(|&j| !converged[j]).take(b).collect();
+            let mut next = Mat::from_fn(n, pick.len(), |i, j| gy[(i, pick[j])]);
+            f.solve_in_place(next.as_mut());
+            self.applications += pick.len();
+            if self.basis.cols + next.ncols() > nb {
+                self.basis.restart(s.as_ref(), keep.min(c));
+            }
+            if self.basis.append(next.as_ref()) == 0 && self.basis.cols < nb {
+                // The space is exhausted (invariant subspace): random directions carry on.
+                let rnd = Mat::from_fn(n, 1, |_, _| self.rng.next());
+                if self.basis.append(rnd.as_ref()) == 0 {
+                    return Ok((vals, s));
+                }
+            }
+        }
+    }
+}
+
+/// Factorisations of `K − σG` the iteration may make (the first and, when the count at σ
+/// shows fewer factors than asked, new points above).
+const MAX_SHIFTS: usize = 3;
+
 /// The lowest `nev` positive load factors of `(K + λK_σ)φ = 0`, verified (module doc). `k`
 /// must be positive definite; `kg` is `K_σ` on K's pattern; `sym` the symbolic factorisation
 /// of that pattern; `k_factor` a factorisation of `k` already made on `sym` (the static
-/// solve's, proved positive definite there), or `None` to factor `k` here.
+/// solve's, proved positive definite there; dropped once the estimates are made), or `None`
+/// to factor `k` here.
 pub fn solve_pencil(
     k: &SymMatrix,
     kg: &SymMatrix,
     sym: &Arc<SymbolicFactor>,
-    k_factor: Option<&Factor>,
+    k_factor: Option<Factor>,
     nev: usize,
     max_applications: usize,
+) -> Result<PencilSolution> {
+    solve_pencil_from(k, kg, sym, k_factor, nev, max_applications, None)
+}
+
+/// [`solve_pencil`], with the first spectral shift given (`first_shift`, load-factor units)
+/// instead of placed from the estimates: for tests of the adaptation to a count that differs
+/// from the request.
+#[doc(hidden)]
+pub fn solve_pencil_from(
+    k: &SymMatrix,
+    kg: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    k_factor: Option<Factor>,
+    nev: usize,
+    max_applications: usize,
+    first_shift: Option<f64>,
 ) -> Result<PencilSolution> {
     if nev == 0 {
         return Err(Error::option("--modes", "--modes must be at least 1"));
@@ -493,120 +699,92 @@ pub fn solve_pencil(
     let mut g = kg.clone();
     g.values.iter_mut().for_each(|a| *a = -*a);
     let t0 = Instant::now();
-    let own;
     let (fk, own_factorizations) = match k_factor {
         Some(f) => (f, 0),
-        None => {
-            own = factor_positive_definite(sym, k)?;
-            (&own, 1)
-        }
+        None => (factor_positive_definite(sym, k)?, 1),
     };
     let mut factor_err = fk.probe_residual;
-    let t_factor = t0.elapsed().as_secs_f64();
+    let t_factor_k = t0.elapsed().as_secs_f64();
+    let mut t_shift = 0.0;
     let t1 = Instant::now();
-    let empty = |applications, times| no_buckling(n, applications, own_factorizations, factor_err, times);
+    let empty = |applications, factor_err, times| no_buckling(n, applications, own_factorizations, factor_err, times);
     if g.values.iter().all(|&x| x == 0.0) {
-        return Ok(empty(0, [t_factor, 0.0, 0.0]));
+        return Ok(empty(0, factor_err, [t_factor_k, 0.0, 0.0]));
     }
-    let want = nev + 1; // one more, to place the Sturm point between factors
+    let want = nev + 1; // one more, to place the shift between factors
     let b = want.clamp(3, 6).min(n);
-    let nb = (2 * want + 4 * b).max(40).min(n);
-    let keep = (want + b).min(nb / 2).max(1);
-    let mut basis = Basis {
-        k,
-        g: &g,
-        v: Mat::zeros(n, nb),
-        kv: Mat::zeros(n, nb),
-        gv: Mat::zeros(n, nb),
-        cols: 0,
+    let mut it = Iteration {
+        basis: Basis {
+            k,
+            g: &g,
+            v: Mat::zeros(n, 0),
+            kv: Mat::zeros(n, 0),
+            gv: Mat::zeros(n, 0),
+            cols: 0,
+        },
+        rng: Rng(0x5eed_b0c1_1e00_0001),
+        prev: Vec::new(),
+        applications: 0,
+        b,
+        max_applications,
     };
-    let mut rng = Rng(0x5eed_b0c1_1e00_0001);
-    // Start block: Op applied to random vectors (in the range of Op: no null-space part).
-    let mut w = Mat::from_fn(n, b, |_, _| rng.next());
+    it.reserve(want);
+    // Start block: K⁻¹G applied to random vectors (in the range of G: no null-space part).
+    let mut w = Mat::from_fn(n, b, |_, _| it.rng.next());
     let mut gw = Mat::zeros(n, b);
     g.mul_block(w.as_ref(), gw.as_mut());
     fk.solve_in_place(gw.as_mut());
     w = gw;
-    let mut applications = b;
-    basis.append(w.as_ref(), &mut rng);
-    let mut converged: Vec<bool>;
-    let mut prev: Vec<f64> = Vec::new();
-    let (vals, s) = loop {
-        let (vals, s) = basis.ritz()?;
-        let c = basis.cols;
-        let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
-        // Ritz vectors to test and expand: the wanted (positive) ones first.
-        let n_test = want.min(c);
-        let pos = vals.iter().take(n_test).filter(|&&m| m > ZERO_MU * top).count();
-        let cand = (pos.max(1) + b).min(c);
-        let y = combine(&basis.v, &s, c, cand);
-        let ky = combine(&basis.kv, &s, c, cand);
-        let gy = combine(&basis.gv, &s, c, cand);
-        let eta = ritz_backward_errors(k, &g, &vals, &y, &ky, &gy);
-        converged = (0..cand)
-            .map(|j| {
-                let still = prev.get(j).is_some_and(|&p: &f64| (p - vals[j]).abs() <= 1e-14 * top);
-                eta[j] <= TOL || (eta[j] <= VERIFY_TOL && still)
-            })
-            .collect();
-        log::debug!(
-            "buckling: basis {c}, μ {:?}, backward errors {:?}",
-            &vals[..cand.min(4)],
-            &eta[..cand.min(4)]
-        );
-        let prev_before = std::mem::replace(&mut prev, vals.clone());
-        let all_wanted = (0..pos.min(want)).all(|j| converged[j]);
-        // Done: the wanted positive ones converged and, when fewer than wanted are positive,
-        // the first non-positive one (the top of the null space) converged too.
-        // (At the null space of K_σ the backward error of a Ritz pair need not fall: its settled
-        // value is what is asked there.)
-        let boundary_ok = pos >= want
-            || converged.get(pos).copied().unwrap_or(true)
-            || prev_settled(&prev_before, &vals, pos, top)
-            || c == n;
-        if (all_wanted && boundary_ok) || c == n {
-            break (vals, s);
-        }
-        if applications > max_applications {
-            return Err(Error::Factorization(format!(
-                "buckling: no convergence after {applications} operator applications ({} of {} load factors converged)",
-                converged.iter().take(pos.min(want)).filter(|&&x| x).count(),
-                pos.min(want)
-            )));
-        }
-        // Expand with Op applied to the best unconverged Ritz vectors.
-        let pick: Vec<usize> = (0..cand).filter(|&j| !converged[j]).take(b).collect();
-        let mut next = Mat::from_fn(n, pick.len(), |i, j| gy[(i, pick[j])]);
-        fk.solve_in_place(next.as_mut());
-        applications += pick.len();
-        if basis.cols + next.ncols() > nb {
-            basis.restart(s.as_ref(), keep.min(c));
-        }
-        if basis.append(next.as_ref(), &mut rng) == 0 && basis.cols < nb {
-            // The space is exhausted (invariant subspace): random directions carry on.
-            let rnd = Mat::from_fn(n, 1, |_, _| rng.next());
-            if basis.append(rnd.as_ref(), &mut rng) == 0 {
-                break (vals, s);
-            }
-        }
-    };
-    let c = basis.cols;
-    let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
-    let pos: Vec<usize> = (0..c.min(want)).filter(|&j| vals[j] > ZERO_MU * top).collect();
-    let t_solve = t1.elapsed().as_secs_f64();
-    if pos.is_empty() {
-        return Ok(empty(applications, [t_factor, t_solve, 0.0]));
+    it.applications = b;
+    it.basis.append(w.as_ref());
+    // Estimates of the lowest factors with the factor of K (upper bounds: Ritz values).
+    let (vals, _) = it.run(&fk, want, Goal::Estimates)?;
+    drop(fk);
+    let est = positive_factors(&vals, it.basis.cols, want);
+    log::debug!("buckling: estimates {est:?} after {} applications", it.applications);
+    if est.is_empty() {
+        return Ok(empty(
+            it.applications,
+            factor_err,
+            [t_factor_k, t1.elapsed().as_secs_f64(), 0.0],
+        ));
     }
+    // The shifted iteration: the factor of K − σG serves both the operator and the count.
+    let mut sigma = first_shift.unwrap_or_else(|| shift_from_estimates(&est, nev));
+    let mut shifts = 0;
+    let (count, s, computed) = loop {
+        let t = Instant::now();
+        let f = Factor::new_shifted(sym.clone(), k, Some((&g, sigma)))?;
+        t_shift += t.elapsed().as_secs_f64();
+        shifts += 1;
+        factor_err = factor_err.max(f.probe_residual);
+        let count = f.negative_pivots;
+        let target = if count >= nev { count } else { want };
+        let (vals, s) = it.run(&f, target, Goal::Converged)?;
+        let computed = positive_factors(&vals, it.basis.cols, target);
+        log::debug!("buckling: σ = {sigma:e}, count {count}, computed {computed:?}");
+        // Fewer below σ than asked while more were found above: a new point above them.
+        if count >= nev || computed.len() <= count || shifts >= MAX_SHIFTS {
+            break (count, s, computed);
+        }
+        sigma = point_above(&computed, nev.min(computed.len()));
+    };
+    let t_solve = t1.elapsed().as_secs_f64() - t_shift;
     let t2 = Instant::now();
-    let report_n = pos.len().min(nev);
-    let lambda: Vec<f64> = pos.iter().take(report_n).map(|&j| 1.0 / vals[j]).collect();
-    let vectors = combine(&basis.v, &s, c, report_n);
+    let report_n = computed.len().min(nev);
+    let lambda: Vec<f64> = computed[..report_n].to_vec();
+    let vectors = combine(&it.basis.v, &s, it.basis.cols, report_n);
     // Residuals of K φ − λ G φ (= Kφ + λK_σφ).
     let backward_error = backward_errors(k, &g, &lambda, vectors.as_ref());
     let rel_residual = relative_residuals(k, &g, &lambda, &vectors);
-    let computed: Vec<f64> = pos.iter().map(|&j| 1.0 / vals[j]).collect();
-    let (sturm, sturm_err) = sturm_check(sym, k, &g, &computed, report_n)?;
-    factor_err = factor_err.max(sturm_err);
+    // Found below the point: every positive factor computed.
+    let found = computed.iter().filter(|&&l| l < sigma).count();
+    let sturm = BucklingSturm {
+        point: sigma,
+        count,
+        found,
+        complete: count == found,
+    };
     Ok(PencilSolution {
         lambda,
         vectors,
@@ -614,10 +792,10 @@ pub fn solve_pencil(
         backward_error,
         sturm,
         no_buckling: false,
-        applications,
-        factorizations: own_factorizations + 1,
+        applications: it.applications,
+        factorizations: own_factorizations + shifts,
         factor_backward_error: factor_err,
-        times: [t_factor, t_solve, t2.elapsed().as_secs_f64()],
+        times: [t_factor_k + t_shift, t_solve, t2.elapsed().as_secs_f64()],
     })
 }
 
@@ -675,7 +853,7 @@ pub fn solve(
         sys.k(),
         &kg,
         sys.symbolic()?,
-        Some(&fk),
+        Some(fk),
         opts.modes,
         opts.max_applications,
     )

@@ -8,6 +8,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod buckling_shift;
 mod couplings;
 mod determinism;
 mod elements;

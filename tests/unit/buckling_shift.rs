@@ -1,0 +1,158 @@
+//! The buckling solver's spectral shift: the factor of `K + σK_σ` serves the iteration and the
+//! Sturm count, σ placed from estimates made with the static factor of K. When the count at σ
+//! shows fewer factors than asked, the solver moves σ above the factors it found and factors
+//! again; when it shows more, it finds them all and reports the lowest. Whatever the first
+//! shift, the factors are the same, and they match a dense solve of the pencil.
+//!
+//! Reference: the dense symmetric-definite problem `G φ = μ K φ` (`G = −K_σ`) reduced with the
+//! Cholesky factor of K, `L⁻¹ G L⁻ᵀ`, solved by faer's dense symmetric eigensolver; λ = 1/μ.
+//! Tolerance 1e-9 relative: both are backward stable, the pencil's condition (slender beam,
+//! λ spread over a factor 25) costs a few digits of the 1e-16 rounding.
+
+use faer::Mat;
+use vibrofem::analysis::buckling::{PencilSolution, solve_pencil, solve_pencil_from};
+use vibrofem::analysis::prestress::InitialStress;
+use vibrofem::analysis::statics::{self, Load};
+use vibrofem::dof::DofMask;
+use vibrofem::linalg::sparse::SymMatrix;
+use vibrofem::model::{BeamPart, Model, ModelSpec, Orientation};
+use vibrofem::section::BeamSection;
+use vibrofem::system::{System, SystemOptions};
+
+const UX: DofMask = 1;
+const UY: DofMask = 2;
+const UZ: DofMask = 4;
+const RX: DofMask = 8;
+const RZ: DofMask = 32;
+
+/// A pinned–pinned steel column, L = 1 m, 10 × 40 mm, 24 line2 beams, in the x–z plane, under
+/// a unit axial compression: the system and its `K_σ`.
+fn column() -> (System, SymMatrix) {
+    let mesh = vibrofem::mesh::parametric::i_beam_line(1.0, 24).unwrap();
+    let spec = ModelSpec {
+        beams: vec![BeamPart {
+            group: "beam".into(),
+            section: BeamSection::rectangle(0.04, 0.01),
+            orientation: Orientation::Vector([0.0, 1.0, 0.0]),
+            material: None,
+        }],
+        fixes: vec![
+            ("beam".to_string(), UY | RX | RZ),
+            ("end_a".to_string(), UX | UZ),
+            ("end_b".to_string(), UZ),
+        ],
+        ..Default::default()
+    };
+    let model = Model::build(&mesh, &spec, "column").unwrap();
+    let sys = System::build(
+        model,
+        &SystemOptions {
+            mass: false,
+            ..Default::default()
+        },
+        "column",
+    )
+    .unwrap();
+    let loads = vec![Load::Force {
+        group: "end_b".into(),
+        force: [-1.0, 0.0, 0.0],
+    }];
+    let st = statics::solve(&sys, &mesh, &[loads]).unwrap();
+    let pre = InitialStress::from_displacements(sys.model(), &st.u[0]).unwrap();
+    let kg = pre.geometric_stiffness(&sys).unwrap();
+    (sys, kg)
+}
+
+fn dense(a: &SymMatrix) -> Mat<f64> {
+    let n = a.n();
+    let mut d = Mat::zeros(n, n);
+    for j in 0..n {
+        let mut e = vec![0.0; n];
+        e[j] = 1.0;
+        let col = a.mul_vec(&e);
+        for i in 0..n {
+            d[(i, j)] = col[i];
+        }
+    }
+    d
+}
+
+/// The positive load factors of the pencil, ascending, from a dense solve.
+fn dense_factors(k: &SymMatrix, kg: &SymMatrix) -> Vec<f64> {
+    let kd = dense(k);
+    let gd = -dense(kg);
+    let l = kd.llt(faer::Side::Lower).unwrap();
+    let lm = l.L().to_owned();
+    let n = kd.nrows();
+    // C = L⁻¹ G L⁻ᵀ by two triangular solves.
+    let mut x = gd.clone();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(lm.as_ref(), x.as_mut(), faer::Par::Seq);
+    let mut xt = x.transpose().to_owned();
+    faer::linalg::triangular_solve::solve_lower_triangular_in_place(lm.as_ref(), xt.as_mut(), faer::Par::Seq);
+    let c = Mat::from_fn(n, n, |i, j| 0.5 * (xt[(i, j)] + xt[(j, i)]));
+    let e = c.self_adjoint_eigen(faer::Side::Lower).unwrap();
+    let top = (0..n).map(|i| e.S()[i].abs()).fold(0.0, f64::max);
+    let mut lam: Vec<f64> = (0..n)
+        .map(|i| e.S()[i])
+        .filter(|&m| m > 1e-10 * top)
+        .map(|m| 1.0 / m)
+        .collect();
+    lam.sort_by(f64::total_cmp);
+    lam
+}
+
+fn check(sol: &PencilSolution, reference: &[f64], nev: usize, what: &str) {
+    assert_eq!(sol.lambda.len(), nev, "{what}: {:?}", sol.lambda);
+    for (j, (&l, &r)) in sol.lambda.iter().zip(reference).enumerate() {
+        assert!((l / r - 1.0).abs() < 1e-9, "{what}: λ{} = {l} against {r}", j + 1);
+    }
+    assert!(sol.sturm.complete, "{what}: {:?}", sol.sturm);
+    assert!(
+        sol.backward_error.iter().all(|&e| e < 1e-10),
+        "{what}: {:?}",
+        sol.backward_error
+    );
+}
+
+#[test]
+fn buckling_shift_placed_from_estimates_counts_exactly_the_request() {
+    let (sys, kg) = column();
+    let reference = dense_factors(sys.k(), &kg);
+    let nev = 3;
+    let sol = solve_pencil(sys.k(), &kg, sys.symbolic().unwrap(), None, nev, 20_000).unwrap();
+    check(&sol, &reference, nev, "default shift");
+    // One factorisation of K (estimates) and one of K + σK_σ (iteration and count).
+    assert_eq!(sol.factorizations, 2);
+    assert_eq!(sol.sturm.count, nev, "{:?}", sol.sturm);
+    assert!(sol.sturm.point > reference[nev - 1] && sol.sturm.point < reference[nev]);
+}
+
+#[test]
+fn buckling_shift_below_the_request_moves_up_and_factors_again() {
+    let (sys, kg) = column();
+    let reference = dense_factors(sys.k(), &kg);
+    let nev = 3;
+    // σ between λ1 and λ2: the count (1) shows fewer factors than asked.
+    let first = 0.5 * (reference[0] + reference[1]);
+    let sol = solve_pencil_from(sys.k(), &kg, sys.symbolic().unwrap(), None, nev, 20_000, Some(first)).unwrap();
+    check(&sol, &reference, nev, "shift below");
+    assert_eq!(
+        sol.factorizations, 3,
+        "K, the first shift and the one above the request"
+    );
+    assert_eq!(sol.sturm.count, nev, "{:?}", sol.sturm);
+    assert!(sol.sturm.point > reference[nev - 1] && sol.sturm.point < reference[nev]);
+}
+
+#[test]
+fn buckling_shift_above_the_request_finds_every_factor_below_it() {
+    let (sys, kg) = column();
+    let reference = dense_factors(sys.k(), &kg);
+    let nev = 2;
+    // σ between λ5 and λ6: five factors below it, all found, the lowest two reported.
+    let first = 0.5 * (reference[4] + reference[5]);
+    let sol = solve_pencil_from(sys.k(), &kg, sys.symbolic().unwrap(), None, nev, 20_000, Some(first)).unwrap();
+    check(&sol, &reference, nev, "shift above");
+    assert_eq!(sol.factorizations, 2);
+    assert_eq!((sol.sturm.count, sol.sturm.found), (5, 5), "{:?}", sol.sturm);
+}
