@@ -16,7 +16,7 @@ fn small_shell() -> Design {
     d.leaf.divisions = [12, 4, 1];
     d.leaf.thickness = 0.0096;
     d.tune = "none".into();
-    d.drive.transient_s = 0.1;
+    d.drive.transient_s = 0.2;
     d.search.enabled = false;
     let full = EnvelopeDesign::default();
     d.envelope = EnvelopeDesign {
@@ -44,23 +44,19 @@ fn envelope_with(d: &Design, reduced: bool, tol: f64) -> EnvelopeResult {
 }
 
 fn rel(a: f64, b: f64) -> f64 {
-    let r = (a - b).abs() / a.abs().max(b.abs()).max(1e-300);
-    if r > 0.0 {
-        eprintln!("relative difference {r:.2e}");
-    }
-    r
+    (a - b).abs() / a.abs().max(b.abs()).max(1e-300)
 }
 
 /// Reduced against full: the checks' envelopes (min, nominal, max) and every run's values agree
 /// to `TOL`.
 ///
 /// Why 1e-6: a reduced run is accepted when every mode it uses has a backward error
-/// η ≤ `reduced_tol` (1e-9): the pair is exact for K and M perturbed by η relative to |K|, |M|.
+/// η ≤ `reduced_tol` (1e-7): the pair is exact for K and M perturbed by η relative to |K|, |M|.
 /// The modes' frequencies then move by about η × ‖|K||x|‖/(λ‖Mx‖) (the table's shells make the
 /// first factor up to ~1e3 times the second), and the static part of the response is exact in
 /// the basis; the response near resonance amplifies a frequency error by about 1/(2ζ) (ζ ≈ 2 %:
-/// × 25). That bounds the values' relative change by ~1e-9 × 1e3 × 25 ≈ 3e-5; measured, the
-/// largest difference is far below (the basis carries K0⁻¹B and K0⁻¹MK0⁻¹B, whose error is
+/// × 25). That bounds the values' relative change by ~1e-7 × 1e3 × 25 ≈ 3e-3 at worst; measured
+/// (the built-in design: 6.6e-10 on the checks' envelopes, with η ≤ 9.2e-9), it is far below (the basis carries K0⁻¹B and K0⁻¹MK0⁻¹B, whose error is
 /// second order in λ/λ_c), and 1e-6 leaves a margin over it while any lost mode or a wrong
 /// static correction (per cent changes) fails.
 const TOL: f64 = 1e-6;
