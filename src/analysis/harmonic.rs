@@ -362,6 +362,84 @@ pub fn superpose_coupled(
     let q: Vec<c64> = (0..k)
         .map(|j| (0..n).fold(c64::new(0.0, 0.0), |s, i| s + load[i] * phi[(i, j)]))
         .collect();
+    let x = coupled_modal(modes, &q, omega, modal_damping)?;
+    let mut u = if residual {
+        static_correction(sys, modes, &q, load)?
+    } else {
+        vec![c64::new(0.0, 0.0); n]
+    };
+    add_modes(&mut u, phi, &x);
+    Ok(u)
+}
+
+/// [`superpose_coupled`] with the static correction from a given static solution
+/// `static_solution` = K⁻¹F̂ (a model without rigid-body modes: the shift is 0), instead of a
+/// factorisation of K: û = Σ_j φ_j x_j + K⁻¹F̂ − Σ_j φ_j q_j/λ_j. For a reduced model whose static
+/// solve is exact in its basis (see `app::design::reduced`).
+pub fn superpose_coupled_given(
+    sys: &System,
+    modes: &ModalRun,
+    load: &[c64],
+    omega: f64,
+    modal_damping: &nalgebra::DMatrix<f64>,
+    static_solution: Vec<c64>,
+) -> Result<Vec<c64>> {
+    let n = check_request(sys, load, &[omega], &Damping::Ratio(0.0))?;
+    let k = modal_damping.nrows();
+    let phi = &modes.vectors;
+    if modal_damping.ncols() != k || k > phi.ncols() || phi.nrows() != n || static_solution.len() != n {
+        return Err(Error::param(
+            "modal_damping",
+            format!(
+                "a {}×{} modal damping matrix for {} modes of {} rows and a static solution of {} (the system has \
+                 {n} free DOFs)",
+                modal_damping.nrows(),
+                modal_damping.ncols(),
+                phi.ncols(),
+                phi.nrows(),
+                static_solution.len()
+            ),
+        ));
+    }
+    if modes.report.n_rigid > 0 {
+        return Err(Error::param(
+            "modes",
+            "a given static solution needs a model without rigid-body modes (K not singular)",
+        ));
+    }
+    let q: Vec<c64> = (0..k)
+        .map(|j| (0..n).fold(c64::new(0.0, 0.0), |s, i| s + load[i] * phi[(i, j)]))
+        .collect();
+    let x = coupled_modal(modes, &q, omega, modal_damping)?;
+    let mut u = static_solution;
+    for (j, &qj) in q.iter().enumerate() {
+        let c = qj / modes.lambda[j];
+        for (i, ui) in u.iter_mut().enumerate() {
+            *ui -= c * phi[(i, j)];
+        }
+    }
+    add_modes(&mut u, phi, &x);
+    Ok(u)
+}
+
+/// u += Σ_j x_j φ_j.
+fn add_modes(u: &mut [c64], phi: &faer::Mat<f64>, x: &nalgebra::DVector<nalgebra::Complex<f64>>) {
+    for j in 0..x.len() {
+        let c = c64::new(x[j].re, x[j].im);
+        for (i, ui) in u.iter_mut().enumerate() {
+            *ui += c * phi[(i, j)];
+        }
+    }
+}
+
+/// The modal coordinates of a coupled superposition: (Λ − ω²I + iωC_r) x = q.
+fn coupled_modal(
+    modes: &ModalRun,
+    q: &[c64],
+    omega: f64,
+    modal_damping: &nalgebra::DMatrix<f64>,
+) -> Result<nalgebra::DVector<nalgebra::Complex<f64>>> {
+    let k = q.len();
     let a = nalgebra::DMatrix::from_fn(k, k, |i, j| {
         let diag = if i == j { modes.lambda[i] - omega * omega } else { 0.0 };
         nalgebra::Complex::new(diag, omega * modal_damping[(i, j)])
@@ -375,18 +453,7 @@ pub fn superpose_coupled(
             omega / (2.0 * std::f64::consts::PI)
         ),
     })?;
-    let mut u = if residual {
-        static_correction(sys, modes, &q, load)?
-    } else {
-        vec![c64::new(0.0, 0.0); n]
-    };
-    for j in 0..k {
-        let c = c64::new(x[j].re, x[j].im);
-        for (i, ui) in u.iter_mut().enumerate() {
-            *ui += c * phi[(i, j)];
-        }
-    }
-    Ok(u)
+    Ok(x)
 }
 
 /// Solve (K − σM) x = f for a complex f with the real LDLᵀ on the system's ordering (real and

@@ -21,6 +21,8 @@ fn small() -> Design {
         load_cases: vec![full.load_cases[1].clone(), full.load_cases[2].clone()],
         tolerances: vec![full.tolerances[0].clone(), full.tolerances[4].clone()],
         fd_step: 0.1,
+        reduced: false,
+        reduced_tol: full.reduced_tol,
     };
     d
 }

@@ -15,6 +15,7 @@ mod design_fatigue;
 mod design_inputs;
 mod design_machine;
 mod design_memo;
+mod design_reduced;
 mod design_startup3d;
 mod dynamics;
 mod export_engine;

@@ -27,12 +27,14 @@
 
 use super::chain::run_design;
 use super::file::{Design, bad};
+use super::reduced::{Plan, within};
 use super::results::{Check, DesignReport};
 use crate::Result;
 use crate::app::report::{Block, Cell, Column, Figure, Section, Table};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// `[envelope]` of a design file.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -46,6 +48,11 @@ pub struct EnvelopeDesign {
     pub tolerances: Vec<Tolerance>,
     /// Finite-difference step of the sensitivities, as a fraction of each band's `plus`.
     pub fd_step: f64,
+    /// Run the 3D machine of the envelope's points (all but the nominal one) in a reduced
+    /// (Ritz) basis per geometry and load case ([`super::reduced`]); `false`: every run full.
+    pub reduced: bool,
+    /// Bar on a reduced run's backward errors (every mode it uses); over it, the run is full.
+    pub reduced_tol: f64,
 }
 
 /// A load case: design keys set to values (`set = { "masses.load" = 0.0 }`).
@@ -128,6 +135,8 @@ impl Default for EnvelopeDesign {
                 ),
             ],
             fd_step: 0.1,
+            reduced: true,
+            reduced_tol: super::reduced::DEFAULT_TOL,
         }
     }
 }
@@ -189,6 +198,12 @@ impl EnvelopeDesign {
             return Err(bad(
                 "envelope.fd_step",
                 format!("must be above 0 and at most 1, got {}", self.fd_step),
+            ));
+        }
+        if !(self.reduced_tol.is_finite() && self.reduced_tol > 0.0 && self.reduced_tol < 1.0) {
+            return Err(bad(
+                "envelope.reduced_tol",
+                format!("must be above 0 and below 1, got {}", self.reduced_tol),
             ));
         }
         let mut base = to_value(d)?;
@@ -407,6 +422,17 @@ pub struct EnvelopeResult {
     pub memo_hits: usize,
     /// Misses.
     pub memo_misses: usize,
+    /// 3D machine runs of the points (the nominal one aside) made in the reduced basis.
+    pub reduced_runs: usize,
+    /// Those made on the full model (reduction off, a rigid table's aside: no basis, or over
+    /// the bar).
+    pub full_runs: usize,
+    /// Of the full runs, those whose reduced run was over the bar.
+    pub reduced_fallbacks: usize,
+    /// Largest backward error of the modes of an accepted reduced run.
+    pub reduced_max_backward_error: f64,
+    /// The bar (`envelope.reduced_tol`).
+    pub reduced_tol: f64,
 }
 
 fn by_id_checks<S: serde::Serializer>(c: &[CheckEnvelope], ser: S) -> std::result::Result<S::Ok, S::Error> {
@@ -460,12 +486,44 @@ fn run_point(e: &EnvelopeDesign, d: Design, label: String, case: &str, t: &[f64]
 
 /// [`run_point`] over independent `points` (design, label, band position) of load case `case`,
 /// on the worker threads (the FE memo is shared; each run is whole), in the given order.
+/// The reduced plan of the calling thread ([`super::reduced::current`]) goes with each run.
 fn run_points(e: &EnvelopeDesign, points: Vec<(Design, String, Vec<f64>)>, case: &str) -> Result<Vec<EnvelopeRun>> {
     use rayon::prelude::*;
+    let plan = super::reduced::current();
     points
         .into_par_iter()
-        .map(|(d, label, t)| run_point(e, d, label, case, &t))
+        .map(|(d, label, t)| super::reduced::within(plan.as_ref(), || run_point(e, d, label, case, &t)))
         .collect()
+}
+
+/// The reduced plan of an envelope about `built`: a basis per machine base of the load cases
+/// (and of the as-built design), built in parallel, unless `envelope.reduced` is off.
+fn reduced_plan(e: &EnvelopeDesign, built: &Design, progress: &dyn Fn(&str)) -> Result<Arc<Plan>> {
+    use rayon::prelude::*;
+    let plan = Arc::new(Plan::new(e.reduced, e.reduced_tol));
+    if !e.reduced {
+        return Ok(plan);
+    }
+    let nt = e.tolerances.len();
+    let mut designs = vec![e.design_at(built, None, &vec![0.0; nt])?];
+    for ci in 0..e.load_cases.len() {
+        designs.push(e.design_at(built, Some(ci), &vec![0.0; nt])?);
+    }
+    let mut keys = vec![];
+    designs.retain(|d| {
+        let k = super::machine::base_memo_key(d);
+        let new = !keys.contains(&k);
+        keys.push(k);
+        new
+    });
+    progress(&format!(
+        "envelope: reduced bases of the 3D machine ({} geometries and loads, in parallel)",
+        designs.len()
+    ));
+    designs
+        .par_iter()
+        .try_for_each(|d| super::machine::prepare_basis(d, &plan))?;
+    Ok(plan)
 }
 
 /// The corner sign patterns of the checks' margins: per check with a gradient, the corner
@@ -541,9 +599,10 @@ pub fn run_plan(
         "nominal",
         &vec![0.0; nt],
     )?;
+    let plan = reduced_plan(e, &built, progress)?;
     let (sens, fd_runs) = match given {
         Some(_) => (vec![], vec![]),
-        None => sensitivities(e, &built, &nominal, progress)?,
+        None => within(Some(&plan), || sensitivities(e, &built, &nominal, progress))?,
     };
     let grad: Vec<Vec<f64>> = nominal
         .checks
@@ -554,7 +613,7 @@ pub fn run_plan(
     let mut runs = vec![nominal];
     runs.extend(fd_runs);
     for ci in 0..e.load_cases.len() {
-        runs.extend(corners(e, &built, ci, &patterns, progress)?);
+        runs.extend(within(Some(&plan), || corners(e, &built, ci, &patterns, progress))?);
     }
     let nominal_values = e.nominal_values(&built)?;
     let sensitivities = e
@@ -575,6 +634,7 @@ pub fn run_plan(
         })
         .collect();
     let (h1, m1) = super::cache::stats();
+    let counts = plan.stats();
     Ok(EnvelopeResult {
         method: format!(
             "vertex method: the nominal point, {} forward differences at {} of each band, then per load case \
@@ -599,8 +659,17 @@ pub fn run_plan(
         seconds: t0.elapsed().as_secs_f64(),
         memo_hits: h1 - h0,
         memo_misses: m1 - m0,
+        reduced_runs: counts.reduced_runs,
+        full_runs: counts.full_runs,
+        reduced_fallbacks: counts.fallbacks,
+        reduced_max_backward_error: counts.max_backward_error,
+        reduced_tol: e.reduced_tol,
     })
 }
+
+/// A change of a check's margin (a fraction of its limit) below which a forward difference
+/// counts as none.
+const MARGIN_NOISE: f64 = 1e-7;
 
 /// One forward difference per band at the nominal point: (∂value/∂p, ∂margin/∂p) per check id,
 /// and the runs.
@@ -641,7 +710,11 @@ fn sensitivities(
         let dm = margins(&run.checks)
             .into_iter()
             .map(|(k, m)| {
-                let g = (m - m0.get(&k).copied().unwrap_or(f64::NAN)) / step;
+                let dm = m - m0.get(&k).copied().unwrap_or(f64::NAN);
+                // A margin change below MARGIN_NOISE is no direction: a reduced run carries
+                // rounding of that order (backward errors up to `reduced_tol`), where the full run
+                // of an insensitive check gives exactly 0.
+                let g = if dm.abs() <= MARGIN_NOISE { 0.0 } else { dm / step };
                 (k, if g.is_finite() { g } else { 0.0 })
             })
             .collect();
@@ -755,6 +828,21 @@ fn aggregate(runs: &[EnvelopeRun]) -> Vec<CheckEnvelope> {
         .collect()
 }
 
+/// How the envelope's 3D machine runs were made, in words.
+fn reduced_words(e: &EnvelopeResult) -> String {
+    if e.reduced_runs == 0 && e.full_runs == 0 {
+        return "3D machine runs: all of a rigid table (12 DOFs, no reduced basis)".into();
+    }
+    if e.reduced_runs == 0 && e.reduced_fallbacks == 0 {
+        return format!("3D machine runs: {} on the full model", e.full_runs);
+    }
+    format!(
+        "3D machine runs: {} in the reduced basis (largest backward error of their modes {:.1e}, bar {:.0e}), {} on \
+         the full model ({} over the bar)",
+        e.reduced_runs, e.reduced_max_backward_error, e.reduced_tol, e.full_runs, e.reduced_fallbacks
+    )
+}
+
 /// The envelope and the sensitivities as report sections (the chart `tuning_chart.svg` beside
 /// the report when written).
 pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
@@ -764,12 +852,13 @@ pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
         blocks: vec![],
     };
     env.blocks.push(Block::Text(format!(
-        "load cases: {}; {}; {:.1} s (FE parts memoised: {} reused, {} computed)",
+        "load cases: {}; {}; {:.1} s (FE parts memoised: {} reused, {} computed); {}",
         e.load_cases.join(", "),
         e.method,
         e.seconds,
         e.memo_hits,
-        e.memo_misses
+        e.memo_misses,
+        reduced_words(e)
     )));
     let pct = |value: f64| Cell::Pct { value, decimals: 1 };
     env.blocks.push(Block::Table(Table {

@@ -34,6 +34,7 @@
 
 use super::file::{Design, bad};
 use super::parts::{coil_stiffness, leaf_end_stiffness, leaf_matrix, table_parts};
+use super::reduced;
 use crate::analysis::harmonic;
 use crate::analysis::modal::{ModalParams, ModalRun, ModalTarget};
 use crate::dof::DofMap;
@@ -264,18 +265,114 @@ pub fn analyse(d: &Design, h: f64) -> Result<MachineResult> {
     let rigid = d.machine.table_model == "rigid";
     let parts = condensed_parts(d, h)?;
     let key = base_key(d, rigid);
-    let base: std::sync::Arc<Base> = super::cache::get_or_large(key, || machine_base(d, &parts, rigid))?;
+    let plan = if rigid { None } else { reduced::current() };
+    let base: std::sync::Arc<Base> = super::cache::get_or_large(key.clone(), || machine_base(d, &parts, rigid))?;
     let springs = machine_springs(d, &parts, &base.layout, rigid);
     let (mut sys, k0) = base.take()?;
-    set_stiffness(d, &base, &springs, &mut sys, &k0, rigid)?;
-    let out = analyse_on(d, &parts, &base, &springs, &sys, rigid);
+    let out = set_stiffness(d, &base, &springs, &mut sys, &k0, rigid)
+        .and_then(|()| match plan.as_deref() {
+            Some(p) => reduced_run(d, p, &key, &sys, &k0),
+            None => Ok(None),
+        })
+        .and_then(|pre| analyse_on(d, &parts, &base, &springs, &sys, rigid, pre));
     base.give_back(sys, k0);
     out
 }
 
+/// The run of `d` in its base's reduced basis under `plan` ([`super::reduced`]), if the plan
+/// has a basis for the base `key` and every mode the run uses passes the plan's bar; `None`:
+/// run the full model (counted).
+fn reduced_run(
+    d: &Design,
+    plan: &reduced::Plan,
+    key: &str,
+    sys: &System,
+    k0: &SymMatrix,
+) -> Result<Option<reduced::ReducedRun>> {
+    let Some(basis) = plan.basis(key) else {
+        plan.count(None, false);
+        return Ok(None);
+    };
+    let want = sys.n_free().min(SHELL_MODES);
+    let lambda_used = (TAU * d.machine.response_range * d.excitation_hz).powi(2);
+    match reduced::run_in(&basis, sys.k(), k0, sys.m()?, want, lambda_used, plan.tol)? {
+        Ok(r) => {
+            plan.count(Some(r.backward), false);
+            Ok(Some(r))
+        }
+        Err(_) => {
+            plan.count(None, true);
+            Ok(None)
+        }
+    }
+}
+
+/// Build the reduced basis of design `d`'s machine (leaves of its own thickness and the load
+/// case's masses as the reference) into `plan`, unless the table is rigid (12 DOFs: every run
+/// is full), reduction is off or the plan has one for its base already.
+pub fn prepare_basis(d: &Design, plan: &reduced::Plan) -> Result<()> {
+    d.machine.validate(d)?;
+    let rigid = d.machine.table_model == "rigid";
+    let key = base_key(d, rigid);
+    if rigid || !plan.enabled || plan.has(&key) {
+        return Ok(());
+    }
+    let parts = condensed_parts(d, d.leaf.thickness)?;
+    let base: std::sync::Arc<Base> = super::cache::get_or_large(key.clone(), || machine_base(d, &parts, rigid))?;
+    let springs = machine_springs(d, &parts, &base.layout, rigid);
+    let (mut sys, k0) = base.take()?;
+    let basis = set_stiffness(d, &base, &springs, &mut sys, &k0, rigid).and_then(|()| basis_on(d, &base, &sys, &k0));
+    base.give_back(sys, k0);
+    plan.insert(key, basis?);
+    Ok(())
+}
+
+/// The basis of [`super::reduced`] on `sys` (K0: its K; `k_base`: without leaves and magnets):
+/// the modes up to [`reduced::REFERENCE_RANGE`] × the response range, the attachment DOFs (the
+/// leaves' and magnets' end nodes and the reactive mass's centre) and the magnets' force pattern.
+fn basis_on(d: &Design, base: &Base, sys: &System, k_base: &SymMatrix) -> Result<reduced::Basis> {
+    let f_ref = reduced::REFERENCE_RANGE * d.machine.response_range * d.excitation_hz;
+    let run = crate::analysis::modal::solve(
+        sys,
+        &ModalParams {
+            target: ModalTarget::Band(0.0, f_ref),
+            ..Default::default()
+        },
+    )?;
+    if !run.report.complete {
+        return Err(Error::Verification("machine reduced basis: a mode was missed".into()));
+    }
+    let dofs = sys.dofs();
+    let mut att = vec![];
+    let reactive = base.layout.reactive as usize;
+    for &a in base.leaf_nodes.iter().chain(&base.magnet_nodes).chain([&reactive]) {
+        for c in 0..6 {
+            if let Some(e) = dofs.eq_of(a, c) {
+                if !att.contains(&e) {
+                    att.push(e);
+                }
+            }
+        }
+    }
+    let load = harmonic::load_vector(sys, &magnet_forces(d, &base.layout, 1)?)?;
+    let pattern: Vec<f64> = load.iter().map(|v| v.re).collect();
+    reduced::Basis::build(
+        k_base,
+        sys.k(),
+        sys.m()?,
+        sys.symbolic()?.clone(),
+        &run,
+        att,
+        &[pattern],
+    )
+}
+
+/// Modes a run of the machine with the shell table computes.
+const SHELL_MODES: usize = 24;
+
 /// The machine's modes on `sys` (24 with the shell table, 12 rigid), verified complete.
 fn machine_run(sys: &System, rigid: bool) -> Result<ModalRun> {
-    let want = sys.n_free().min(if rigid { 12 } else { 24 });
+    let want = sys.n_free().min(if rigid { 12 } else { SHELL_MODES });
     let run = crate::analysis::modal::solve(
         sys,
         &ModalParams {
@@ -289,7 +386,8 @@ fn machine_run(sys: &System, rigid: bool) -> Result<ModalRun> {
     Ok(run)
 }
 
-/// [`analyse`] on the system `sys` with the leaves and magnets in its K.
+/// [`analyse`] on the system `sys` with the leaves and magnets in its K: its modes and static
+/// solves from the full model, or from the reduced run `pre`.
 fn analyse_on(
     d: &Design,
     parts: &Condensed,
@@ -297,11 +395,15 @@ fn analyse_on(
     springs: &Springs,
     sys: &System,
     rigid: bool,
+    pre: Option<reduced::ReducedRun>,
 ) -> Result<MachineResult> {
     let layout = &base.layout;
     let masses = &base.masses;
     let (leaf_nodes, table_ref, magnet_nodes) = (&base.leaf_nodes, base.table_ref, &base.magnet_nodes);
-    let run = machine_run(sys, rigid)?;
+    let (run, statics) = match pre {
+        Some(p) => (p.run, Some(p.statics)),
+        None => (machine_run(sys, rigid)?, None),
+    };
     let dofs = sys.dofs().n_free;
     let f_resp = d.machine.response_range * d.excitation_hz;
     let n_use = run
@@ -316,7 +418,7 @@ fn analyse_on(
     let pots = dashpots(d, parts, layout, springs, leaf_nodes);
     let cr = modal_damping(&pots, &shapes);
     let omega = TAU * d.excitation_hz;
-    let full = forced_response(d, layout, sys, &run, &cr, 1)?;
+    let full = forced_response(d, layout, sys, &run, &cr, 1, statics.as_ref())?;
     let response: Vec<[Complex<f64>; 3]> = (0..layout.mesh.n_nodes())
         .map(|a| std::array::from_fn(|c| full[a][c]))
         .collect();
@@ -337,7 +439,7 @@ fn analyse_on(
     let mut floor = vec![floor_force(d, parts, layout, &full, 1)];
     for k in 2..=3u32 {
         if d.magnet_drive()?.cos_coefficient(k) != 0.0 {
-            let uk = forced_response(d, layout, sys, &run, &cr, k)?;
+            let uk = forced_response(d, layout, sys, &run, &cr, k, statics.as_ref())?;
             floor.push(floor_force(d, parts, layout, &uk, k));
         }
     }
@@ -1109,10 +1211,14 @@ fn forced_response(
     run: &ModalRun,
     cr: &DMatrix<f64>,
     k: u32,
+    statics: Option<&reduced::Statics>,
 ) -> Result<Vec<[Complex<f64>; 6]>> {
     let omega = k as f64 * TAU * d.excitation_hz;
     let load = harmonic::load_vector(sys, &magnet_forces(d, layout, k)?)?;
-    let u = harmonic::superpose_coupled(sys, run, &load, omega, cr, true)?;
+    let u = match statics {
+        Some(s) => harmonic::superpose_coupled_given(sys, run, &load, omega, cr, s.static_solve(&load))?,
+        None => harmonic::superpose_coupled(sys, run, &load, omega, cr, true)?,
+    };
     let nodes = harmonic::expand(sys, &u);
     Ok(nodes
         .iter()

@@ -29,6 +29,7 @@ pub mod job;
 pub mod machine;
 pub mod parts;
 pub mod plots;
+pub mod reduced;
 pub mod reference;
 pub mod report;
 pub mod results;
