@@ -189,16 +189,20 @@ class Pencil:
         GAMG on A needs aij). Read again rather than converted: PETSc 3.18's MatConvert of K
         after the P1 level's MatPtAP crashed (SEGV)."""
         kt = P.get("k_type", "baij" if self.mg is not None and self.bs > 1 else None)
-        if not kt or kt in self.K.getType():
+        if kt:
+            self.reread(kt)
+
+    def reread(self, kt: str) -> None:
+        """K's storage read again in type `kt` ("aij", "baij"), the current shift applied again."""
+        if self.K.getType() in (kt, "seq" + kt, "mpi" + kt):
             return
         rows, s = self.K.getOwnershipRange(), self.sigma
         self.K.destroy()
         trim()
         self.K = load("K.petsc", kt, rows=rows)
         self.sigma = 0.0
-        # M (aij, its own pattern) into K's blocks: entry by entry, every entry is in K's pattern.
-        self.K.axpy(-s, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        self.sigma = s
+        # M (aij) into K: entry by entry when the types differ; every entry is in K's pattern.
+        self.shift(s)
 
 
 def load_compact(name: str, bs: int):
@@ -565,6 +569,7 @@ def sturm_upper(pen: Pencil, lam_max: float, above) -> dict:
     if budget_mb <= 0:
         sturm["sturm_skipped"] = "no memory was left in the budget for a factorisation"
         return sturm
+    pen.reread("aij")  # MUMPS's Cholesky takes aij or sbaij, not baij
     pen.shift(upper_pt)
     pc = PETSc.PC().create(comm=COMM)
     pc.setOperators(pen.K)
