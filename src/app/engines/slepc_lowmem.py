@@ -354,6 +354,8 @@ def multigrid(pen: Pencil, R) -> None:
                 c.setArray(v.getArray()[keep])
                 cn.append(c)
             ac.setNearNullSpace(PETSc.NullSpace().create(vectors=orthonormal(cn), comm=COMM))
+            for v in near + cn:  # the coarse null space holds its own copies
+                v.destroy()
         pen.mg = (pi, ac)
         gamg = "st_mg_coarse_"
         fine = {"ksp_type": "chebyshev", "pc_type": "jacobi", "ksp_max_it": int(P.get("smooth_its", 1)),
@@ -622,6 +624,8 @@ def main() -> None:
     t = time.perf_counter()
     pen.shift(sigma)
     multigrid(pen, R)
+    for r in R:  # the rigid-body pairs (rigid_vecs) are kept; R itself is no longer needed
+        r.destroy()
     pen.compact()
     mark("shift", t)
     nr, nev = len(rigid_lam), int(P["nev"])
