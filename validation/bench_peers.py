@@ -17,7 +17,9 @@ process of the run):
 
 Sizes (label: h in mm): 20k: 40, 65k: 25, 120k: 20.3, 300k: 14.9, 1M: 9.4 (vibrofem alone at
 1M). Runs under ``--repeat-below`` seconds are repeated (``--repeat``, default 3) and the
-median is reported. Writes ``validation/out/bench_peers.json``, a log-log plot of wall time and
+median is reported. ``--lowmem`` compares the in-core and the low-memory paths instead (time
+per mode, memory per DOF; live up to ``--lowmem-live-up-to`` DOFs, from the runs logged in
+``validation/lowmem_results.json`` above). Writes ``validation/out/bench_peers.json``, a log-log plot of wall time and
 peak memory against DOFs (``validation/out/bench_peers.svg``, copied to ``docs/bench_peers.svg``
 with ``--readme``), and the markdown table; with ``--readme`` (or ``--docs``) the table replaces
 the block between ``<!-- bench_peers:begin -->`` and ``<!-- bench_peers:end -->`` in
@@ -279,13 +281,14 @@ def floor_table(rows: list) -> str:
     return "vibrofem against its floor (docs/solver-floor.md):\n\n" + "\n".join(lines)
 
 
-def plot(rows: list, path: str) -> bool:
+def plot(rows: list, path: str, tools=TOOLS, titles=("time (compared figure)", "peak memory")) -> bool:
     """Log-log plot of the compared time and the peak memory against DOFs, one line per tool,
     written as SVG by hand (no plotting package needed). False when there is nothing to plot."""
     import math
-    colors = {"vibrofem": "#1f77b4", "slepc": "#ff7f0e", "calculix": "#2ca02c", "skfem": "#d62728"}
+    colors = {"vibrofem": "#1f77b4", "slepc": "#ff7f0e", "calculix": "#2ca02c", "skfem": "#d62728",
+              "in-core": "#1f77b4", "low-memory": "#d62728"}
     series = {}
-    for tool in TOOLS:
+    for tool in tools:
         pts = [(row["dofs"], row["tools"][tool]) for row in rows
                if tool in row["tools"] and "wall_s" in row["tools"][tool]]
         if pts:
@@ -329,7 +332,7 @@ def plot(rows: list, path: str) -> bool:
             out.append(f'<text x="{x0 + L + 8}" y="{T + 16 + 15 * i}" font-size="12" fill="{c}">{tool}</text>')
         return out
 
-    body = panel(0, "time (compared figure)", "time [s]", 1) + panel(W, "peak memory", "peak RSS [MiB]", 2)
+    body = panel(0, titles[0], "time [s]", 1) + panel(W, titles[1], "peak RSS [MiB]", 2)
     with open(path, "w") as fh:
         fh.write(f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * W}" height="{H}" '
                  f'font-family="sans-serif">\n<rect width="100%" height="100%" fill="white"/>\n'
@@ -338,6 +341,77 @@ def plot(rows: list, path: str) -> bool:
 
 
 DOCS_PAGE = os.path.join("docs", "performance.md")
+LOWMEM_LOG = os.path.join(HERE, "lowmem_results.json")
+PATHS = ("in-core", "low-memory")
+
+
+def lowmem_live(mesh: str, path: str, args) -> dict:
+    """One run of `vibrofem modes MESH --modes 18 --solver direct|iterative --json` with the process
+    tree's resident memory summed (validation/lowmem_run.py's poller: vibrofem and its MPI rank)."""
+    import lowmem_run as LR
+    cmd = [args.vibrofem, "modes", mesh, "--modes", str(N_MODES), "--json", "--solver",
+           "direct" if path == "in-core" else "iterative",
+           "--material", ",".join(repr(float(x)) for x in STEEL)]
+    load = os.getloadavg()[0]
+    r = LR.run_polled(cmd, kill_above=args.lowmem_kill_above * 2 ** 30)
+    out = {"wall_s": r["wall_s"], "peak_bytes": r["tree_peak_bytes"], "ranks": 1, "loadavg": load,
+           "source": "live run"}
+    if r["returncode"]:
+        out["failed"] = r["stderr"][-500:]
+    return out
+
+
+def lowmem_table(rows: list) -> str:
+    """In-core against low-memory: wall time, time per elastic mode, peak memory, memory per DOF."""
+    lines = ["| DOFs | path | wall [s] | s per mode | peak [MiB] | bytes per DOF | load | source |",
+             "|---:|---|---:|---:|---:|---:|---:|---|"]
+    for row in rows:
+        for path in PATHS:
+            r = row["tools"].get(path)
+            if not r or "wall_s" not in r:
+                why = (r or {}).get("failed") or (r or {}).get("skipped") or "not run"
+                lines.append(f"| {row['dofs']:,} | {path} | – | – | – | – | – | {why} |")
+                continue
+            peak = r.get("peak_bytes") or 0
+            load = "–" if r.get("loadavg") is None else f"{r['loadavg']:.1f}"
+            lines.append(f"| {row['dofs']:,} | {path} | {r['wall_s']:.0f} | {r['wall_s'] / (N_MODES - 6):.1f} | "
+                         f"{peak / 2 ** 20:,.0f} | {peak / row['dofs']:,.0f} | {load} | {r.get('source', '')} |")
+    return "\n".join(lines)
+
+
+def lowmem_main(args) -> int:
+    """--lowmem: the in-core and the low-memory paths side by side (12 elastic modes, free-free),
+    live for the sizes up to --lowmem-live-up-to DOFs, from validation/lowmem_results.json (runs
+    logged by hand with /usr/bin/time -v and a process-tree sampler, docs/lowmem.md) above."""
+    with open(LOWMEM_LOG) as fh:
+        logged = json.load(fh)["runs"]
+    rows = []
+    for label in [x.strip() for x in args.sizes.split(",") if x.strip()]:
+        if label not in SIZES and label != "3M":
+            raise SystemExit(f"unknown size {label!r}; known: {', '.join(SIZES)}, 3M")
+        row = {"size": label, "tools": {}}
+        for path in PATHS:
+            log = [r for r in logged if r["size"] == label and r["path"] == path]
+            if log:
+                row["dofs"] = log[-1]["dofs"]
+                row["tools"][path] = log[-1]
+        if label in SIZES and row.get("dofs", 0) <= args.lowmem_live_up_to:
+            mesh = BP.make_mesh(label, SIZES[label])
+            row["dofs"] = dofs_of(mesh)
+            if row["dofs"] <= args.lowmem_live_up_to:
+                for path in PATHS:
+                    row["tools"][path] = lowmem_live(os.path.abspath(mesh), path, args)
+        if "dofs" in row:
+            rows.append(row)
+    text = lowmem_table(rows)
+    os.makedirs(OUT, exist_ok=True)
+    with open(os.path.join(OUT, "bench_lowmem.json"), "w") as fh:
+        json.dump({"rows": rows, "loadavg_at_end": os.getloadavg()}, fh, indent=1)
+    svg = os.path.join(OUT, "bench_lowmem.svg")
+    if plot(rows, svg, PATHS, ("wall time, 18 modes", "peak memory (process tree)")):
+        text += "\n\n![in-core and low-memory: time and memory against DOFs](bench_lowmem.svg)"
+    print(text)
+    return 0
 
 
 def update_readme(text: str) -> None:
@@ -368,7 +442,14 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=3600.0, help="seconds per run")
     ap.add_argument("--readme", "--docs", dest="readme", action="store_true",
                     help="write the table and the plot into docs/performance.md")
+    ap.add_argument("--lowmem", action="store_true",
+                    help="in-core against low-memory path (--solver direct|iterative): live up to "
+                         "--lowmem-live-up-to DOFs, logged runs (validation/lowmem_results.json) above")
+    ap.add_argument("--lowmem-live-up-to", type=int, default=200_000, help="DOFs run live with --lowmem")
+    ap.add_argument("--lowmem-kill-above", type=float, default=20.0, help="GiB: kill a live --lowmem run above")
     args = ap.parse_args(argv)
+    if args.lowmem:
+        return lowmem_main(args)
     if args.quick:
         args.sizes, args.repeat = "20k", 1
     tools = [t.strip() for t in args.tools.split(",") if t.strip()]

@@ -25,7 +25,7 @@ use super::slepc::{self, SlepcOptions};
 use super::{Before, Engine};
 use crate::analysis::modal::{self, ModalOptions, ModalRun, ModalTarget, Timings};
 use crate::linalg::eigen::{self, EigenParams, EigenSolution, SturmCheck};
-use crate::mesh::Mesh;
+use crate::mesh::{CellKind, Mesh};
 use crate::model::Model;
 use crate::system::{System, memory_budget, peak_memory, resident_memory};
 use crate::util::fmt::fmt_bytes;
@@ -178,6 +178,62 @@ pub fn rigid_motions(model: &Model) -> Vec<f64> {
     r
 }
 
+/// Mid-edge node `4 + k` of a tet10 cell lies on the edge `TET10_EDGES[k]` (gmsh order, as in
+/// src/fe/shape.rs).
+const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+
+/// For a model of tet10 solids only: per free equation the two equations it is interpolated from
+/// on the P1 space of the same mesh (`2n` entries): its own twice at a vertex DOF, the same
+/// component of the edge's two end nodes at a mid-edge DOF (−1 for an end that is not free).
+/// The script's coarse level (parents.bin). `None` for any other model, or a mesh where a node
+/// is a vertex of one cell and a mid-edge node of another (not conforming): then the script's
+/// multigrid is GAMG on the whole operator.
+pub fn vertex_parents(model: &Model) -> Option<Vec<i64>> {
+    if model.solids.is_empty()
+        || model.solids.iter().any(|s| s.kind != CellKind::Tet10)
+        || !model.shells.is_empty()
+        || !model.beams.is_empty()
+    {
+        return None;
+    }
+    let nn = model.nodes.len();
+    let mut parent = vec![[u32::MAX; 2]; nn];
+    let mut vertex = vec![false; nn];
+    for set in &model.solids {
+        for cell in set.conn.chunks_exact(10) {
+            for &v in &cell[..4] {
+                vertex[v as usize] = true;
+            }
+            for (k, [a, b]) in TET10_EDGES.iter().enumerate() {
+                let p = [cell[*a].min(cell[*b]), cell[*a].max(cell[*b])];
+                let m = &mut parent[cell[4 + k] as usize];
+                if m[0] == u32::MAX {
+                    *m = p;
+                } else if *m != p {
+                    return None;
+                }
+            }
+        }
+    }
+    if (0..nn).any(|a| vertex[a] && parent[a][0] != u32::MAX) {
+        return None;
+    }
+    let dofs = &model.dofs;
+    let mut out = Vec::with_capacity(2 * dofs.n_free);
+    for eq in 0..dofs.n_free {
+        let (a, c) = dofs.node_comp_of(eq);
+        match parent.get(a) {
+            Some(p) if p[0] != u32::MAX => {
+                for &q in p {
+                    out.push(dofs.eq_of(q as usize, c).map_or(-1, |e| e as i64));
+                }
+            }
+            _ => out.extend([eq as i64, eq as i64]),
+        }
+    }
+    Some(out)
+}
+
 /// The nodes' block size for the multigrid: 3 (or 6) when every node with free DOFs has
 /// exactly its three translations (or six components) free, else 1.
 fn block_size(model: &Model) -> usize {
@@ -270,6 +326,11 @@ fn write_folder(sys: &System, opts: &ModalOptions, dir: &Path, lm: &LowMemOption
     let path = dir.join("R.bin");
     let bytes: Vec<u8> = r.iter().flat_map(|v| v.to_le_bytes()).collect();
     std::fs::write(&path, bytes).map_err(|e| Error::io(&path, e))?;
+    if let Some(par) = vertex_parents(sys.model()) {
+        let path = dir.join("parents.bin");
+        let bytes: Vec<u8> = par.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(&path, bytes).map_err(|e| Error::io(&path, e))?;
+    }
     let pj = dir.join("params.json");
     let text = std::fs::read_to_string(&pj).map_err(|e| Error::io(&pj, e))?;
     let mut p: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::output(pj.display(), e))?;
@@ -611,4 +672,43 @@ pub fn table(run: &ModalRun, info: &LowMemInfo) -> String {
         }
     ));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::box_mesh;
+    use crate::model::ModelSpec;
+
+    /// The P1 interpolation from parents.bin reproduces a linear field at every DOF: a mid-edge
+    /// node lies halfway between its two parents (same component), a vertex DOF is its own
+    /// parent, and the vertex DOFs are those of the tet4 mesh with the same divisions.
+    #[test]
+    fn tet10_parents_interpolate_linear_fields() {
+        let mesh = box_mesh(CellKind::Tet10, [0.3, 0.2, 0.1], [3, 2, 1]);
+        let model = Model::build(&mesh, &ModelSpec::default(), "box").unwrap();
+        let par = vertex_parents(&model).expect("a tet10 model has a P1 coarse space");
+        let dofs = &model.dofs;
+        assert_eq!(par.len(), 2 * dofs.n_free);
+        let mut vertex = 0;
+        for eq in 0..dofs.n_free {
+            let (a, c) = dofs.node_comp_of(eq);
+            let (p, q) = (par[2 * eq] as usize, par[2 * eq + 1] as usize);
+            if p == eq && q == eq {
+                vertex += 1;
+                continue;
+            }
+            let (pa, pc) = dofs.node_comp_of(p);
+            let (qa, qc) = dofs.node_comp_of(q);
+            assert_eq!((pc, qc), (c, c));
+            for d in 0..3 {
+                let mid = 0.5 * (model.nodes[pa][d] + model.nodes[qa][d]);
+                assert!((model.nodes[a][d] - mid).abs() < 1e-12, "equation {eq}");
+            }
+        }
+        let tet4 = box_mesh(CellKind::Tet4, [0.3, 0.2, 0.1], [3, 2, 1]);
+        assert_eq!(vertex, 3 * tet4.n_nodes());
+        let hex = box_mesh(CellKind::Hex20, [0.3, 0.2, 0.1], [3, 2, 1]);
+        assert!(vertex_parents(&Model::build(&hex, &ModelSpec::default(), "box").unwrap()).is_none());
+    }
 }

@@ -25,6 +25,7 @@ reach its bar, a shift that is not below the spectrum) writes {"error": …} to 
 exits with status 3: never a silent unconverged answer. Rank 0 writes lambda.bin, vectors.bin
 and slepc.json in the layout of slepc_modes.py, with the peak resident memory after each phase.
 """
+import ctypes
 import json
 import os
 import resource
@@ -66,7 +67,17 @@ def peak_mb() -> float:
     return total
 
 
+def trim() -> None:
+    """Give the C heap's freed memory back to the system (glibc's malloc_trim): numpy's and
+    PETSc's temporaries otherwise stay resident after they are freed."""
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
+
+
 def mark(phase: str, t0: float) -> None:
+    trim()
     TIMINGS[phase] = time.perf_counter() - t0
     MEMORY[phase] = peak_mb()
 
@@ -84,10 +95,14 @@ def fail(msg: str) -> None:
     sys.exit(3)
 
 
-def load(name: str):
+def load(name: str, mat_type=None, rows=None):
+    """The matrix in file `name` (PETSc binary), its local rows `rows` (lo, hi) if given."""
     v = PETSc.Viewer().createBinary(os.path.join(WD, name), "r", comm=COMM)
     a = PETSc.Mat().create(comm=COMM)
-    a.setType(P.get("mat_type", "aij"))  # "sbaij": the upper triangle only (ks-mumps; GAMG needs aij)
+    if rows is not None:
+        n = int(np.fromfile(os.path.join(WD, name), dtype=">i4", count=2)[1])
+        a.setSizes(((rows[1] - rows[0], n), (rows[1] - rows[0], n)), bsize=int(P.get("block_size", 1)))
+    a.setType(mat_type or P.get("mat_type", "aij"))  # "sbaij": the upper triangle only (GAMG needs aij)
     a.load(v)
     v.destroy()
     a.setOption(PETSc.Mat.Option.SYMMETRIC, True)
@@ -133,12 +148,20 @@ class Pencil:
         if bs > 1:
             OPTS["matload_block_size"] = bs
         self.bs = bs
-        self.K = load("K.petsc")
-        self.M = load("M.petsc")
+        # M without the explicit zeros of K's pattern (a solid's mass: a third of the entries),
+        # read first so that its temporaries are gone before K takes its place.
+        self.subset = bool(P.get("compact_m", True)) and P.get("mat_type", "aij") == "aij"
+        if self.subset:
+            self.M = load_compact("M.petsc", bs)
+            self.K = load("K.petsc", rows=self.M.getOwnershipRange())
+        else:
+            self.K = load("K.petsc")
+            self.M = load("M.petsc")
         self.n = self.K.getSize()[0]
         self.normK = max(self.K.norm(PETSc.NormType.INFINITY), 1e-300)
         self.normM = self.M.norm(PETSc.NormType.INFINITY)
         self.sigma = 0.0  # the shift already applied to K's storage
+        self.mg = None  # (P, PᵀAP) of the P1 coarse level, when there is one
 
     def backward(self, x, lam: float) -> float:
         """‖Kx − λMx‖ / ((‖K‖∞ + |λ|‖M‖∞)‖x‖), whatever shift K's storage holds."""
@@ -154,8 +177,78 @@ class Pencil:
 
     def shift(self, s: float) -> None:
         """Make K's storage hold K − sM."""
-        self.K.axpy(-(s - self.sigma), self.M, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        pattern = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN if self.subset else \
+            PETSc.Mat.Structure.SAME_NONZERO_PATTERN
+        self.K.axpy(-(s - self.sigma), self.M, structure=pattern)
         self.sigma = s
+
+    def compact(self) -> None:
+        """K's storage (A = K − σM) read again in params' `k_type` ("baij": 3 × 3 blocks, a third
+        less memory than aij and faster products) once the multigrid no longer needs it in aij:
+        only with the P1 two-level multigrid (its fine level needs products and the diagonal;
+        GAMG on A needs aij). Read again rather than converted: PETSc 3.18's MatConvert of K
+        after the P1 level's MatPtAP crashed (SEGV)."""
+        kt = P.get("k_type", "baij" if self.mg is not None and self.bs > 1 else None)
+        if kt:
+            self.reread(kt)
+
+    def reread(self, kt: str) -> None:
+        """K's storage read again in type `kt` ("aij", "baij"), the current shift applied again."""
+        if self.K.getType() in (kt, "seq" + kt, "mpi" + kt):
+            return
+        rows, s = self.K.getOwnershipRange(), self.sigma
+        self.K.destroy()
+        trim()
+        self.K = load("K.petsc", kt, rows=rows)
+        self.sigma = 0.0
+        # M (aij) into K: entry by entry when the types differ; every entry is in K's pattern.
+        self.shift(s)
+
+
+def load_compact(name: str, bs: int):
+    """The matrix in file `name` (PETSc binary AIJ) without its explicit zeros, in AIJ with PETSc's
+    row distribution in blocks of `bs`, read row chunk by row chunk (no full-pattern copy is ever held). A solid's
+    consistent mass matrix couples only equal components: written in K's pattern, two thirds of
+    its entries are zeros."""
+    path = os.path.join(WD, name)
+    head = np.fromfile(path, dtype=">i4", count=4)
+    if head[0] != 1211216:
+        raise ValueError(f"{path}: not a PETSc binary matrix")
+    nrows, ncols, nz = int(head[1]), int(head[2]), int(head[3])
+    layout = PETSc.Vec().createMPI((PETSc.DECIDE, nrows), bsize=bs, comm=COMM)
+    lo, hi = layout.getOwnershipRange()
+    layout.destroy()
+    with open(path, "rb") as fh:
+        fh.seek(16)
+        start = np.zeros(nrows + 1, dtype=np.int64)
+        np.cumsum(np.fromfile(fh, dtype=">i4", count=nrows), out=start[1:])
+        indptr = [np.zeros(1, dtype=np.int64)]
+        idx, data = [], []
+        chunk = 65536
+        for r0 in range(lo, hi, chunk):  # read, not mapped: mapped file pages would count as resident
+            r1 = min(hi, r0 + chunk)
+            a, b = int(start[r0]), int(start[r1])
+            fh.seek(16 + 4 * nrows + 4 * a)
+            c = np.fromfile(fh, dtype=">i4", count=b - a).astype(np.int64)
+            fh.seek(16 + 4 * nrows + 4 * nz + 8 * a)
+            v = np.fromfile(fh, dtype=">f8", count=b - a).astype(np.float64)
+            row = np.repeat(np.arange(r0, r1), np.diff(start[r0:r1 + 1]))
+            keep = (v != 0.0) | (c == row)
+            idx.append(c[keep].astype(PETSc.IntType))
+            data.append(v[keep])
+            counts = np.bincount(row[keep] - r0, minlength=r1 - r0)
+            indptr.append(indptr[-1][-1] + np.cumsum(counts))
+    del start
+    ia = np.concatenate(indptr).astype(PETSc.IntType)
+    ja = np.concatenate(idx) if idx else np.zeros(0, dtype=PETSc.IntType)
+    del idx
+    va = np.concatenate(data) if data else np.zeros(0)
+    del data, indptr
+    m = PETSc.Mat().createAIJ(((hi - lo, nrows), (hi - lo, ncols)), csr=(ia, ja, va), comm=COMM)
+    m.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    del ia, ja, va
+    trim()
+    return m
 
 
 def rigid_pairs(pen: Pencil):
@@ -184,15 +277,92 @@ def rigid_pairs(pen: Pencil):
     return R, lam, vecs
 
 
+def orthonormal(vs):
+    """Copies of `vs` orthonormalised (GAMG wants an orthonormal near-null space basis)."""
+    out = [v.copy() for v in vs]
+    for i in range(len(out)):
+        for j in range(i):
+            out[i].axpy(-out[j].dot(out[i]), out[j])
+        out[i].normalize()
+    return out
+
+
+def vertex_interpolation(pen: Pencil):
+    """The tet10 mesh's P1 space inside its P2 one: P (n × n_c) from the vertex DOFs, 1 at a vertex
+    DOF, 1/2 from each end of its edge at a mid-edge DOF (parents.bin: n rows of two int64, the
+    equations a DOF is interpolated from, both its own at a vertex, −1 for a fixed end). Exact
+    for fields linear along each edge, the rigid-body motions among them; so PᵀAP is the P1
+    stiffness of the same mesh (shifted), seven times smaller than A. None without parents.bin."""
+    path = os.path.join(WD, "parents.bin")
+    if not os.path.exists(path) or P.get("coarse", "p1") != "p1":
+        return None
+    n = pen.n
+    par = np.fromfile(path, dtype="<i8").reshape(n, 2)
+    own = np.arange(n)
+    vertex = (par[:, 0] == own) & (par[:, 1] == own)
+    cmap = np.cumsum(vertex) - 1
+    lo, hi = pen.K.getOwnershipRange()
+    pl = par[lo:hi]
+    bad = ~vertex[lo:hi] & (((pl[:, 0] >= 0) & ~vertex[np.maximum(pl[:, 0], 0)])
+                            | ((pl[:, 1] >= 0) & ~vertex[np.maximum(pl[:, 1], 0)]))
+    if bad.any():
+        raise ValueError(f"parents.bin: equation {lo + int(np.argmax(bad))} is interpolated from a DOF that is not "
+                         "a vertex DOF")
+    cols, vals, ptr = [], [], [0]
+    for e in range(lo, hi):
+        a, b = par[e]
+        if vertex[e]:
+            cols.append(cmap[e])
+            vals.append(1.0)
+        else:
+            for q in (a, b):
+                if q >= 0:
+                    cols.append(cmap[q])
+                    vals.append(0.5)
+        ptr.append(len(cols))
+    nc_local = int(vertex[lo:hi].sum())
+    pi = PETSc.Mat().createAIJ(((hi - lo, n), (nc_local, int(vertex.sum()))),
+                               csr=(np.array(ptr, dtype=PETSc.IntType), np.array(cols, dtype=PETSc.IntType),
+                                    np.array(vals)), comm=COMM)
+    if pen.bs > 1:
+        pi.setBlockSizes(pen.bs, pen.bs)
+    return pi, vertex[lo:hi]
+
+
 def multigrid(pen: Pencil, R) -> None:
-    """GAMG's options and near-null space on A (params: gamg_threshold, near_null_space)."""
-    if R and P.get("near_null_space", True):
-        near = [r.copy() for r in R]
-        for i in range(len(near)):  # GAMG wants an orthonormal basis
-            for j in range(i):
-                near[i].axpy(-near[j].dot(near[i]), near[j])
-            near[i].normalize()
-        pen.K.setNearNullSpace(PETSc.NullSpace().create(vectors=near, comm=COMM))
+    """The preconditioner's pieces (params: gamg_threshold, near_null_space, coarse): GAMG on A
+    with R as near-null space; or, for a tet10 mesh (parents.bin), a two-level cycle whose fine
+    level is Chebyshev/Jacobi on A and whose coarse level is GAMG on the P1 operator PᵀAP."""
+    near = orthonormal(R) if R and P.get("near_null_space", True) else []
+    vi = vertex_interpolation(pen)
+    pen.mg = None
+    # The inverse's KSP is the spectral transformation's: its options take the prefix "st_".
+    gamg = "st_"
+    if vi is None:
+        if near:
+            pen.K.setNearNullSpace(PETSc.NullSpace().create(vectors=near, comm=COMM))
+    else:
+        pi, keep = vi
+        product = pen.K.ptap(pi)
+        ac = product.duplicate(copy=True)  # without the product's reference to K (freed below)
+        product.destroy()
+        ac.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        if near:
+            cn = []
+            for v in near:
+                c = ac.createVecRight()
+                c.setArray(v.getArray()[keep])
+                cn.append(c)
+            ac.setNearNullSpace(PETSc.NullSpace().create(vectors=orthonormal(cn), comm=COMM))
+            for v in near + cn:  # the coarse null space holds its own copies
+                v.destroy()
+        pen.mg = (pi, ac)
+        gamg = "st_mg_coarse_"
+        fine = {"ksp_type": "chebyshev", "pc_type": "jacobi", "ksp_max_it": int(P.get("smooth_its", 1)),
+                "ksp_chebyshev_esteig": "0,0.1,0,1.1"}
+        for k, v in fine.items():
+            if not OPTS.hasName("st_mg_levels_" + k):
+                OPTS["st_mg_levels_" + k] = v
     defaults = {
         "pc_gamg_threshold": P.get("gamg_threshold", 0.01),
         "pc_gamg_square_graph": 1,
@@ -201,8 +371,24 @@ def multigrid(pen: Pencil, R) -> None:
         "mg_levels_ksp_max_it": 2,
     }
     for k, v in defaults.items():
-        if not OPTS.hasName(k):
-            OPTS[k] = v
+        if not OPTS.hasName(gamg + k):
+            OPTS[gamg + k] = v
+
+
+def precondition(pc, pen: Pencil) -> None:
+    """Make `pc` the preconditioner multigrid() prepared."""
+    if pen.mg is None:
+        pc.setType(PETSc.PC.Type.GAMG)
+        return
+    pi, ac = pen.mg
+    pc.setType(PETSc.PC.Type.MG)
+    pc.setMGLevels(2)
+    pc.setMGType(PETSc.PC.MGType.MULTIPLICATIVE)
+    pc.setMGInterpolation(1, pi)
+    coarse = pc.getMGCoarseSolve()
+    coarse.setType(PETSc.KSP.Type.PREONLY)
+    coarse.setOperators(ac)
+    coarse.getPC().setType(PETSc.PC.Type.GAMG)
 
 
 def mumps_factor(pc, ooc_mb: int) -> None:
@@ -235,10 +421,11 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
         eps.setWhichEigenpairs(SLEPc.EPS.Which.SMALLEST_REAL)
         st.setType(SLEPc.ST.Type.PRECOND)
         ksp.setType(PETSc.KSP.Type.PREONLY)
-        ksp.getPC().setType(PETSc.PC.Type.GAMG)
+        precondition(ksp.getPC(), pen)
         # Stop when the wanted pairs converge; the extra vectors only widen the block.
-        eps.setDimensions(want_el, 3 * nev)  # LOBPCG holds X, W, P: ncv = 3 × block
-        eps.setLOBPCGBlockSize(nev)
+        block = int(P.get("lobpcg_block", nev))
+        eps.setDimensions(want_el, 3 * block)  # LOBPCG holds X, W, P: ncv = 3 × block
+        eps.setLOBPCGBlockSize(block)
         # Locking converged pairs made SLEPc 3.18's LOBPCG stagnate at 1e-9–3e-8 on the clustered
         # pairs at the block's end (120k plate, the 1983-DOF box); without it the box converges.
         eps.setLOBPCGLocking(False)
@@ -250,7 +437,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
         st.setType(SLEPc.ST.Type.SINVERT)
         if method == "ks-cg":
             ksp.setType(PETSc.KSP.Type.CG)
-            ksp.getPC().setType(PETSc.PC.Type.GAMG)
+            precondition(ksp.getPC(), pen)
             ksp.setTolerances(rtol=float(P.get("inner_rtol", 1e-9)), atol=0.0, max_it=int(P.get("ksp_max_it", 1000)))
             tol = float(P.get("eig_tol", 1e-8))
         else:
@@ -384,6 +571,7 @@ def sturm_upper(pen: Pencil, lam_max: float, above) -> dict:
     if budget_mb <= 0:
         sturm["sturm_skipped"] = "no memory was left in the budget for a factorisation"
         return sturm
+    pen.reread("aij")  # MUMPS's Cholesky takes aij or sbaij, not baij
     pen.shift(upper_pt)
     pc = PETSc.PC().create(comm=COMM)
     pc.setOperators(pen.K)
@@ -436,6 +624,9 @@ def main() -> None:
     t = time.perf_counter()
     pen.shift(sigma)
     multigrid(pen, R)
+    for r in R:  # the rigid-body pairs (rigid_vecs) are kept; R itself is no longer needed
+        r.destroy()
+    pen.compact()
     mark("shift", t)
     nr, nev = len(rigid_lam), int(P["nev"])
     want_el = max(0, nev - nr)
@@ -488,9 +679,10 @@ def main() -> None:
             json.dump(out, fh)
 
 
-try:
-    main()
-except PETSc.Error as e:  # a PETSc failure (memory, a breakdown): an error, never a silent answer
-    fail(f"PETSc error {e.ierr} after the {list(TIMINGS)[-1] if TIMINGS else 'start'} phase: {e}")
-except (np.linalg.LinAlgError, ValueError, OSError) as e:
-    fail(f"{type(e).__name__} after the {list(TIMINGS)[-1] if TIMINGS else 'start'} phase: {e}")
+if __name__ == "__main__":  # imported by validation/lowmem_gamg.py to measure the phases alone
+    try:
+        main()
+    except PETSc.Error as e:  # a PETSc failure (memory, a breakdown): an error, never a silent answer
+        fail(f"PETSc error {e.ierr} after the {list(TIMINGS)[-1] if TIMINGS else 'start'} phase: {e}")
+    except (np.linalg.LinAlgError, ValueError, OSError) as e:
+        fail(f"{type(e).__name__} after the {list(TIMINGS)[-1] if TIMINGS else 'start'} phase: {e}")
