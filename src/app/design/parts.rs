@@ -36,10 +36,8 @@ pub struct LeafStresses {
 /// The leaf's FE statics under a guided 1000 N load: stiffness and peak stresses per metre of
 /// guided displacement (nodal stresses of the hex20 solid, clamped at one end).
 pub fn leaf_fe_stresses(d: &Design, h: f64) -> Result<LeafStresses> {
-    let l = &d.leaf;
-    let key = super::cache::key("leaf_fe", &(l.length, l.width, h, ref_material(d), l.divisions));
-    let s = *super::cache::get_or(key, || leaf_fe_fresh(&at_ref_young(d), h))?;
-    let f = l.material[0] / LEAF_REF_YOUNG;
+    let s = leaf_fe_memo(d, h)?.stresses;
+    let f = d.leaf.material[0] / LEAF_REF_YOUNG;
     Ok(LeafStresses {
         k: f * s.k,
         von_mises_per_m: f * s.von_mises_per_m,
@@ -65,9 +63,33 @@ fn at_ref_young(d: &Design) -> Design {
     r
 }
 
-/// [`leaf_fe_stresses`] computed (not memoised).
-fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafStresses> {
+/// The leaf's FE at one thickness, from one factorisation: what [`leaf_fe_stresses`] and
+/// [`leaf_end_stiffness`] give.
+#[derive(Clone, Copy, Debug)]
+struct LeafFe {
+    stresses: LeafStresses,
+    end: [[f64; 6]; 6],
+}
+
+/// The memoised [`LeafFe`] of `d`'s leaf at thickness `h`, at E = [`LEAF_REF_YOUNG`].
+fn leaf_fe_memo(d: &Design, h: f64) -> Result<LeafFe> {
     let l = &d.leaf;
+    let key = super::cache::key("leaf_fe", &(l.length, l.width, h, ref_material(d), l.divisions));
+    Ok(*super::cache::get_or(key, || leaf_fe_fresh(&at_ref_young(d), h))?)
+}
+
+/// [`LeafFe`] computed (not memoised): the hex20 leaf clamped at `xmin` (translations held), its
+/// `xmax` face rigidly coupled to a reference node at the face's centroid whose six components
+/// are free. One factorisation of K and six solves, one per unit load on a reference component,
+/// give the end's flexibility F (6×6); its inverse is the end stiffness, the Schur complement of
+/// K on the reference node (what six runs with one component prescribed each would give). The
+/// guided case (a unit vertical motion, the other five held) is the field F⁻¹e_z applied: its
+/// stiffness is the (z, z) entry and its stresses per metre come from that field.
+fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafFe> {
+    use crate::linalg::factor::Factor;
+    use crate::system::{System, SystemOptions};
+    let l = &d.leaf;
+    let source = "leaf spring";
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
     let spec = ModelSpec {
         material: Material {
@@ -78,27 +100,76 @@ fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafStresses> {
         fixes: vec![("xmin".into(), crate::dof::TRANSLATIONS)],
         couplings: vec![CouplingSpec {
             group: "xmax".into(),
-            guided: Some(2),
+            guided: None,
             reference: None,
         }],
         ..Default::default()
     };
-    let run = run_static(
-        &mesh,
-        "leaf spring",
-        &StaticOptions {
-            spec,
-            cases: vec![vec![Load::Force {
-                group: "xmax".into(),
-                force: [0.0, 0.0, 1000.0],
-            }]],
+    let model = crate::model::Model::build(&mesh, &spec, source)?;
+    let sys = System::build(
+        model,
+        &SystemOptions {
+            mass: false,
+            ..Default::default()
         },
+        source,
     )?;
-    let r = &run.cases[0].references[0];
-    let uz = r.displacement[2];
-    let k = 1000.0 / uz;
-    let u = crate::app::report::mesh_displacements(&run, 0);
-    let ns = crate::post::stress::nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+    let model = sys.model();
+    let node = model
+        .references
+        .first()
+        .map(|r| r.node)
+        .ok_or_else(|| Error::Verification(format!("{source}: the end face's coupling has no reference node")))?;
+    let mut eqs = [0usize; 6];
+    for (c, e) in eqs.iter_mut().enumerate() {
+        *e = sys.dofs().eq_of(node, c).ok_or_else(|| {
+            Error::Verification(format!(
+                "{source}: component {c} of the end's reference node is not free"
+            ))
+        })?;
+    }
+    let fa = Factor::new(sys.symbolic()?.clone(), sys.k())?;
+    if fa.negative_pivots > 0 || fa.pivot_range.0 <= fa.pivot_range.1 * 1e-13 {
+        return Err(Error::Factorization(format!(
+            "{source}: the stiffness matrix is singular or indefinite (pivot ratio {:.1e}, {} negative pivots)",
+            fa.pivot_range.0 / fa.pivot_range.1.max(f64::MIN_POSITIVE),
+            fa.negative_pivots
+        )));
+    }
+    let n = sys.n_free();
+    let mut x = faer::Mat::<f64>::zeros(n, 6);
+    for (j, &e) in eqs.iter().enumerate() {
+        x[(e, j)] = 1.0;
+    }
+    fa.solve_in_place(x.as_mut());
+    // F symmetrised (K is symmetric; this removes solver rounding), then inverted.
+    let mut f = faer::Mat::<f64>::zeros(6, 6);
+    for i in 0..6 {
+        for j in 0..6 {
+            f[(i, j)] = 0.5 * (x[(eqs[i], j)] + x[(eqs[j], i)]);
+        }
+    }
+    let llt = f
+        .llt(faer::Side::Lower)
+        .map_err(|_| Error::Factorization(format!("{source}: the end's flexibility is not positive definite")))?;
+    let s = faer::linalg::solvers::Solve::solve(&llt, faer::Mat::<f64>::identity(6, 6));
+    let mut end = [[0.0; 6]; 6];
+    for i in 0..6 {
+        for j in 0..6 {
+            end[i][j] = 0.5 * (s[(i, j)] + s[(j, i)]);
+        }
+    }
+    // The guided case at uz = 1 m: the field X F⁻¹ e_z.
+    let xg: Vec<f64> = (0..n).map(|r| (0..6).map(|j| x[(r, j)] * end[j][2]).sum()).collect();
+    let full = model.dofs.full(&xg);
+    let nm = model.n_mesh_nodes;
+    let mut u = vec![0.0; 3 * nm];
+    for a in 0..nm {
+        for c in 0..3 {
+            u[3 * a + c] = full[crate::dof::NCOMP * a + c];
+        }
+    }
+    let ns = crate::post::stress::nodal_stress(&model.solids, nm, &u)?;
     // The von Mises peak's node (the reference check's hot spot) and its signed principal
     // stress: the largest |principal| over all nodes would be a free-edge corner of the rigid
     // clamp, whose value grows with the mesh (docs/fatigue.md, *A rigid clamp is singular*).
@@ -109,12 +180,14 @@ fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafStresses> {
         .enumerate()
         .fold((0, 0.0f64), |a, (i, v)| if v > a.1 { (i, v) } else { a });
     let pr = ns.principal.get(hot).map_or(0.0, |p| p[0].abs().max(p[2].abs()));
-    let out = LeafStresses {
-        k,
-        von_mises_per_m: vm / uz,
-        principal_per_m: pr / uz,
-    };
-    Ok(out)
+    Ok(LeafFe {
+        stresses: LeafStresses {
+            k: end[2][2],
+            von_mises_per_m: vm,
+            principal_per_m: pr,
+        },
+        end,
+    })
 }
 
 /// FE axial stiffness of one coil isolator (beam helix), N/m.
@@ -409,61 +482,10 @@ pub fn estimate_dofs(d: &Design) -> Result<usize> {
 /// the end face, the clamp face held: six FE statics with one component of the end's rigid
 /// coupling prescribed each, the column the reaction it takes.
 pub fn leaf_end_stiffness(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
-    let l = &d.leaf;
-    let key = super::cache::key("leaf_end", &(l.length, l.width, h, ref_material(d), l.divisions));
-    let k = *super::cache::get_or(key, || leaf_end_stiffness_fresh(&at_ref_young(d), h))?;
+    let k = leaf_fe_memo(d, h)?.end;
     // Proportional to E, as [`leaf_fe_stresses`].
-    let f = l.material[0] / LEAF_REF_YOUNG;
+    let f = d.leaf.material[0] / LEAF_REF_YOUNG;
     Ok(k.map(|row| row.map(|v| f * v)))
-}
-
-/// [`leaf_end_stiffness`] computed (not memoised).
-fn leaf_end_stiffness_fresh(d: &Design, h: f64) -> Result<[[f64; 6]; 6]> {
-    let l = &d.leaf;
-    let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
-    let mut k = [[0.0; 6]; 6];
-    // Small unit motions (m, rad): linear, and well inside the small-rotation range.
-    let delta = 1e-5;
-    for j in 0..6 {
-        let mut pres = [Some(0.0); 6];
-        pres[j] = Some(delta);
-        let spec = ModelSpec {
-            material: crate::material::Material {
-                young: l.material[0],
-                poisson: l.material[1],
-                density: l.material[2],
-            },
-            fixes: vec![("xmin".into(), crate::dof::TRANSLATIONS)],
-            couplings: vec![CouplingSpec {
-                group: "xmax".into(),
-                guided: None,
-                reference: None,
-            }],
-            prescribed: vec![("xmax".into(), pres)],
-            ..Default::default()
-        };
-        let run = run_static(
-            &mesh,
-            "leaf spring (condensation)",
-            &StaticOptions {
-                spec,
-                cases: vec![vec![]],
-            },
-        )?;
-        let r = &run.cases[0].references[0];
-        for i in 0..6 {
-            k[i][j] = r.reaction[i] / delta;
-        }
-    }
-    // Symmetrise (the FE matrix is symmetric; this removes solver rounding).
-    for i in 0..6 {
-        for j in 0..i {
-            let m = 0.5 * (k[i][j] + k[j][i]);
-            k[i][j] = m;
-            k[j][i] = m;
-        }
-    }
-    Ok(k)
 }
 
 /// The leaf's 12×12 stiffness between its clamp (first six components) and its guided end, in
