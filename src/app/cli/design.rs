@@ -73,7 +73,7 @@ pub fn design_cmd(a: &DesignArgs) -> Result<i32> {
 
 /// Run `work`, telling the user each step it starts: a spinner on a terminal, else timed lines
 /// on stderr (seconds since `t0`).
-fn with_progress<T>(t0: std::time::Instant, work: impl FnOnce(&dyn Fn(&str)) -> Result<T>) -> Result<T> {
+fn with_progress<T>(t0: std::time::Instant, work: impl FnOnce(&(dyn Fn(&str) + Sync)) -> Result<T>) -> Result<T> {
     use std::io::IsTerminal;
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new_spinner();

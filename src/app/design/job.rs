@@ -2,10 +2,13 @@
 //! envelope, the start-up study and, when a check fails, the search; every report file written
 //! into the output folder. The caller prints (the command line) or returns (Python) the result.
 
+use super::results::DesignReport;
+use super::search::search_lazy;
 use super::{Design, SearchOutcome, envelope, report, run_design, search_text, search_with, startup};
 use crate::app::report::{Report, render};
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 /// What a design job wrote.
 pub struct Job {
@@ -17,35 +20,88 @@ pub struct Job {
     pub variant: Option<Report>,
 }
 
-/// Run the job on `d`, writing the reports into `out` (which exists).
-pub fn run(d: &Design, out: &Path, progress: &dyn Fn(&str)) -> Result<Job> {
-    let mut r = run_design(d, Some(out), progress)?;
+/// The studies of the design's own run: start-up (soft and switched, with their wall time) and
+/// the envelope.
+struct Studies {
+    soft: startup::Startup,
+    switched: startup::Startup,
+    startup_s: f64,
+    env: Option<envelope::EnvelopeResult>,
+}
+
+fn studies(d: &Design, r: &DesignReport, progress: &dyn Fn(&str)) -> Result<Studies> {
     // Issue 29 item 3: start-up and run-down on the 3D machine's modes, the two-mass estimate
     // beside it (its wall time joins the run's timings).
     progress("start-up and run-down (3D machine and two-mass estimate)");
     let clock = std::time::Instant::now();
-    let soft = startup::run(d, &r, startup::RAMP_S)?;
-    let switched = startup::run(d, &r, 0.0)?;
-    r.timings_s
-        .push(("start-up and run-down".into(), clock.elapsed().as_secs_f64()));
-    let mut rep = report::report(&r);
+    let soft = startup::run(d, r, startup::RAMP_S)?;
+    let switched = startup::run(d, r, 0.0)?;
+    let startup_s = clock.elapsed().as_secs_f64();
     let env = if d.envelope.enabled {
-        let e = envelope::run(d, &r, progress)?;
-        insert_envelope(&mut rep, &e, out)?;
-        Some(e)
+        Some(envelope::run(d, r, progress)?)
     } else {
         None
     };
+    Ok(Studies {
+        soft,
+        switched,
+        startup_s,
+        env,
+    })
+}
+
+/// Run the job on `d`, writing the reports into `out` (which exists).
+///
+/// When the design already fails a check at its nominal point the search is certain to run:
+/// it then runs on its own thread beside the start-up study and the envelope (both use the
+/// worker threads), and asks for the envelope's corner patterns only if a variant passes at its
+/// nominal point (it waits for them then). Otherwise it runs after the envelope, when the
+/// envelope fails. Either way the results are those of the sequential order: every part is a
+/// function of its inputs (the FE memo returns what a computation gives).
+pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Job> {
+    let mut r = run_design(d, Some(out), progress)?;
+    let vdir = out.join("passing-variant");
+    let early = d.search.enabled && r.checks.iter().any(|c| !c.ok);
+    let (st, early_search) = if early {
+        std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
+        let patterns: OnceLock<Option<Vec<Vec<f64>>>> = OnceLock::new();
+        let wait = || loop {
+            if let Some(p) = patterns.get() {
+                return p.clone();
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        };
+        let r = &r;
+        std::thread::scope(|s| {
+            let search = s.spawn(|| search_lazy(d, Some(&vdir), &wait, progress));
+            let st = studies(d, r, progress);
+            // Set in every case (an error included) so that a waiting search goes on.
+            let _ = patterns.set(st.as_ref().ok().and_then(|x| x.env.as_ref()).map(envelope::patterns_of));
+            let o = search
+                .join()
+                .unwrap_or_else(|_| Err(Error::Verification("the design search's thread panicked".into())));
+            (st, Some(o))
+        })
+    } else {
+        (studies(d, &r, progress), None)
+    };
+    let st = st?;
+    r.timings_s.push(("start-up and run-down".into(), st.startup_s));
+    let mut rep = report::report(&r);
+    if let Some(e) = &st.env {
+        insert_envelope(&mut rep, e, out)?;
+    }
     let at = rep
         .sections
         .iter()
         .position(|s| s.id == "quantities")
         .unwrap_or(rep.sections.len());
-    rep.sections.insert(at, startup::section(&soft, &switched));
-    rep.data["startup"] = serde_json::json!({ "ramped": json_value(&soft)?, "switched": json_value(&switched)? });
+    rep.sections.insert(at, startup::section(&st.soft, &st.switched));
+    rep.data["startup"] = serde_json::json!({ "ramped": json_value(&st.soft)?, "switched": json_value(&st.switched)? });
     let margin = d.search.required_margin;
     let fails = r.checks.iter().any(|c| !c.ok)
-        || env
+        || st
+            .env
             .as_ref()
             .is_some_and(|e| d.search.over_envelope && !e.passes(margin));
     let mut search = None;
@@ -53,10 +109,14 @@ pub fn run(d: &Design, out: &Path, progress: &dyn Fn(&str)) -> Result<Job> {
     if d.search.enabled && fails {
         // Issue 13 item 3: a failing design is followed by the lightest passing variant (issue
         // 29 item 7: over the envelope, with the required margin).
-        let vdir = out.join("passing-variant");
-        std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
-        let patterns = env.as_ref().map(envelope::patterns_of);
-        let o = search_with(d, Some(&vdir), patterns.as_deref(), progress)?;
+        let o = match early_search {
+            Some(o) => o?,
+            None => {
+                std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
+                let patterns = st.env.as_ref().map(envelope::patterns_of);
+                search_with(d, Some(&vdir), patterns.as_deref(), progress)?
+            }
+        };
         let text = search_text(d, &o);
         std::fs::write(out.join("search.txt"), &text).map_err(|e| Error::io(out.join("search.txt"), e))?;
         rep.data["search"] = search_json(&o)?;

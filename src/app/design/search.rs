@@ -207,7 +207,7 @@ fn judge(
     d: &Design,
     v: &Design,
     r: &DesignReport,
-    patterns: Option<&[Vec<f64>]>,
+    patterns: &dyn Fn() -> Option<Vec<Vec<f64>>>,
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<String>, Option<EnvelopeResult>)> {
     let margin = d.search.required_margin;
@@ -229,7 +229,7 @@ fn judge(
     if short.is_empty() && d.search.over_envelope && d.envelope.enabled {
         let mut v = v.clone();
         v.envelope = d.envelope.clone();
-        let env = super::envelope::run_plan(&v, r, patterns, progress)?;
+        let env = super::envelope::run_plan(&v, r, patterns().as_deref(), progress)?;
         let short = env
             .short(margin)
             .into_iter()
@@ -252,6 +252,18 @@ pub fn search_with(
     d: &Design,
     out: Option<&std::path::Path>,
     patterns: Option<&[Vec<f64>]>,
+    progress: &dyn Fn(&str),
+) -> Result<SearchOutcome> {
+    search_lazy(d, out, &|| patterns.map(<[Vec<f64>]>::to_vec), progress)
+}
+
+/// [`search_with`], asking `patterns` for the corner patterns only when a variant passes at its
+/// nominal point and is judged over the envelope (the design job runs the search beside the
+/// given design's envelope; its patterns are ready when it ends).
+pub fn search_lazy(
+    d: &Design,
+    out: Option<&std::path::Path>,
+    patterns: &dyn Fn() -> Option<Vec<Vec<f64>>>,
     progress: &dyn Fn(&str),
 ) -> Result<SearchOutcome> {
     let s = &d.search;
