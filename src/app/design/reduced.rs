@@ -115,54 +115,86 @@ fn symmetrise(a: &mut DMatrix<f64>) {
     }
 }
 
-/// An M-orthonormal basis of the span of `cols`, column by column: each column made M-orthogonal
-/// to the basis so far by classical Gram–Schmidt twice (which keeps orthogonality to rounding
-/// without squaring the columns' conditioning, as a Gram matrix would), and dropped when what is
-/// left is below [`DROP`] of its M-norm.
+/// Columns orthogonalised together against the basis so far (after the modes).
+const GS_BLOCK: usize = 64;
+
+/// An M-orthonormal basis of the span of `cols` (the first `n_modes` of them modes): each
+/// column made M-orthogonal to the basis so far by classical Gram–Schmidt twice (which keeps
+/// orthogonality to rounding without squaring the columns' conditioning, as a Gram matrix
+/// would), and dropped when what is left is below [`DROP`] of its M-norm after the modes. The
+/// modes go column by column; the other columns in blocks of [`GS_BLOCK`]: a block is projected
+/// against the basis so far with matrix products (twice), then its columns against the block's
+/// columns kept before them, one by one. In exact arithmetic this is the column-by-column
+/// process; it needs one product with M per column instead of five.
 fn m_orthonormal(m: &SymMatrix, cols: &[Vec<f64>], n_modes: usize) -> Mat<f64> {
     let n = m.n();
     let mut q = Mat::<f64>::zeros(n, cols.len());
     let mut mq = Mat::<f64>::zeros(n, cols.len());
     let mut k = 0;
-    let m_of = |v: &Mat<f64>| {
-        let mut y = Mat::zeros(n, 1);
-        m.mul_block(v.as_ref(), y.as_mut());
-        y
-    };
-    for c in cols {
-        let mut v = Mat::from_fn(n, 1, |i, _| c[i]);
-        let mut mv = m_of(&v);
-        let m_norm = |v: &Mat<f64>, mv: &Mat<f64>| (0..n).map(|i| v[(i, 0)] * mv[(i, 0)]).sum::<f64>().max(0.0).sqrt();
-        // Against the modes first: the static responses are mostly the soft isolation modes, and
-        // what the column adds is measured against what is left of it after them.
+    let n_modes = n_modes.min(cols.len());
+    let mut start = 0;
+    while start < cols.len() {
+        let end = if start < n_modes {
+            n_modes
+        } else {
+            (start + GS_BLOCK).min(cols.len())
+        };
+        let mut w = Mat::from_fn(n, end - start, |i, j| cols[start + j][i]);
+        let norms = |w: &Mat<f64>| -> Vec<f64> {
+            let mw = mul(m, w);
+            (0..w.ncols())
+                .map(|j| (0..n).map(|i| w[(i, j)] * mw[(i, j)]).sum::<f64>().max(0.0).sqrt())
+                .collect()
+        };
+        // The part of the basis so far the columns' norms are measured after: the modes.
         let k_modes = n_modes.min(k);
-        let mut norm0 = m_norm(&v, &mv);
+        let mut norm0 = norms(&w);
         for (lo, hi) in [(0, k_modes), (k_modes, k)] {
-            for _ in 0..2 {
-                if hi > lo {
-                    let mut h = Mat::zeros(hi - lo, 1);
+            if hi > lo {
+                for _ in 0..2 {
                     let (qs, mqs) = (q.as_ref().subcols(lo, hi - lo), mq.as_ref().subcols(lo, hi - lo));
-                    matmul(h.as_mut(), Accum::Replace, mqs.transpose(), v.as_ref(), 1.0, Par::Seq);
-                    matmul(v.as_mut(), Accum::Add, qs, h.as_ref(), -1.0, Par::Seq);
-                    mv = m_of(&v);
+                    let mut h = Mat::zeros(hi - lo, w.ncols());
+                    matmul(
+                        h.as_mut(),
+                        Accum::Replace,
+                        mqs.transpose(),
+                        w.as_ref(),
+                        1.0,
+                        Par::rayon(0),
+                    );
+                    matmul(w.as_mut(), Accum::Add, qs, h.as_ref(), -1.0, Par::rayon(0));
                 }
             }
             if lo == 0 && k_modes > 0 && k >= n_modes {
-                norm0 = m_norm(&v, &mv);
+                norm0 = norms(&w);
             }
         }
-        if !(norm0 > 0.0) {
-            continue;
+        let k_block = k;
+        for (j, &nrm0) in norm0.iter().enumerate() {
+            let mut v = w.as_ref().subcols(j, 1).to_owned();
+            if k > k_block {
+                for _ in 0..2 {
+                    let (qs, mqs) = (
+                        q.as_ref().subcols(k_block, k - k_block),
+                        mq.as_ref().subcols(k_block, k - k_block),
+                    );
+                    let mut h = Mat::zeros(k - k_block, 1);
+                    matmul(h.as_mut(), Accum::Replace, mqs.transpose(), v.as_ref(), 1.0, Par::Seq);
+                    matmul(v.as_mut(), Accum::Add, qs, h.as_ref(), -1.0, Par::Seq);
+                }
+            }
+            let mv = mul(m, &v);
+            let norm = (0..n).map(|i| v[(i, 0)] * mv[(i, 0)]).sum::<f64>().max(0.0).sqrt();
+            if !(nrm0 > 0.0) || norm <= DROP * nrm0 {
+                continue;
+            }
+            for i in 0..n {
+                q[(i, k)] = v[(i, 0)] / norm;
+                mq[(i, k)] = mv[(i, 0)] / norm;
+            }
+            k += 1;
         }
-        let norm = m_norm(&v, &mv);
-        if norm <= DROP * norm0 {
-            continue;
-        }
-        for i in 0..n {
-            q[(i, k)] = v[(i, 0)] / norm;
-            mq[(i, k)] = mv[(i, 0)] / norm;
-        }
-        k += 1;
+        start = end;
     }
     q.subcols(0, k).to_owned()
 }
