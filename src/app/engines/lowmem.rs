@@ -1017,9 +1017,8 @@ mod tests {
             assert_eq!(corners + edges.len(), kind.n_nodes(), "{kind}");
             for (k, &[a, b]) in edges.iter().enumerate() {
                 assert!(a < corners && b < corners);
-                for d in 0..3 {
-                    assert_eq!(refs[corners + k][d], 0.5 * (refs[a][d] + refs[b][d]), "{kind} edge {k}");
-                }
+                let mid: [f64; 3] = std::array::from_fn(|d| 0.5 * (refs[a][d] + refs[b][d]));
+                assert_eq!(refs[corners + k], mid, "{kind} edge {k}");
             }
         }
     }
