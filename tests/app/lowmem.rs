@@ -129,6 +129,24 @@ fn free_free_beam_equals_the_direct_path() {
     }
 }
 
+/// Quadratic solids other than tet10 take the two-level multigrid whose coarse level is the
+/// linear elements of the same mesh (parents.bin): hex20 (trilinear hex8 level; clamped in
+/// `clamped_solid_equals_the_direct_path`) and wedge15 (wedge6 level), free–free. Same modes as
+/// the direct path; hex27 (face and centre nodes) keeps GAMG on the whole operator.
+#[test]
+fn hex20_and_wedge15_use_the_linear_coarse_level() {
+    if !slepc_ready() {
+        return;
+    }
+    let hex = "box:0.3,0.1,0.05:12,4,2:hex20";
+    let i = same_as_direct(&[hex, "--modes", "12"], "1");
+    assert_eq!(i["solver"]["coarse"], "p1", "{}", i["solver"]);
+    let i = same_as_direct(&["box:0.3,0.1,0.05:9,3,2:wedge15", "--modes", "10"], "1");
+    assert_eq!(i["solver"]["coarse"], "p1", "{}", i["solver"]);
+    let i = same_as_direct(&["box:0.3,0.1,0.05:6,2,1:hex27", "--modes", "10"], "1");
+    assert_eq!(i["solver"]["coarse"], "gamg", "{}", i["solver"]);
+}
+
 /// Two ranks once: the same free–free plate.
 #[test]
 fn two_ranks_equal_the_direct_path() {
@@ -234,6 +252,35 @@ fn auto_takes_the_iterative_path_when_the_factor_does_not_fit() {
     let (code, v, err) = modes_json(&[plate, "--modes", "12"], "auto");
     assert_eq!(code, 0, "{err}");
     assert!(v.get("solver").is_none(), "{v}");
+}
+
+/// A memory budget that not even LOBPCG's smallest block meets: the run goes on with that
+/// block (6 elastic modes wanted + 1) and the report says the budget is not met, in the notes
+/// and in the JSON (`solver.lobpcg_block`).
+#[test]
+fn a_budget_below_the_smallest_block_is_said() {
+    if !slepc_ready() {
+        return;
+    }
+    let plate = "box:0.3,0.1,0.05:12,4,2:hex20";
+    let (code, v, err) = modes_json(&[plate, "--modes", "12", "--max-memory", "1M"], "iterative");
+    assert_eq!(code, 0, "{err}");
+    let b = &v["solver"]["lobpcg_block"];
+    assert_eq!(b["block"], 7, "{b}");
+    assert_eq!(b["default"], 10, "{b}");
+    assert_eq!(b["min"], 7, "{b}");
+    assert_eq!(b["fits"], false, "{b}");
+    assert_eq!(v["accurate"], true);
+    let notes = v["notes"].to_string();
+    assert!(
+        notes.contains("is not met") && notes.contains("smallest block (7 for 6 elastic modes"),
+        "{notes}"
+    );
+    // Without a budget of its own the run keeps the default block.
+    let (code, v, err) = modes_json(&[plate, "--modes", "12"], "iterative");
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(v["solver"]["lobpcg_block"]["block"], 10, "{}", v["solver"]);
+    assert_eq!(v["solver"]["lobpcg_block"]["fits"], true, "{}", v["solver"]);
 }
 
 /// Requests the iterative path does not serve are refused naming the option.

@@ -95,6 +95,10 @@ pub struct LowMemInfo {
     pub reason: Option<String>,
     /// Rigid-body motions the script found and deflated.
     pub rigid: usize,
+    /// The multigrid's coarse level: `p1` (the linear elements of the same mesh, from
+    /// parents.bin: tet10, hex20, wedge15) or `gamg` (GAMG on the whole operator); `None` for
+    /// `ks-mumps`.
+    pub coarse: Option<String>,
     /// Whether the Sturm count ran (completeness verified).
     pub sturm_verified: bool,
     /// Why not, when it did not.
@@ -105,6 +109,10 @@ pub struct LowMemInfo {
     pub budget_bytes: Option<u64>,
     /// Bytes given to the script for its out-of-core Sturm factorisation.
     pub sturm_budget_bytes: u64,
+    /// LOBPCG's block (the block the script used, its default, the smallest allowed, the
+    /// ranks' estimated peak with it and whether that fits the budget); `None` for the other
+    /// methods.
+    pub lobpcg_block: Option<BlockChoice>,
     /// Memory by phase, MiB.
     pub memory_mib: MemoryMib,
     /// Wall time by phase of the script, s.
@@ -178,19 +186,54 @@ pub fn rigid_motions(model: &Model) -> Vec<f64> {
     r
 }
 
-/// Mid-edge node `4 + k` of a tet10 cell lies on the edge `TET10_EDGES[k]` (gmsh order, as in
-/// src/fe/shape.rs).
+/// Mid-edge node `4 + k` of a tet10 cell lies on the edge `TET10_EDGES[k]` (gmsh order, as the
+/// reference nodes of src/fe/shape.rs).
 const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
+/// Mid-edge node `8 + k` of a hex20 cell lies on the edge `HEX20_EDGES[k]` (gmsh order).
+const HEX20_EDGES: [[usize; 2]; 12] = [
+    [0, 1],
+    [0, 3],
+    [0, 4],
+    [1, 2],
+    [1, 5],
+    [2, 3],
+    [2, 6],
+    [3, 7],
+    [4, 5],
+    [4, 7],
+    [5, 6],
+    [6, 7],
+];
+/// Mid-edge node `6 + k` of a wedge15 cell lies on the edge `WEDGE15_EDGES[k]` (gmsh order).
+const WEDGE15_EDGES: [[usize; 2]; 9] = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 4], [2, 5], [3, 4], [3, 5], [4, 5]];
 
-/// For a model of tet10 solids only: per free equation the two equations it is interpolated from
-/// on the P1 space of the same mesh (`2n` entries): its own twice at a vertex DOF, the same
-/// component of the edge's two end nodes at a mid-edge DOF (−1 for an end that is not free).
-/// The script's coarse level (parents.bin). `None` for any other model, or a mesh where a node
-/// is a vertex of one cell and a mid-edge node of another (not conforming): then the script's
-/// multigrid is GAMG on the whole operator.
+/// The edge table of a quadratic solid kind whose nodes beyond its corners are all mid-edge
+/// nodes (tet10, hex20, wedge15): node `corners + k` lies halfway along `edges[k]`, whose ends
+/// are corner nodes. `None` for every other kind (linear kinds; hex27, whose face and centre
+/// nodes are not on an edge).
+pub fn mid_edges(kind: CellKind) -> Option<&'static [[usize; 2]]> {
+    match kind {
+        CellKind::Tet10 => Some(&TET10_EDGES),
+        CellKind::Hex20 => Some(&HEX20_EDGES),
+        CellKind::Wedge15 => Some(&WEDGE15_EDGES),
+        _ => None,
+    }
+}
+
+/// For a model of quadratic solids whose extra nodes are all mid-edge nodes (tet10, hex20,
+/// wedge15, mixed as long as the mesh is conforming): per free equation the two equations it is
+/// interpolated from on the linear space of the same mesh (`2n` entries): its own twice at a
+/// vertex DOF, the same component of the edge's two end nodes at a mid-edge DOF (−1 for an end
+/// that is not free). Half and half is exact linear interpolation along a straight edge with
+/// its node at the middle, so the space is the mesh's linear elements (tet4 in tet10, the
+/// trilinear hex8 in hex20, wedge6 in wedge15) and holds the rigid-body motions. The script's
+/// coarse level (parents.bin). `None` for any other model (shells, beams, linear or hex27
+/// solids), or a mesh where a node is a vertex of one cell and a mid-edge node of another, or
+/// the mid-edge node of two different edges (not conforming): then the script's multigrid is
+/// GAMG on the whole operator.
 pub fn vertex_parents(model: &Model) -> Option<Vec<i64>> {
     if model.solids.is_empty()
-        || model.solids.iter().any(|s| s.kind != CellKind::Tet10)
+        || model.solids.iter().any(|s| mid_edges(s.kind).is_none())
         || !model.shells.is_empty()
         || !model.beams.is_empty()
     {
@@ -200,13 +243,15 @@ pub fn vertex_parents(model: &Model) -> Option<Vec<i64>> {
     let mut parent = vec![[u32::MAX; 2]; nn];
     let mut vertex = vec![false; nn];
     for set in &model.solids {
-        for cell in set.conn.chunks_exact(10) {
-            for &v in &cell[..4] {
+        let edges = mid_edges(set.kind)?;
+        let corners = set.kind.linear().n_nodes();
+        for cell in set.conn.chunks_exact(set.kind.n_nodes()) {
+            for &v in &cell[..corners] {
                 vertex[v as usize] = true;
             }
-            for (k, [a, b]) in TET10_EDGES.iter().enumerate() {
+            for (k, [a, b]) in edges.iter().enumerate() {
                 let p = [cell[*a].min(cell[*b]), cell[*a].max(cell[*b])];
-                let m = &mut parent[cell[4 + k] as usize];
+                let m = &mut parent[cell[corners + k] as usize];
                 if m[0] == u32::MAX {
                     *m = p;
                 } else if *m != p {
@@ -312,15 +357,123 @@ fn check_request(opts: &ModalOptions) -> Result<usize> {
     }
 }
 
-/// The ranks' memory estimate, bytes: PETSc's K and M with the multigrid hierarchy (about 60
-/// bytes per stored entry), the eigensolver's blocks (about 4 vectors per wanted mode plus
-/// the rigid-body motions) and each rank's interpreter and libraries (about 120 MiB).
-fn ranks_estimate(nnz: u64, n: u64, nev: u64, ranks: u64) -> u64 {
-    60 * nnz + 8 * n * (4 * nev + 12) + ranks * 120 * (1 << 20)
+/// Bytes per stored entry of K that the ranks hold besides LOBPCG's vectors: K − σM (BAIJ),
+/// M without its zeros, the P1 level and GAMG's hierarchy. Measured (the script's peak less
+/// LOBPCG's vectors and the interpreter, docs/lowmem.md): 18.5 at 1M DOFs (83.1 M entries),
+/// 13.6 at 120k (9.37 M); 20 keeps the estimate above both.
+const BYTES_PER_ENTRY: u64 = 20;
+/// Each rank's interpreter, PETSc and SLEPc, bytes.
+const RANK_BYTES: u64 = 120 << 20;
+/// SLEPc's LOBPCG holds about this many vectors of n per column of its block: V and Z (three
+/// columns each), X, R, P, AX, BX, and the M-products cached for the BVs with the M inner
+/// product. Measured at 120k DOFs: 19.2 MiB more peak per column between blocks 13, 14 and 16,
+/// 21.1 vectors (docs/lowmem.md).
+const VECTORS_PER_COLUMN: u64 = 21;
+/// Vectors of n besides the block: the constraints Y (rigid-body pairs and wanted modes, per
+/// mode asked) plus this many (work vectors, the rigid-body pairs' copies).
+const VECTORS_FIXED: u64 = 8;
+/// The smallest LOBPCG block is the elastic modes wanted plus this (params.json
+/// `lobpcg_min_extra`): the last wanted pairs converge at about the rate λ_wanted/λ_(block+1),
+/// so each column cut costs iterations (120k plate, 12 wanted: 31, 40 and 45 iterations with
+/// blocks 16, 14 and 13; docs/lowmem.md) but a block of wanted + 1 still converges.
+pub const LOBPCG_MIN_EXTRA: usize = 1;
+/// What this process keeps resident while the ranks run, K and M dropped, bytes.
+const OWN_WAIT_BYTES: u64 = 64 << 20;
+
+/// The script's default LOBPCG block for `wanted` elastic modes: wanted + max(4, wanted / 3).
+pub fn default_block(wanted: usize) -> usize {
+    wanted + (wanted / 3).max(4)
+}
+
+/// The ranks' memory estimate, bytes, with a LOBPCG block of `block` and `nev` modes asked:
+/// the matrices and the multigrid (per stored entry of K), LOBPCG's vectors (per block column
+/// and per mode) and each rank's interpreter and libraries.
+pub fn ranks_estimate(n: u64, nnz: u64, ranks: u64, nev: usize, block: usize) -> u64 {
+    BYTES_PER_ENTRY * nnz
+        + 8 * n * (VECTORS_PER_COLUMN * block as u64 + nev as u64 + VECTORS_FIXED)
+        + ranks * RANK_BYTES
+}
+
+/// The largest LOBPCG block (at most `cap`) whose [`ranks_estimate`] fits `avail` bytes; 0 when
+/// not even a block of 1 fits.
+pub fn block_max(n: u64, nnz: u64, ranks: u64, nev: usize, avail: u64, cap: usize) -> usize {
+    (1..=cap)
+        .rev()
+        .find(|&b| ranks_estimate(n, nnz, ranks, nev, b) <= avail)
+        .unwrap_or(0)
+}
+
+/// LOBPCG's block for a run, chosen from the memory budget.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct BlockChoice {
+    /// The block: the default when the estimate fits (or no budget is known), else the largest
+    /// that fits, never below `min`.
+    pub block: usize,
+    /// The script's default for the wanted modes.
+    pub default: usize,
+    /// The smallest allowed: wanted + [`LOBPCG_MIN_EXTRA`].
+    pub min: usize,
+    /// The ranks' estimated peak with `block`, bytes.
+    pub estimate_bytes: u64,
+    /// Whether that estimate fits the budget (true without a budget).
+    pub fits: bool,
+}
+
+/// The block for `wanted` elastic modes (`nev` modes asked in all) on a model of `n` DOFs and
+/// `nnz` stored entries of K, `ranks` ranks, `avail` bytes for the ranks (`None`: no limit):
+/// the default if it fits, else the largest block that fits, else the smallest allowed (the run
+/// goes on; the note says the budget is not met). The script applies the same rule with
+/// params.json's `lobpcg_block_max` ([`block_max`]) once it knows how many rigid-body modes it
+/// deflated.
+pub fn choose_block(n: u64, nnz: u64, ranks: u64, nev: usize, wanted: usize, avail: Option<u64>) -> BlockChoice {
+    let default = default_block(wanted);
+    let min = (wanted + LOBPCG_MIN_EXTRA).min(default);
+    let block = avail.map_or(default, |a| block_max(n, nnz, ranks, nev, a, default).max(min));
+    let estimate_bytes = ranks_estimate(n, nnz, ranks, nev, block);
+    BlockChoice {
+        block,
+        default,
+        min,
+        estimate_bytes,
+        fits: avail.is_none_or(|a| estimate_bytes <= a),
+    }
+}
+
+/// How a run uses its memory budget.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+struct Plan {
+    /// This process drops K and M while the ranks run.
+    tight: bool,
+    /// Bytes left for the ranks (`None`: no budget known).
+    avail: Option<u64>,
+    /// The largest LOBPCG block within `avail` (params.json `lobpcg_block_max`).
+    block_max: Option<usize>,
+    /// Bytes for the script's out-of-core Sturm count.
+    sturm_budget: u64,
+}
+
+/// The plan for `nev` modes on `n` DOFs, `nnz` entries, `ranks` ranks within `budget` bytes:
+/// K and M (`km_bytes`) are dropped while the ranks run when the ranks' estimate at the default
+/// block does not fit beside them; the block is cut to fit what is left; the Sturm count gets
+/// the rest.
+fn plan(n: u64, nnz: u64, ranks: u64, nev: usize, km_bytes: u64, budget: Option<u64>) -> Plan {
+    let Some(b) = budget else { return Plan::default() };
+    let cap = default_block(nev);
+    let full = ranks_estimate(n, nnz, ranks, nev, cap);
+    let tight = km_bytes + OWN_WAIT_BYTES + full > b;
+    let avail = b.saturating_sub(OWN_WAIT_BYTES + if tight { 0 } else { km_bytes });
+    let bm = block_max(n, nnz, ranks, nev, avail, cap);
+    let est = ranks_estimate(n, nnz, ranks, nev, bm.max(1));
+    Plan {
+        tight,
+        avail: Some(avail),
+        block_max: Some(bm),
+        sturm_budget: avail.saturating_sub(est),
+    }
 }
 
 /// Write K, M, R.bin, params.json and the script into `dir`; returns the Sturm budget given.
-fn write_folder(sys: &System, opts: &ModalOptions, dir: &Path, lm: &LowMemOptions, sturm_budget: u64) -> Result<()> {
+fn write_folder(sys: &System, opts: &ModalOptions, dir: &Path, lm: &LowMemOptions, plan: &Plan) -> Result<()> {
     slepc::write_job(sys, &opts.params(), dir, true)?;
     let r = rigid_motions(sys.model());
     let path = dir.join("R.bin");
@@ -336,7 +489,11 @@ fn write_folder(sys: &System, opts: &ModalOptions, dir: &Path, lm: &LowMemOption
     let mut p: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::output(pj.display(), e))?;
     p["rigid"] = 6.into();
     p["block_size"] = block_size(sys.model()).into();
-    p["sturm_budget"] = (sturm_budget as f64).into();
+    p["sturm_budget"] = (plan.sturm_budget as f64).into();
+    if let Some(bm) = plan.block_max {
+        p["lobpcg_block_max"] = bm.into();
+        p["lobpcg_min_extra"] = LOBPCG_MIN_EXTRA.into();
+    }
     let method = lm
         .method
         .clone()
@@ -398,16 +555,12 @@ fn solve_iterative(
     let (n, nnz) = (s.n_free() as u64, s.k().pattern.nnz() as u64);
     let km_bytes = 2 * 12 * nnz;
     let budget = memory_budget(lm.max_memory);
-    let est = ranks_estimate(nnz, n, nev as u64, o.ranks as u64);
-    let tight = budget.as_ref().is_some_and(|b| km_bytes + est > b.bytes);
-    let sturm_budget = budget.as_ref().map_or(0, |b| {
-        let keep = if tight { 0 } else { km_bytes };
-        b.bytes.saturating_sub(est + keep)
-    });
+    let plan = plan(n, nnz, o.ranks as u64, nev, km_bytes, budget.as_ref().map(|b| b.bytes));
+    let tight = plan.tight;
     reset_peak();
     let wd = slepc::workdir(o)?;
     let t = Instant::now();
-    write_folder(s, opts, &wd.path, lm, sturm_budget)?;
+    write_folder(s, opts, &wd.path, lm, &plan)?;
     let t_write = t.elapsed().as_secs_f64();
     mem.vibrofem.insert("write".into(), peak_mib());
     if tight {
@@ -442,11 +595,13 @@ fn solve_iterative(
         ranks: out.info.ranks,
         reason,
         rigid: out.info.rigid,
+        coarse: out.info.coarse.clone(),
         sturm_verified: out.info.upper.is_some(),
         sturm_not_verified: out.not_verified.clone(),
         matrices_dropped: tight,
         budget_bytes: budget.as_ref().map(|b| b.bytes),
-        sturm_budget_bytes: sturm_budget,
+        sturm_budget_bytes: plan.sturm_budget,
+        lobpcg_block: None,
         memory_mib: mem,
         script_timings_s: out.info.timings_s.clone(),
     };
@@ -481,12 +636,61 @@ fn solve_iterative(
         .map(|k| own(k))
         .fold(0.0, f64::max);
     run.report.peak_memory_bytes = Some((own_peak * MIB) as u64);
+    let (choice, note) = block_note(&out.info, (n, nnz, o.ranks as u64, nev), &plan, budget.as_ref());
+    info.lobpcg_block = choice;
+    run.report.notes.extend(note);
     if let Some(why) = &info.sturm_not_verified {
         // Not a failed count: no count.
         run.report.notes.retain(|n| !n.starts_with("Sturm check failed"));
         run.report.notes.push(format!("Sturm count not verified: {why}"));
     }
     Ok((run, info))
+}
+
+/// The block LOBPCG ran with (from the script's report) and, when the budget cut it below its
+/// default or could not be met at the smallest block, a note saying so. `size`: n, stored
+/// entries, ranks, modes asked.
+fn block_note(
+    out: &LowMemOut,
+    (n, nnz, ranks, nev): (u64, u64, u64, usize),
+    plan: &Plan,
+    budget: Option<&crate::system::MemoryBudget>,
+) -> (Option<BlockChoice>, Option<String>) {
+    let Some(used) = out.lobpcg_block else {
+        return (None, None);
+    };
+    let wanted = nev.saturating_sub(out.rigid);
+    let mut c = choose_block(n, nnz, ranks, nev, wanted, plan.avail);
+    c.block = used;
+    c.estimate_bytes = ranks_estimate(n, nnz, ranks, nev, used);
+    c.fits = plan.avail.is_none_or(|a| c.estimate_bytes <= a);
+    let (Some(avail), Some(b)) = (plan.avail, budget) else {
+        return (Some(c), None);
+    };
+    let note = if !c.fits {
+        Some(format!(
+            "the memory budget ({} {}) is not met: even LOBPCG's smallest block ({used} for {wanted} elastic \
+             modes; default {}) makes the ranks' estimated peak {}, above the {} left for them; the run went on",
+            b.what,
+            fmt_bytes(b.bytes),
+            c.default,
+            fmt_bytes(c.estimate_bytes),
+            fmt_bytes(avail)
+        ))
+    } else if used < c.default {
+        Some(format!(
+            "LOBPCG block {used} for {wanted} elastic modes (default {}): the largest whose estimated peak \
+             ({} for the ranks) fits the {} left for them ({} {})",
+            c.default,
+            fmt_bytes(c.estimate_bytes),
+            fmt_bytes(avail),
+            b.what,
+            fmt_bytes(b.bytes)
+        ))
+    } else {
+        None
+    };
+    (Some(c), note)
 }
 
 /// What `slepc_lowmem.py` reports in `slepc.json` (optional keys may be added).
@@ -509,6 +713,10 @@ struct LowMemOut {
     upper: Option<(f64, usize)>,
     #[serde(default)]
     sturm_skipped: Option<String>,
+    #[serde(default)]
+    lobpcg_block: Option<usize>,
+    #[serde(default)]
+    coarse: Option<String>,
     #[serde(default)]
     timings_s: BTreeMap<String, f64>,
     #[serde(default)]
@@ -680,24 +888,24 @@ mod tests {
     use crate::mesh::generate::box_mesh;
     use crate::model::ModelSpec;
 
-    /// The P1 interpolation from parents.bin reproduces a linear field at every DOF: a mid-edge
-    /// node lies halfway between its two parents (same component), a vertex DOF is its own
-    /// parent, and the vertex DOFs are those of the tet4 mesh with the same divisions.
-    #[test]
-    fn tet10_parents_interpolate_linear_fields() {
-        let mesh = box_mesh(CellKind::Tet10, [0.3, 0.2, 0.1], [3, 2, 1]);
-        let model = Model::build(&mesh, &ModelSpec::default(), "box").unwrap();
-        let par = vertex_parents(&model).expect("a tet10 model has a P1 coarse space");
+    /// Checks parents.bin of `model` and returns its vertex DOFs: a vertex DOF is its own parent
+    /// twice; a mid-edge DOF has two distinct parents of its own component, both vertex DOFs,
+    /// at nodes whose midpoint is its node (so the interpolation is exact for linear fields);
+    /// `edge` checks the two parent nodes' positions.
+    fn check_parents(model: &Model, edge: impl Fn([f64; 3], [f64; 3]) -> bool) -> usize {
+        let par = vertex_parents(model).expect("a coarse level");
         let dofs = &model.dofs;
         assert_eq!(par.len(), 2 * dofs.n_free);
+        let own = |e: usize| par[2 * e] == e as i64 && par[2 * e + 1] == e as i64;
         let mut vertex = 0;
         for eq in 0..dofs.n_free {
             let (a, c) = dofs.node_comp_of(eq);
-            let (p, q) = (par[2 * eq] as usize, par[2 * eq + 1] as usize);
-            if p == eq && q == eq {
+            if own(eq) {
                 vertex += 1;
                 continue;
             }
+            let (p, q) = (par[2 * eq] as usize, par[2 * eq + 1] as usize);
+            assert!(p != q && own(p) && own(q), "equation {eq}: parents {p}, {q}");
             let (pa, pc) = dofs.node_comp_of(p);
             let (qa, qc) = dofs.node_comp_of(q);
             assert_eq!((pc, qc), (c, c));
@@ -705,10 +913,165 @@ mod tests {
                 let mid = 0.5 * (model.nodes[pa][d] + model.nodes[qa][d]);
                 assert!((model.nodes[a][d] - mid).abs() < 1e-12, "equation {eq}");
             }
+            assert!(edge(model.nodes[pa], model.nodes[qa]), "equation {eq}: not an edge");
         }
+        vertex
+    }
+
+    fn build(mesh: &Mesh) -> Model {
+        Model::build(mesh, &ModelSpec::default(), "box").unwrap()
+    }
+
+    /// The P1 interpolation from parents.bin reproduces a linear field at every DOF: a mid-edge
+    /// node lies halfway between its two parents (same component), a vertex DOF is its own
+    /// parent, and the vertex DOFs are those of the tet4 mesh with the same divisions.
+    #[test]
+    fn tet10_parents_interpolate_linear_fields() {
+        let mesh = box_mesh(CellKind::Tet10, [0.3, 0.2, 0.1], [3, 2, 1]);
+        let vertex = check_parents(&build(&mesh), |_, _| true);
         let tet4 = box_mesh(CellKind::Tet4, [0.3, 0.2, 0.1], [3, 2, 1]);
         assert_eq!(vertex, 3 * tet4.n_nodes());
-        let hex = box_mesh(CellKind::Hex20, [0.3, 0.2, 0.1], [3, 2, 1]);
-        assert!(vertex_parents(&Model::build(&hex, &ModelSpec::default(), "box").unwrap()).is_none());
+        // Face and centre nodes are not on an edge: no coarse level from parents.
+        let hex27 = box_mesh(CellKind::Hex27, [0.3, 0.2, 0.1], [3, 2, 1]);
+        assert!(vertex_parents(&build(&hex27)).is_none());
+        let hex8 = box_mesh(CellKind::Hex8, [0.3, 0.2, 0.1], [3, 2, 1]);
+        assert!(vertex_parents(&build(&hex8)).is_none());
+    }
+
+    /// Hex20 (serendipity) box: every mid-edge DOF points at the two corners of its edge (a
+    /// brick edge: the parents differ along one axis by one division), every corner DOF at
+    /// itself, and the corner DOFs are the hex8 mesh's: the trilinear coarse space.
+    #[test]
+    fn hex20_parents_are_the_edge_ends() {
+        let (size, n) = ([0.3, 0.2, 0.1], [3, 2, 1]);
+        let h: [f64; 3] = std::array::from_fn(|d| size[d] / n[d] as f64);
+        let mesh = box_mesh(CellKind::Hex20, size, n);
+        let brick_edge = |p: [f64; 3], q: [f64; 3]| {
+            let diff: Vec<f64> = (0..3).map(|d| (p[d] - q[d]).abs()).collect();
+            (0..3).any(|d| (diff[d] - h[d]).abs() < 1e-12 && (0..3).all(|e| e == d || diff[e] < 1e-12))
+        };
+        let vertex = check_parents(&build(&mesh), brick_edge);
+        assert_eq!(vertex, 3 * box_mesh(CellKind::Hex8, size, n).n_nodes());
+        let wedge = box_mesh(CellKind::Wedge15, size, n);
+        let vertex = check_parents(&build(&wedge), |_, _| true);
+        assert_eq!(vertex, 3 * box_mesh(CellKind::Wedge6, size, n).n_nodes());
+    }
+
+    /// LOBPCG's block from the memory budget (the 1M plate's size: 1 005 282 DOFs, 83 121 714
+    /// entries, 18 modes of which 12 elastic): the default 16 when it fits or no budget is
+    /// known; the largest block that fits a budget between the smallest (13) and the default;
+    /// the smallest, marked as not fitting, below it. The estimate grows by
+    /// 8 n × VECTORS_PER_COLUMN bytes per column.
+    #[test]
+    fn lobpcg_block_fits_the_budget() {
+        let (n, nnz, r) = (1_005_282u64, 83_121_714u64, 1u64);
+        let est = |b: usize| ranks_estimate(n, nnz, r, 18, b);
+        assert_eq!(est(16) - est(15), 8 * n * VECTORS_PER_COLUMN);
+        let c = choose_block(n, nnz, r, 18, 12, None);
+        assert_eq!((c.block, c.default, c.min, c.fits), (16, 16, 13, true));
+        assert_eq!(c.estimate_bytes, est(16));
+        assert_eq!(choose_block(n, nnz, r, 18, 12, Some(64 << 30)).block, 16);
+        for b in 13..=16 {
+            let c = choose_block(n, nnz, r, 18, 12, Some(est(b)));
+            assert_eq!((c.block, c.fits), (b, true));
+            let c = choose_block(n, nnz, r, 18, 12, Some(est(b) - 1));
+            if b > 13 {
+                assert_eq!((c.block, c.fits), (b - 1, true));
+                assert!(c.estimate_bytes < est(b));
+            } else {
+                assert_eq!((c.block, c.fits), (13, false));
+                assert_eq!(c.estimate_bytes, est(13));
+            }
+        }
+        assert_eq!(choose_block(n, nnz, r, 18, 12, Some(0)).block, 13);
+        // Few modes: the smallest block is wanted + 1 (the default's 4 extra columns cut).
+        let c = choose_block(n, nnz, r, 3, 2, Some(0));
+        assert_eq!((c.block, c.default, c.fits), (3, 6, false));
+        // The 1M plate under --max-memory 4G: K and M dropped, the block cut to fit.
+        let km = 2 * 12 * nnz;
+        let p = plan(n, nnz, r, 18, km, Some(4 << 30));
+        assert!(p.tight);
+        assert_eq!(p.avail, Some((4 << 30) - OWN_WAIT_BYTES));
+        let c = choose_block(n, nnz, r, 18, 12, p.avail);
+        assert!(c.fits && c.block < 16 && Some(c.block) == p.block_max, "{c:?} {p:?}");
+        assert_eq!(p.sturm_budget, p.avail.unwrap() - est(c.block));
+        // Ample memory: K and M kept, the default block, the rest for the Sturm count.
+        let p = plan(n, nnz, r, 18, km, Some(64 << 30));
+        assert!(!p.tight);
+        assert_eq!(p.block_max, Some(default_block(18)));
+        assert!(p.sturm_budget > 0);
+        assert_eq!(plan(n, nnz, r, 18, km, None), Plan::default());
+    }
+
+    /// The edge tables agree with the reference nodes of src/fe/shape.rs: node `corners + k` is
+    /// the midpoint of the corners of edge `k`, and every higher-order node is on an edge.
+    #[test]
+    fn edge_tables_match_the_reference_nodes() {
+        for kind in CellKind::SOLIDS {
+            let Some(edges) = mid_edges(kind) else {
+                assert!(kind.order() == 1 || kind == CellKind::Hex27, "{kind}");
+                continue;
+            };
+            let refs = crate::fe::shape::reference_nodes(kind);
+            let corners = kind.linear().n_nodes();
+            assert_eq!(corners + edges.len(), kind.n_nodes(), "{kind}");
+            for (k, &[a, b]) in edges.iter().enumerate() {
+                assert!(a < corners && b < corners);
+                let mid: [f64; 3] = std::array::from_fn(|d| 0.5 * (refs[a][d] + refs[b][d]));
+                assert_eq!(refs[corners + k], mid, "{kind} edge {k}");
+            }
+        }
+    }
+
+    /// A conforming mix: one brick of hex20 beside one of two wedge15 (sharing a quad face)
+    /// has a coarse level; the same mix with a hex8 brick (its nodes are corners of a cell
+    /// kind without an edge table) has none.
+    #[test]
+    fn mixed_hex20_wedge15_parents() {
+        let mut mesh = box_mesh(CellKind::Wedge15, [0.2, 0.1, 0.1], [2, 1, 1]);
+        let hex = box_mesh(CellKind::Hex20, [0.1, 0.1, 0.1], [1, 1, 1]);
+        let find = |p: [f64; 3]| {
+            mesh.nodes
+                .iter()
+                .position(|q| (0..3).all(|d| (p[d] - q[d]).abs() < 1e-12))
+                .expect("a lattice node") as u32
+        };
+        let cell: Vec<u32> = hex
+            .blocks
+            .iter()
+            .find(|b| b.kind == CellKind::Hex20)
+            .unwrap()
+            .conn
+            .iter()
+            .map(|&a| find(hex.nodes[a as usize]))
+            .collect();
+        let mut block = crate::mesh::CellBlock::new(CellKind::Hex20);
+        block.conn = cell;
+        block.tags = vec![1000];
+        // The wedges of the first brick (centroid x < 0.1) give way to the hex20 cell.
+        let nodes = mesh.nodes.clone();
+        for b in mesh.blocks.iter_mut().filter(|b| b.kind == CellKind::Wedge15) {
+            let (mut conn, mut tags) = (Vec::new(), Vec::new());
+            for (c, &t) in b.conn.chunks_exact(15).zip(&b.tags) {
+                let x: f64 = c[..6].iter().map(|&a| nodes[a as usize][0]).sum::<f64>() / 6.0;
+                if x > 0.1 {
+                    conn.extend_from_slice(c);
+                    tags.push(t);
+                }
+            }
+            (b.conn, b.tags) = (conn, tags);
+        }
+        mesh.blocks.push(block);
+        let model = build(&mesh);
+        assert_eq!(model.solids.len(), 2);
+        check_parents(&model, |_, _| true);
+        let hex8 = crate::mesh::CellBlock {
+            kind: CellKind::Hex8,
+            conn: mesh.blocks.last().unwrap().conn[..8].to_vec(),
+            tags: vec![1000],
+        };
+        mesh.blocks.pop();
+        mesh.blocks.push(hex8);
+        assert!(vertex_parents(&build(&mesh)).is_none());
     }
 }

@@ -375,8 +375,11 @@ def multigrid(pen: Pencil, R) -> None:
             OPTS[gamg + k] = v
 
 
-def precondition(pc, pen: Pencil) -> None:
-    """Make `pc` the preconditioner multigrid() prepared."""
+def precondition(pc, pen: Pencil, info=None) -> None:
+    """Make `pc` the preconditioner multigrid() prepared; info's `coarse` says which ("p1": the
+    two-level cycle on the mesh's linear elements, "gamg": GAMG on A)."""
+    if info is not None:
+        info["coarse"] = "gamg" if pen.mg is None else "p1"
     if pen.mg is None:
         pc.setType(PETSc.PC.Type.GAMG)
         return
@@ -403,6 +406,16 @@ def mumps_factor(pc, ooc_mb: int) -> None:
         F.setMumpsIcntl(key, val)
 
 
+def lobpcg_block(want_el: int, default: int) -> int:
+    """LOBPCG's block: params' `lobpcg_block` (default: wanted + max(4, wanted/3)), cut to
+    `lobpcg_block_max` (the largest the driver's memory budget allows) but never below the
+    wanted modes + `lobpcg_min_extra` (1)."""
+    block = int(P.get("lobpcg_block", default))
+    if "lobpcg_block_max" in P:
+        block = min(block, max(want_el + int(P.get("lobpcg_min_extra", 1)), int(P["lobpcg_block_max"])))
+    return max(block, 1)
+
+
 def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
     """Step 3: the elastic pairs of A (values λ − σ), ascending, and the inner KSP for step 4."""
     method = P.get("method", "lobpcg")
@@ -415,21 +428,23 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
     st = eps.getST()
     ksp = st.getKSP()
     nev = want_el + max(4, want_el // 3)
+    info: dict = {}
     eps.setDimensions(nev)
     if method == "lobpcg":
         eps.setType(SLEPc.EPS.Type.LOBPCG)
         eps.setWhichEigenpairs(SLEPc.EPS.Which.SMALLEST_REAL)
         st.setType(SLEPc.ST.Type.PRECOND)
         ksp.setType(PETSc.KSP.Type.PREONLY)
-        precondition(ksp.getPC(), pen)
+        precondition(ksp.getPC(), pen, info)
         # Stop when the wanted pairs converge; the extra vectors only widen the block.
-        block = int(P.get("lobpcg_block", nev))
+        block = lobpcg_block(want_el, nev)
         eps.setDimensions(want_el, 3 * block)  # LOBPCG holds X, W, P: ncv = 3 × block
         eps.setLOBPCGBlockSize(block)
         # Locking converged pairs made SLEPc 3.18's LOBPCG stagnate at 1e-9–3e-8 on the clustered
         # pairs at the block's end (120k plate, the 1983-DOF box); without it the box converges.
         eps.setLOBPCGLocking(False)
         tol = float(P.get("eig_tol", 1e-10))
+        info["lobpcg_block"] = block
     elif method in ("ks-cg", "ks-mumps"):
         eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
         eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
@@ -437,7 +452,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
         st.setType(SLEPc.ST.Type.SINVERT)
         if method == "ks-cg":
             ksp.setType(PETSc.KSP.Type.CG)
-            precondition(ksp.getPC(), pen)
+            precondition(ksp.getPC(), pen, info)
             ksp.setTolerances(rtol=float(P.get("inner_rtol", 1e-9)), atol=0.0, max_it=int(P.get("ksp_max_it", 1000)))
             tol = float(P.get("eig_tol", 1e-8))
         else:
@@ -451,7 +466,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
     eps.setConvergenceTest(SLEPc.EPS.Conv.NORM)
     eps.setTolerances(tol, int(P.get("max_it", 300)))
     eps.setFromOptions()
-    info = {"method": method, "eig_tol": tol}
+    info.update({"method": method, "eig_tol": tol})
     if method == "ks-mumps":
         try:
             ksp.setUp()
