@@ -663,17 +663,22 @@ pub fn run_static(mesh: &Mesh, source: &str, opts: &StaticOptions) -> Result<Sta
     let t = Instant::now();
     let model = Model::build(mesh, &opts.spec, source)?;
     let t_model = t.elapsed().as_secs_f64();
-    let sys = System::build(
+    let sys = stiffness_system(model, source)?;
+    let mut run = solve(&sys, mesh, &opts.cases)?;
+    run.timings.assemble += t_model;
+    Ok(run)
+}
+
+/// The [`System`] of a static analysis of `model`: K and its symbolic factorisation, no mass.
+pub fn stiffness_system(model: Model, source: &str) -> Result<System> {
+    System::build(
         model,
         &SystemOptions {
             mass: false,
             ..Default::default()
         },
         source,
-    )?;
-    let mut run = solve(&sys, mesh, &opts.cases)?;
-    run.timings.assemble += t_model;
-    Ok(run)
+    )
 }
 
 /// Displacements, reactions, reference-node results and equilibrium of each load case on an

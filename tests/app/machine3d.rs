@@ -7,6 +7,26 @@ use vibrofem::app::design::{analyse, coil_stiffness, leaf_end_stiffness, leaf_ma
 use vibrofem::app::dynamics::electromagnet::RectifiedDrive;
 use vibrofem::app::dynamics::two_mass::TwoMass;
 
+/// The FE leaf of `d` clamped at `xmin`, its `xmax` face rigidly coupled (guided along `guided`
+/// if given).
+fn leaf_spec(d: &Design, guided: Option<usize>) -> vibrofem::model::ModelSpec {
+    let l = &d.leaf;
+    vibrofem::model::ModelSpec {
+        material: vibrofem::material::Material {
+            young: l.material[0],
+            poisson: l.material[1],
+            density: l.material[2],
+        },
+        fixes: vec![("xmin".into(), vibrofem::dof::TRANSLATIONS)],
+        couplings: vec![vibrofem::model::CouplingSpec {
+            group: "xmax".into(),
+            guided,
+            reference: None,
+        }],
+        ..Default::default()
+    }
+}
+
 #[test]
 fn condensed_leaf_reproduces_the_fe_leaf() {
     let d = Design::paper();
@@ -25,20 +45,7 @@ fn condensed_leaf_reproduces_the_fe_leaf() {
         &mesh,
         "leaf (guided)",
         &vibrofem::analysis::statics::StaticOptions {
-            spec: vibrofem::model::ModelSpec {
-                material: vibrofem::material::Material {
-                    young: l.material[0],
-                    poisson: l.material[1],
-                    density: l.material[2],
-                },
-                fixes: vec![("xmin".into(), vibrofem::dof::TRANSLATIONS)],
-                couplings: vec![vibrofem::model::CouplingSpec {
-                    group: "xmax".into(),
-                    guided: Some(2),
-                    reference: None,
-                }],
-                ..Default::default()
-            },
+            spec: leaf_spec(&d, Some(2)),
             cases: vec![vec![vibrofem::analysis::statics::Load::Force {
                 group: "xmax".into(),
                 force: [0.0, 0.0, 1000.0],
@@ -52,20 +59,7 @@ fn condensed_leaf_reproduces_the_fe_leaf() {
     }
     // A general load on the free end (force in y and z, the end face rigid but free to rotate)
     // gives, through the condensed 6×6, the FE leaf's displacement and rotations.
-    let spec = vibrofem::model::ModelSpec {
-        material: vibrofem::material::Material {
-            young: l.material[0],
-            poisson: l.material[1],
-            density: l.material[2],
-        },
-        fixes: vec![("xmin".into(), vibrofem::dof::TRANSLATIONS)],
-        couplings: vec![vibrofem::model::CouplingSpec {
-            group: "xmax".into(),
-            guided: None,
-            reference: None,
-        }],
-        ..Default::default()
-    };
+    let spec = leaf_spec(&d, None);
     let f = [200.0, 300.0, 1000.0];
     let run = vibrofem::analysis::statics::run_static(
         &mesh,

@@ -87,7 +87,6 @@ fn leaf_fe_memo(d: &Design, h: f64) -> Result<LeafFe> {
 /// stiffness is the (z, z) entry and its stresses per metre come from that field.
 fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafFe> {
     use crate::linalg::factor::Factor;
-    use crate::system::{System, SystemOptions};
     let l = &d.leaf;
     let source = "leaf spring";
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
@@ -105,15 +104,7 @@ fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafFe> {
         }],
         ..Default::default()
     };
-    let model = crate::model::Model::build(&mesh, &spec, source)?;
-    let sys = System::build(
-        model,
-        &SystemOptions {
-            mass: false,
-            ..Default::default()
-        },
-        source,
-    )?;
+    let sys = crate::analysis::statics::stiffness_system(crate::model::Model::build(&mesh, &spec, source)?, source)?;
     let model = sys.model();
     let node = model
         .references
