@@ -18,6 +18,7 @@ mod fatigue_closed_forms;
 mod fuzz_regressions;
 mod gmsh_bookkeeping;
 mod group_names;
+mod job_beside;
 mod memory_estimate;
 mod mesh_io;
 mod modal_requests;

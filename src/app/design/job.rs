@@ -50,6 +50,51 @@ fn studies(d: &Design, r: &DesignReport, progress: &dyn Fn(&str)) -> Result<Stud
     })
 }
 
+/// Run `first` on this thread and `second` on a thread of its own at the same time; `second` may
+/// ask for `share` of `first`'s result through the function it is given, which waits until
+/// `first` has ended and gives `None` when `first` failed or panicked. Both results are returned
+/// (a panic of either is carried on after both have ended). `second` runs on a plain thread, not
+/// a worker of the pool: its wait never holds a worker the pool's jobs (`first`'s among them)
+/// need.
+pub fn beside<A, B, P>(
+    first: impl FnOnce() -> Result<A>,
+    share: impl FnOnce(&A) -> P,
+    second: impl FnOnce(&dyn Fn() -> Option<P>) -> Result<B> + Send,
+) -> (Result<A>, Result<B>)
+where
+    B: Send,
+    P: Clone + Send + Sync,
+{
+    /// Sets the cell to `None` if it is still empty when dropped (on a panic of `first`).
+    struct Release<'a, P>(&'a OnceLock<Option<P>>);
+    impl<P> Drop for Release<'_, P> {
+        fn drop(&mut self) {
+            let _ = self.0.set(None);
+        }
+    }
+    let cell: OnceLock<Option<P>> = OnceLock::new();
+    let get = || loop {
+        if let Some(p) = cell.get() {
+            return p.clone();
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
+    std::thread::scope(|s| {
+        let other = s.spawn(|| second(&get));
+        let a = {
+            let _release = Release(&cell);
+            let a = first();
+            let _ = cell.set(a.as_ref().ok().map(share));
+            a
+        };
+        let b = match other.join() {
+            Ok(b) => b,
+            Err(e) => std::panic::resume_unwind(e),
+        };
+        (a, b)
+    })
+}
+
 /// Run the job on `d`, writing the reports into `out` (which exists).
 ///
 /// When the design already fails a check at its nominal point the search is certain to run:
@@ -64,24 +109,12 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
     let early = d.search.enabled && r.checks.iter().any(|c| !c.ok);
     let (st, early_search) = if early {
         std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
-        let patterns: OnceLock<Option<Vec<Vec<f64>>>> = OnceLock::new();
-        let wait = || loop {
-            if let Some(p) = patterns.get() {
-                return p.clone();
-            }
-            std::thread::sleep(std::time::Duration::from_millis(10));
-        };
-        let r = &r;
-        std::thread::scope(|s| {
-            let search = s.spawn(|| search_lazy(d, Some(&vdir), &wait, progress));
-            let st = studies(d, r, progress);
-            // Set in every case (an error included) so that a waiting search goes on.
-            let _ = patterns.set(st.as_ref().ok().and_then(|x| x.env.as_ref()).map(envelope::patterns_of));
-            let o = search
-                .join()
-                .unwrap_or_else(|_| Err(Error::Verification("the design search's thread panicked".into())));
-            (st, Some(o))
-        })
+        let (st, o) = beside(
+            || studies(d, &r, progress),
+            |st: &Studies| st.env.as_ref().map(envelope::patterns_of),
+            |patterns| search_lazy(d, Some(&vdir), &|| patterns().flatten(), progress),
+        );
+        (st, Some(o))
     } else {
         (studies(d, &r, progress), None)
     };
