@@ -688,14 +688,12 @@ pub fn solve(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<StaticRun
     solve_keeping_factor(sys, mesh, cases).map(|(run, _)| run)
 }
 
-/// [`solve`], handing back the factorisation of K it made (positive definite, on the system's
-/// symbolic factorisation) for a caller that solves with K again (buckling's iteration).
-pub(crate) fn solve_keeping_factor(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<(StaticRun, Factor)> {
+/// The factorisation of a static system's K on its symbolic factorisation, proved positive
+/// definite; a singular or indefinite K is an error naming the free rigid-body motions (or the
+/// equation the factorisation stopped at).
+pub fn factor_stiffness(sys: &System) -> Result<Factor> {
     let model = sys.model();
-    let sets = model.element_sets();
-    let t_asm = sys.timings.assemble;
     let km_k = sys.k();
-    let t = Instant::now();
     let singular = |extra: String| {
         let free = free_rigid_motions(km_k, &model.dofs, &model.nodes);
         Error::Factorization(if free.is_empty() {
@@ -719,6 +717,18 @@ pub(crate) fn solve_keeping_factor(sys: &System, mesh: &Mesh, cases: &[Vec<Load>
             fa.negative_pivots
         )));
     }
+    Ok(fa)
+}
+
+/// [`solve`], handing back the factorisation of K it made (positive definite, on the system's
+/// symbolic factorisation) for a caller that solves with K again (buckling's iteration).
+pub(crate) fn solve_keeping_factor(sys: &System, mesh: &Mesh, cases: &[Vec<Load>]) -> Result<(StaticRun, Factor)> {
+    let model = sys.model();
+    let sets = model.element_sets();
+    let t_asm = sys.timings.assemble;
+    let km_k = sys.k();
+    let t = Instant::now();
+    let fa = factor_stiffness(sys)?;
     let t_fac = t.elapsed().as_secs_f64() + sys.timings.order;
 
     let t = Instant::now();

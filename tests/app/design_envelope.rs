@@ -4,27 +4,34 @@
 use vibrofem::app::design::envelope::{self, EnvelopeDesign, LoadCase, Tolerance, corner_patterns};
 use vibrofem::app::design::{Design, cache, run_design};
 
-/// A small design: the rigid table on a coarse mesh, coarse leaves, no tuning (each chain a
-/// fraction of a second), with two load cases and two bands.
-fn small() -> Design {
+/// The paper's design made cheap for envelope tests: table `table_model` on a coarse mesh,
+/// coarse leaves, no tuning, a start-up of `transient_s`, no search; its envelope on, full runs,
+/// with the default envelope's load cases and bands numbered `cases` and `bands`.
+pub(crate) fn coarse(table_model: &str, transient_s: f64, cases: &[usize], bands: &[usize]) -> Design {
     let mut d = Design::paper();
-    d.machine.table_model = "rigid".into();
+    d.machine.table_model = table_model.into();
     d.table.elem_size = 0.05;
     d.leaf.divisions = [12, 4, 1];
     d.leaf.thickness = 0.0096;
     d.tune = "none".into();
-    d.drive.transient_s = 0.1;
+    d.drive.transient_s = transient_s;
     d.search.enabled = false;
     let full = EnvelopeDesign::default();
     d.envelope = EnvelopeDesign {
         enabled: true,
-        load_cases: vec![full.load_cases[1].clone(), full.load_cases[2].clone()],
-        tolerances: vec![full.tolerances[0].clone(), full.tolerances[4].clone()],
+        load_cases: cases.iter().map(|&i| full.load_cases[i].clone()).collect(),
+        tolerances: bands.iter().map(|&i| full.tolerances[i].clone()).collect(),
         fd_step: 0.1,
         reduced: false,
         reduced_tol: full.reduced_tol,
     };
     d
+}
+
+/// A small design: the rigid table on a coarse mesh, coarse leaves, no tuning (each chain a
+/// fraction of a second), with two load cases and two bands.
+fn small() -> Design {
+    coarse("rigid", 0.1, &[1, 2], &[0, 4])
 }
 
 #[test]

@@ -3,34 +3,15 @@
 //! and a rigid table (12 DOFs) runs full without a basis.
 
 use std::sync::Arc;
-use vibrofem::app::design::envelope::{self, EnvelopeDesign, EnvelopeResult};
+use vibrofem::app::design::envelope::{self, EnvelopeResult};
 use vibrofem::app::design::reduced::{DEFAULT_TOL, Plan, within};
 use vibrofem::app::design::{Design, analyse, machine, run_design};
 
 /// The shell table on a coarse mesh, coarse leaves, no tuning, one load case besides the
 /// nominal one and three bands (stiffness of the leaves, damping, mains).
 fn small_shell() -> Design {
-    let mut d = Design::paper();
-    d.machine.table_model = "shells".into();
-    d.table.elem_size = 0.05;
-    d.leaf.divisions = [12, 4, 1];
-    d.leaf.thickness = 0.0096;
-    d.tune = "none".into();
-    d.drive.transient_s = 0.2;
-    d.search.enabled = false;
-    let full = EnvelopeDesign::default();
-    d.envelope = EnvelopeDesign {
-        enabled: true,
-        load_cases: vec![full.load_cases[1].clone(), full.load_cases[3].clone()],
-        tolerances: vec![
-            full.tolerances[0].clone(),
-            full.tolerances[3].clone(),
-            full.tolerances[4].clone(),
-        ],
-        fd_step: 0.1,
-        reduced: true,
-        reduced_tol: full.reduced_tol,
-    };
+    let mut d = super::design_envelope::coarse("shells", 0.2, &[1, 3], &[0, 3, 4]);
+    d.envelope.reduced = true;
     d
 }
 

@@ -106,8 +106,8 @@ where
 pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Job> {
     let mut r = run_design(d, Some(out), progress)?;
     let vdir = out.join("passing-variant");
-    let early = d.search.enabled && r.checks.iter().any(|c| !c.ok);
-    let (st, early_search) = if early {
+    let nominal_fails = r.checks.iter().any(|c| !c.ok);
+    let (st, early_search) = if d.search.enabled && nominal_fails {
         std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
         let (st, o) = beside(
             || studies(d, &r, progress),
@@ -132,7 +132,7 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
     rep.sections.insert(at, startup::section(&st.soft, &st.switched));
     rep.data["startup"] = serde_json::json!({ "ramped": json_value(&st.soft)?, "switched": json_value(&st.switched)? });
     let margin = d.search.required_margin;
-    let fails = r.checks.iter().any(|c| !c.ok)
+    let fails = nominal_fails
         || st
             .env
             .as_ref()

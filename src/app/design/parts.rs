@@ -86,7 +86,6 @@ fn leaf_fe_memo(d: &Design, h: f64) -> Result<LeafFe> {
 /// guided case (a unit vertical motion, the other five held) is the field F⁻¹e_z applied: its
 /// stiffness is the (z, z) entry and its stresses per metre come from that field.
 fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafFe> {
-    use crate::linalg::factor::Factor;
     let l = &d.leaf;
     let source = "leaf spring";
     let mesh = crate::mesh::generate::try_box_mesh(CellKind::Hex20, [l.length, l.width, h], l.divisions)?;
@@ -119,14 +118,7 @@ fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafFe> {
             ))
         })?;
     }
-    let fa = Factor::new(sys.symbolic()?.clone(), sys.k())?;
-    if fa.negative_pivots > 0 || fa.pivot_range.0 <= fa.pivot_range.1 * 1e-13 {
-        return Err(Error::Factorization(format!(
-            "{source}: the stiffness matrix is singular or indefinite (pivot ratio {:.1e}, {} negative pivots)",
-            fa.pivot_range.0 / fa.pivot_range.1.max(f64::MIN_POSITIVE),
-            fa.negative_pivots
-        )));
-    }
+    let fa = crate::analysis::statics::factor_stiffness(&sys)?;
     let n = sys.n_free();
     let mut x = faer::Mat::<f64>::zeros(n, 6);
     for (j, &e) in eqs.iter().enumerate() {
@@ -152,14 +144,8 @@ fn leaf_fe_fresh(d: &Design, h: f64) -> Result<LeafFe> {
     }
     // The guided case at uz = 1 m: the field X F⁻¹ e_z.
     let xg: Vec<f64> = (0..n).map(|r| (0..6).map(|j| x[(r, j)] * end[j][2]).sum()).collect();
-    let full = model.dofs.full(&xg);
     let nm = model.n_mesh_nodes;
-    let mut u = vec![0.0; 3 * nm];
-    for a in 0..nm {
-        for c in 0..3 {
-            u[3 * a + c] = full[crate::dof::NCOMP * a + c];
-        }
-    }
+    let u = model.dofs.expand_nodes(&xg, 3, nm);
     let ns = crate::post::stress::nodal_stress(&model.solids, nm, &u)?;
     // The von Mises peak's node (the reference check's hot spot) and its signed principal
     // stress: the largest |principal| over all nodes would be a free-edge corner of the rigid

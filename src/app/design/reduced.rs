@@ -148,7 +148,9 @@ fn m_orthonormal(m: &SymMatrix, cols: &[Vec<f64>], n_modes: usize) -> Mat<f64> {
         };
         // The part of the basis so far the columns' norms are measured after: the modes.
         let k_modes = n_modes.min(k);
-        let mut norm0 = norms(&w);
+        // Measured after the projection on the modes when they are all in, else as given.
+        let after_modes = k_modes > 0 && k >= n_modes;
+        let mut norm0 = if after_modes { vec![] } else { norms(&w) };
         for (lo, hi) in [(0, k_modes), (k_modes, k)] {
             if hi > lo {
                 for _ in 0..2 {
@@ -165,7 +167,7 @@ fn m_orthonormal(m: &SymMatrix, cols: &[Vec<f64>], n_modes: usize) -> Mat<f64> {
                     matmul(w.as_mut(), Accum::Add, qs, h.as_ref(), -1.0, Par::rayon(0));
                 }
             }
-            if lo == 0 && k_modes > 0 && k >= n_modes {
+            if lo == 0 && after_modes {
                 norm0 = norms(&w);
             }
         }
