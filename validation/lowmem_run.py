@@ -2,7 +2,7 @@
 """Drive the low-memory modal path (src/app/engines/slepc_lowmem.py) on a mesh and compare it
 with vibrofem's direct path.
 
-    /usr/bin/python3 validation/lowmem_run.py MESH [--modes 18] [--method lobpcg|ks-cg|ks-mumps]
+    /usr/bin/python3 validation/lowmem_run.py MESH [--modes 18] [--method lobpcg|slepc-lobpcg|ks-cg|ks-mumps]
         [--ranks 1] [--sturm-budget BYTES] [--param KEY=JSON ...] [--direct] [--check]
         [--kill-above GIB] [--vibrofem target/release/vibrofem] [--workdir DIR]
 
@@ -116,7 +116,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("mesh")
     ap.add_argument("--modes", type=int, default=18)
-    ap.add_argument("--method", default="ks-cg", choices=["lobpcg", "ks-cg", "ks-mumps"])
+    ap.add_argument("--method", default="ks-cg", choices=["lobpcg", "slepc-lobpcg", "ks-cg", "ks-mumps"])
     ap.add_argument("--param", action="append", default=[], metavar="KEY=JSON",
                     help="extra params.json key (e.g. inner_rtol=1e-9, petsc_options={\"eps_monitor\":\"\"})")
     ap.add_argument("--check", action="store_true", help="recompute the backward errors (validation/lowmem_check.py)")

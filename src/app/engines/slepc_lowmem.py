@@ -11,10 +11,12 @@ The lowest modes of K x = λ M x without an in-core factorisation of K (docs/low
 2. A = K − σM with σ < 0 below the spectrum (SPD; in K's storage, no copy; eigenvalues λ − σ).
    The iterative methods precondition it with PETSc's smoothed-aggregation multigrid (GAMG),
    R as its near-null space and the nodes' block size 3; one hierarchy serves the whole run.
-3. The remaining modes by SLEPc's `method` (params.json): "lobpcg" (LOBPCG, one multigrid cycle
-   per vector and iteration), "ks-cg" (Krylov–Schur, shift-and-invert whose inverse is CG +
-   GAMG to `inner_rtol`) or "ks-mumps" (Krylov–Schur, shift-and-invert with MUMPS's
-   out-of-core LDLᵀ of A, whose inertia also checks that σ is below the spectrum).
+3. The remaining modes by `method` (params.json): "lobpcg" (block LOBPCG here, one multigrid
+   cycle per vector and iteration, A and M applied once per new vector: lobpcg()),
+   "slepc-lobpcg" (SLEPc's LOBPCG, the same preconditioner; ~3.5× slower, kept for comparison),
+   "ks-cg" (SLEPc's Krylov–Schur, shift-and-invert whose inverse is CG + GAMG to `inner_rtol`)
+   or "ks-mumps" (Krylov–Schur, shift-and-invert with MUMPS's out-of-core LDLᵀ of A, whose
+   inertia also checks that σ is below the spectrum).
 4. Refinement: block inverse iteration (A⁻¹M by the same inverse) with Rayleigh–Ritz until
    every kept pair's backward error is below `refine_tol`.
 5. Completeness: MUMPS's inertia of K − sM above the last mode (out-of-core factor, ICNTL(22))
@@ -76,10 +78,23 @@ def trim() -> None:
         pass
 
 
+_LAST = [time.perf_counter()]
+
+
+def progress(msg: str, every: float = 10.0) -> None:
+    """A line `progress: msg` on rank 0's stderr (vibrofem shows it with the elapsed time), at
+    most one per `every` seconds: long runs report, short ones stay quiet."""
+    now = time.perf_counter()
+    if RANK == 0 and now - _LAST[0] >= every:
+        _LAST[0] = now
+        print("progress: " + msg, file=sys.stderr, flush=True)
+
+
 def mark(phase: str, t0: float) -> None:
     trim()
     TIMINGS[phase] = time.perf_counter() - t0
     MEMORY[phase] = peak_mb()
+    progress(f"low-memory path: {phase} done in {TIMINGS[phase]:.1f} s (peak {MEMORY[phase]:.0f} MiB)")
 
 
 def counts() -> dict:
@@ -158,21 +173,31 @@ class Pencil:
             self.K = load("K.petsc")
             self.M = load("M.petsc")
         self.n = self.K.getSize()[0]
-        self.normK = max(self.K.norm(PETSc.NormType.INFINITY), 1e-300)
-        self.normM = self.M.norm(PETSc.NormType.INFINITY)
+        # The diagonals of K and M (before any shift) scale the backward error (backward()).
+        self.dK, self.dM = self.K.getDiagonal(), self.M.getDiagonal()
+        self.dK.abs()
+        self.dM.abs()
         self.sigma = 0.0  # the shift already applied to K's storage
         self.mg = None  # (P, PᵀAP) of the P1 coarse level, when there is one
 
     def backward(self, x, lam: float) -> float:
-        """‖Kx − λMx‖ / ((‖K‖∞ + |λ|‖M‖∞)‖x‖), whatever shift K's storage holds."""
+        """‖Kx − λMx‖ / (‖D_K x‖ + |λ|‖D_M x‖) (D: the diagonal), whatever shift K's storage holds.
+        An upper bound of vibrofem's backward error ‖Kx − λMx‖ / (‖|K||x|‖ + |λ|‖|M||x|‖): |K||x| ≥
+        D_K|x| entry by entry. (A bound by ‖K‖∞‖x‖ instead is not one: on a beam's rotations and
+        translations it was 77 times below vibrofem's.)"""
         r = self.K.createVecLeft()
         self.K.mult(x, r)
         mx = self.M.createVecLeft()
         self.M.mult(x, mx)
         r.axpy(-(lam - self.sigma), mx)
-        eta = r.norm() / ((self.normK + abs(lam) * self.normM) * x.norm())
-        r.destroy()
-        mx.destroy()
+        dx = x.copy()
+        dx.pointwiseMult(self.dK, x)
+        den = dx.norm()
+        dx.pointwiseMult(self.dM, x)
+        den += abs(lam) * dx.norm()
+        eta = r.norm() / max(den, 1e-300)
+        for v in (r, mx, dx):
+            v.destroy()
         return eta
 
     def shift(self, s: float) -> None:
@@ -308,22 +333,17 @@ def vertex_interpolation(pen: Pencil):
     if bad.any():
         raise ValueError(f"parents.bin: equation {lo + int(np.argmax(bad))} is interpolated from a DOF that is not "
                          "a vertex DOF")
-    cols, vals, ptr = [], [], [0]
-    for e in range(lo, hi):
-        a, b = par[e]
-        if vertex[e]:
-            cols.append(cmap[e])
-            vals.append(1.0)
-        else:
-            for q in (a, b):
-                if q >= 0:
-                    cols.append(cmap[q])
-                    vals.append(0.5)
-        ptr.append(len(cols))
-    nc_local = int(vertex[lo:hi].sum())
+    # A row: (its own coarse column, 1) at a vertex DOF; (each free end's column, 1/2) otherwise.
+    isv = vertex[lo:hi]
+    ends = np.where(pl >= 0, cmap[np.maximum(pl, 0)], -1)
+    cols = np.stack([np.where(isv, cmap[lo:hi], ends[:, 0]), np.where(isv, -1, ends[:, 1])], axis=1)
+    vals = np.stack([np.where(isv, 1.0, 0.5), np.full(hi - lo, 0.5)], axis=1)
+    keep = cols >= 0
+    ptr = np.concatenate([[0], np.cumsum(keep.sum(axis=1))])
+    nc_local = int(isv.sum())
     pi = PETSc.Mat().createAIJ(((hi - lo, n), (nc_local, int(vertex.sum()))),
-                               csr=(np.array(ptr, dtype=PETSc.IntType), np.array(cols, dtype=PETSc.IntType),
-                                    np.array(vals)), comm=COMM)
+                               csr=(ptr.astype(PETSc.IntType), cols[keep].astype(PETSc.IntType), vals[keep]),
+                               comm=COMM)
     if pen.bs > 1:
         pi.setBlockSizes(pen.bs, pen.bs)
     return pi, vertex[lo:hi]
@@ -419,6 +439,8 @@ def lobpcg_block(want_el: int, default: int) -> int:
 def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
     """Step 3: the elastic pairs of A (values λ − σ), ascending, and the inner KSP for step 4."""
     method = P.get("method", "lobpcg")
+    if method == "lobpcg":
+        return lobpcg(pen, rigid_vecs, want_el)
     A, M = pen.K, pen.M
     eps = SLEPc.EPS().create(comm=COMM)
     eps.setOperators(A, M)
@@ -430,7 +452,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
     nev = want_el + max(4, want_el // 3)
     info: dict = {}
     eps.setDimensions(nev)
-    if method == "lobpcg":
+    if method == "slepc-lobpcg":
         eps.setType(SLEPc.EPS.Type.LOBPCG)
         eps.setWhichEigenpairs(SLEPc.EPS.Which.SMALLEST_REAL)
         st.setType(SLEPc.ST.Type.PRECOND)
@@ -443,7 +465,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
         # Locking converged pairs made SLEPc 3.18's LOBPCG stagnate at 1e-9–3e-8 on the clustered
         # pairs at the block's end (120k plate, the 1983-DOF box); without it the box converges.
         eps.setLOBPCGLocking(False)
-        tol = float(P.get("eig_tol", 1e-10))
+        tol = float(P.get("eig_tol", 1e-11))
         info["lobpcg_block"] = block
     elif method in ("ks-cg", "ks-mumps"):
         eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
@@ -461,7 +483,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
             mumps_factor(ksp.getPC(), int(P.get("ooc_mb", 0)))
             tol = float(P.get("eig_tol", 1e-12))
     else:
-        fail(f"params.json: method {method!r} is not one of lobpcg, ks-cg, ks-mumps")
+        fail(f"params.json: method {method!r} is not one of lobpcg, slepc-lobpcg, ks-cg, ks-mumps")
     st.setShift(0.0)
     eps.setConvergenceTest(SLEPc.EPS.Conv.NORM)
     eps.setTolerances(tol, int(P.get("max_it", 300)))
@@ -503,6 +525,206 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
     return [X[i] for i in order], np.array(theta)[order], ksp, info, eps
 
 
+# The refinement's bar on backward() (an upper bound of vibrofem's backward error, whose bar is 1e-10).
+REFINE_TOL = 5e-11
+CHUNK = 16384  # rows per slice of the block operations (their temporaries: m × CHUNK numbers)
+
+
+class Blocks:
+    """Blocks of vectors stored by rows ((rows, n_local) arrays: row j is a vector's local part), the
+    operators applied to them through PETSc vectors wrapping the rows (no copies), and their
+    inner products summed over the ranks."""
+
+    def __init__(self, pen: Pencil) -> None:
+        self.pen = pen
+        lo, hi = pen.K.getOwnershipRange()
+        self.nl = hi - lo
+        self.chunks = [slice(s, min(self.nl, s + CHUNK)) for s in range(0, self.nl, CHUNK)]
+        self.vin, self.vout = pen.K.createVecRight(), pen.K.createVecLeft()
+        self.tmp = pen.K.createVecRight()
+        self.mpi = COMM.tompi4py() if COMM.getSize() > 1 else None
+
+    def allsum(self, g):
+        if self.mpi is not None:
+            from mpi4py import MPI
+            self.mpi.Allreduce(MPI.IN_PLACE, g, op=MPI.SUM)
+        return g
+
+    def apply(self, op, src, dst, rows: int) -> None:
+        """dst[j] = op(src[j]) for j < rows (op(x, y): a PETSc product or solve)."""
+        for j in range(rows):
+            self.vin.placeArray(src[j])
+            self.vout.placeArray(dst[j])
+            op(self.vin, self.vout)
+            self.vout.resetArray()
+            self.vin.resetArray()
+
+    def project(self, B, rows: int, U, MU, urows: int) -> None:
+        """B[:rows] made M-orthogonal to U[:urows] (M-orthonormal, MU = M·U)."""
+        if not rows or not urows:
+            return
+        C = self.allsum(MU[:urows] @ B[:rows].T)
+        for c in self.chunks:
+            B[:rows, c] -= C.T @ U[:urows, c]
+
+    def combine(self, srcs, C, dsts) -> None:
+        """Rows of Cᵀ·S written into dsts (list of (array, rows)), S the rows of srcs (list of
+        (array, rows)) stacked; slice by slice, so a destination may be a source."""
+        for c in self.chunks:
+            S = np.vstack([a[:r, c] for a, r in srcs])
+            out = C.T @ S
+            i = 0
+            for a, r in dsts:
+                a[:r, c] = out[i:i + r]
+                i += r
+
+    def grams(self, parts):
+        """SᵀAS and SᵀMS of S = the rows of parts (list of (X, AX, MX, rows)) stacked."""
+        m = sum(p[3] for p in parts)
+        GA, GM = np.zeros((m, m)), np.zeros((m, m))
+        for c in self.chunks:
+            S = np.vstack([p[0][:p[3], c] for p in parts])
+            GA += S @ np.vstack([p[1][:p[3], c] for p in parts]).T
+            GM += S @ np.vstack([p[2][:p[3], c] for p in parts]).T
+        return self.allsum(GA), self.allsum(GM)
+
+    def svqb(self, G, tau: float):
+        """T with Tᵀ G T = I on the directions of G (a Gram matrix) above tau relative (SVQB)."""
+        dg = np.diag(G).copy()
+        ok = dg > 0.0
+        d = np.where(ok, 1.0 / np.sqrt(np.where(ok, dg, 1.0)), 0.0)
+        e, Q = np.linalg.eigh(0.5 * (G + G.T) * np.outer(d, d))
+        keep = e > tau * max(e.max(initial=0.0), 1e-300)
+        return (d[:, None] * Q[:, keep]) / np.sqrt(e[keep])
+
+
+def ritz(GA, GM):
+    """Ritz values (ascending) and GM-orthonormal coefficients of the pencil (GA, GM)."""
+    d = 1.0 / np.sqrt(np.diag(GM))
+    Li = np.linalg.inv(np.linalg.cholesky(0.5 * (GM + GM.T) * np.outer(d, d)))
+    H = Li @ (0.5 * (GA + GA.T) * np.outer(d, d)) @ Li.T
+    theta, V = np.linalg.eigh(0.5 * (H + H.T))
+    return theta, (Li.T @ V) * d[:, None]
+
+
+def lobpcg(pen: Pencil, rigid_vecs, want_el: int):
+    """Step 3, method "lobpcg": the lowest pairs of A = K − σM by block LOBPCG (Knyazev 2001) with
+    the basis selection of Hetmaniuk & Lehoucq (2006): X the Ritz vectors, W the preconditioned
+    residuals of the pairs not yet converged (one multigrid cycle each) made M-orthogonal to the
+    rigid-body pairs, X and P and orthonormal among themselves, P the previous step's direction
+    M-orthonormal and M-orthogonal to X. A·X, M·X, A·P, M·P are updated with X and P (no products
+    on them): an iteration applies A and M once to each vector of W, where SLEPc's LOBPCG
+    applies them to its whole basis (three blocks) again for the Rayleigh–Ritz (docs/lowmem.md).
+    Memory: nine blocks of n numbers (X, W, P and their products with A and M)."""
+    A, M, sigma = pen.K, pen.M, pen.sigma
+    bl = Blocks(pen)
+    ksp = PETSc.KSP().create(comm=COMM)
+    ksp.setOptionsPrefix("st_")  # the prefix of the multigrid's options (multigrid())
+    ksp.setOperators(A)
+    ksp.setType(PETSc.KSP.Type.PREONLY)
+    info: dict = {}
+    precondition(ksp.getPC(), pen, info)
+    ksp.setFromOptions()
+    ksp.setUp()
+    nev = want_el + max(4, want_el // 3)
+    k = lobpcg_block(want_el, nev)
+    # The bar: half the refinement's, so that no refinement is needed (the backward errors are
+    # those of the updated A·X, M·X: at 120k they equal the recomputed ones to 1e-8 relative).
+    tol = float(P.get("eig_tol", 0.5 * float(P.get("refine_tol", REFINE_TOL))))
+    max_it = int(P.get("max_it", 300))
+    info.update({"method": "lobpcg", "eig_tol": tol, "lobpcg_block": k})
+    nl = bl.nl
+    dk, dm = pen.dK.getArray(readonly=True), pen.dM.getArray(readonly=True)
+    ny = len(rigid_vecs)
+    Y = np.array([v.getArray() for v in rigid_vecs]).reshape(ny, nl)
+    MY = np.empty_like(Y)
+    bl.apply(M.mult, Y, MY, ny)
+    X, AX, MX, W, AW, MW, Pd, AP, MP = (np.empty((k, nl)) for _ in range(9))
+    X[:] = np.random.default_rng(20261127 + RANK).standard_normal((k, nl))
+    for _ in range(2):
+        bl.project(X, k, Y, MY, ny)
+    bl.apply(A.mult, X, AX, k)
+    bl.apply(M.mult, X, MX, k)
+    theta, Z = ritz(*bl.grams([(X, AX, MX, k)]))
+    for a in ((X, k), (AX, k), (MX, k)):
+        bl.combine([a], Z, [a])
+    conv = np.zeros(k, dtype=bool)
+    npr, it = 0, 0
+    eta, history = np.ones(k), []
+    while True:
+        sq = np.zeros((3, k))  # ‖r‖², ‖D_K x‖², ‖D_M x‖² (the backward error of Pencil.backward)
+        for c in bl.chunks:
+            R = AX[:, c] - theta[:, None] * MX[:, c]
+            sq[0] += np.einsum("ij,ij->i", R, R)
+            R = X[:, c] * dk[c]
+            sq[1] += np.einsum("ij,ij->i", R, R)
+            R = X[:, c] * dm[c]
+            sq[2] += np.einsum("ij,ij->i", R, R)
+        sq = np.sqrt(bl.allsum(sq))
+        eta = sq[0] / np.maximum(sq[1] + np.abs(theta + sigma) * sq[2], 1e-300)
+        conv |= eta <= tol
+        history.append(float(eta[:want_el].max(initial=0.0)))
+        progress(f"LOBPCG iteration {it}: {int(conv[:want_el].sum())} of {want_el} modes converged, largest backward "
+                 f"error {history[-1]:.1e} (bar {tol:.0e})")
+        if conv[:want_el].all() or it >= max_it:
+            break
+        it += 1
+        act = np.flatnonzero(~conv)
+        na = len(act)
+        for j, col in enumerate(act):  # W: the preconditioned residuals
+            bl.tmp.setArray(AX[col] - theta[col] * MX[col])
+            bl.vout.placeArray(W[j])
+            ksp.solve(bl.tmp, bl.vout)
+            bl.vout.resetArray()
+        for _ in range(2):
+            bl.project(W, na, Y, MY, ny)
+            bl.project(W, na, X, MX, k)
+            bl.project(W, na, Pd, MP, npr)
+        for _ in range(2):  # orthonormal (Euclidean: no products yet), vanished directions dropped
+            T = bl.svqb(bl.allsum(W[:na] @ W[:na].T), 1e-14)
+            bl.combine([(W, na)], T, [(W, T.shape[1])])
+            na = T.shape[1]
+        bl.apply(A.mult, W, AW, na)
+        bl.apply(M.mult, W, MW, na)
+        parts = [(X, AX, MX, k), (W, AW, MW, na), (Pd, AP, MP, npr)]
+        try:
+            GA, GM = bl.grams(parts)
+            th, Z = ritz(GA, GM)
+        except np.linalg.LinAlgError:  # a basis that lost its independence: restart without P
+            parts = parts[:2]
+            GA, GM = bl.grams(parts)
+            th, Z = ritz(GA, GM)
+        theta, Zk, Zr = th[:k], Z[:, :k], Z[:, k:]
+        # P: the step of the new X, [0; Zw; Zp] of the active pairs, made GM-orthogonal to Zk and
+        # orthonormal. Z is GM-orthonormal, so its part orthogonal to Zk is Zr·Q with
+        # Q = Zrᵀ·GM·[0; Zw; Zp]; directions below 1e-8 (relative, squared) are dropped: they would
+        # magnify rounding in A·P and M·P.
+        Yc = Zk[:, act].copy()
+        Yc[:k] = 0.0
+        Q = Zr.T @ (GM @ Yc)
+        C = np.hstack([Zk, Zr @ (Q @ bl.svqb(Q.T @ Q, 1e-8))])
+        pn = C.shape[1] - k
+        for j in range(3):
+            bl.combine([(p[j], p[3]) for p in parts], C, [((X, AX, MX)[j], k), ((Pd, AP, MP)[j], pn)])
+        npr = pn
+    info["iterations"] = it
+    info["converged"] = int(conv.sum())
+    info["eta"] = [float(e) for e in eta]
+    info["eta_history"] = history
+    if not conv[:want_el].all():
+        fail(f"lobpcg: {int(conv[:want_el].sum())} of {want_el} elastic modes converged in {it} iterations (largest "
+             f"backward error {eta[:want_el].max():.1e}, bar {tol:.0e}): the preconditioned iteration stalled (a mechanism, "
+             "a zero-energy motion that is not a rigid-body motion, is a common cause); solve with --solver direct")
+    out = []
+    for j in range(k):
+        x = A.createVecRight()
+        x.setArray(X[j])
+        out.append(x)
+    del X, AX, MX, W, AW, MW, Pd, AP, MP, Y, MY
+    trim()
+    return out, np.array(theta), ksp, info, None
+
+
 def m_orthonormal(M, V, MV, Y):
     """Y made M-orthogonal to V (M-orthonormal, MV = M·V) and M-orthonormal itself (Gram–Schmidt
     twice); vectors that vanish relative to their start are dropped. Returns (Y, M·Y)."""
@@ -529,7 +751,7 @@ def refine(pen: Pencil, ksp, X, theta, want_el: int, rigid_vecs):
     per round: a block Lanczos step, much faster than plain block inverse iteration for the pairs
     at the block's end."""
     Mr = products(pen.M, rigid_vecs)
-    tol = float(P.get("refine_tol", 2e-11))
+    tol = float(P.get("refine_tol", REFINE_TOL))
 
     def errors(th, XX):
         return [pen.backward(XX[j], th[j] + pen.sigma) for j in range(min(want_el, len(XX)))]
@@ -648,10 +870,10 @@ def main() -> None:
     t = time.perf_counter()
     try:
         X, theta, ksp, info, eps = eigensolve(pen, rigid_vecs, want_el)
-    except PETSc.Error as e:
+    except (PETSc.Error, np.linalg.LinAlgError) as e:
         # LOBPCG's Rayleigh-Ritz breaks down (LAPACK sygvd) on a basis that holds zero-energy
         # motions the deflation does not: a mechanism is the usual cause, named as such.
-        fail(f"the eigensolver ({P.get('method', 'lobpcg')}) broke down (PETSc error {e.ierr}) with {nr} "
+        fail(f"the eigensolver ({P.get('method', 'lobpcg')}) broke down ({getattr(e, 'ierr', e)}) with {nr} "
              "rigid-body motions deflated: the model likely has a mechanism (a zero-energy motion that is not a "
              "rigid-body motion: unconnected parts, a free hinge), which the multigrid's near-null space does not "
              "hold. Solve with --solver direct, which finds and reports zero-energy modes, or constrain the "
@@ -667,7 +889,8 @@ def main() -> None:
     t = time.perf_counter()
     X, theta, err, rinfo = refine(pen, ksp, X, theta, want_el, rigid_vecs)
     info.update(rinfo)
-    eps.destroy()
+    if eps is not None:
+        eps.destroy()
     ksp.destroy()
     mark("refine", t)
     lam = np.concatenate([np.array(rigid_lam), theta[:want_el] + sigma])
