@@ -25,7 +25,8 @@ use crate::post::modal::lambda_of_hz;
 use crate::system::System;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
 use std::time::Instant;
 
 /// The script run under MPI.
@@ -278,19 +279,37 @@ pub(super) fn run_mpi(o: &SlepcOptions, dir: &Path, script: &Path, versions: &st
         .env("OPENBLAS_NUM_THREADS", "1");
     petsc_env(&mut c);
     log::info!("{ENGINE}: {versions}; running {c:?}");
-    let out = c
-        .output()
+    let mut child = c
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
         .map_err(|e| engine_err(format!("cannot run {mpi} ({e}); {INSTALL}")))?;
-    if !out.status.success() {
-        let err = String::from_utf8_lossy(&out.stderr);
-        let tail: Vec<&str> = err.lines().rev().take(12).collect();
-        let tail: Vec<&str> = tail.into_iter().rev().collect();
+    // The job's stderr as it comes: its `progress: …` lines are shown with the elapsed time (a
+    // long low-memory run reports its phases and iterations), the last other lines are kept for
+    // an error.
+    let t0 = Instant::now();
+    let mut tail = std::collections::VecDeque::new();
+    if let Some(err) = child.stderr.take() {
+        for line in BufReader::new(err).lines().map_while(std::io::Result::ok) {
+            if let Some(msg) = line.strip_prefix("progress: ") {
+                eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
+                continue;
+            }
+            tail.push_back(line);
+            if tail.len() > 12 {
+                tail.pop_front();
+            }
+        }
+    }
+    let status = child
+        .wait()
+        .map_err(|e| engine_err(format!("{mpi} -n {}: {e}", o.ranks)))?;
+    if !status.success() {
         return Err(engine_err(format!(
-            "{mpi} -n {} exited with {} (work folder {}):\n{}",
+            "{mpi} -n {} exited with {status} (work folder {}):\n{}",
             o.ranks,
-            out.status,
             dir.display(),
-            tail.join("\n")
+            Vec::from(tail).join("\n")
         )));
     }
     Ok(())
