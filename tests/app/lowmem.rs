@@ -121,7 +121,8 @@ fn the_script_lobpcg_equals_slepc_lobpcg() {
     ];
     let mut out = Vec::new();
     for method in ["lobpcg", "slepc-lobpcg"] {
-        let (code, o, err) = crate::common::run_cmd(crate::common::bin().args(args).env("VIBROFEM_LOWMEM_METHOD", method));
+        let (code, o, err) =
+            crate::common::run_cmd(crate::common::bin().args(args).env("VIBROFEM_LOWMEM_METHOD", method));
         assert_eq!(code, 0, "{method}: {err}");
         let v: serde_json::Value = serde_json::from_str(&o).unwrap();
         assert_eq!(v["solver"]["method"], method, "{}", v["solver"]);

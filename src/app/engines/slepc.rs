@@ -24,8 +24,8 @@ use crate::linalg::eigen::{self, EigenParams};
 use crate::post::modal::lambda_of_hz;
 use crate::system::System;
 use crate::{Error, Result};
-use std::path::{Path, PathBuf};
 use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
