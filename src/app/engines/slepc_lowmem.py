@@ -665,7 +665,7 @@ def lobpcg(pen: Pencil, rigid_vecs, want_el: int):
         conv |= eta <= tol
         history.append(float(eta[:want_el].max(initial=0.0)))
         progress(f"LOBPCG iteration {it}: {int(conv[:want_el].sum())} of {want_el} modes converged, largest backward "
-                 f"error {history[-1]:.1e} (bar {tol:.0e})")
+                 f"error {history[-1]:.1e} (bar {tol:.1e})")
         if conv[:want_el].all() or it >= max_it:
             break
         it += 1
@@ -713,7 +713,7 @@ def lobpcg(pen: Pencil, rigid_vecs, want_el: int):
     info["eta_history"] = history
     if not conv[:want_el].all():
         fail(f"lobpcg: {int(conv[:want_el].sum())} of {want_el} elastic modes converged in {it} iterations (largest "
-             f"backward error {eta[:want_el].max():.1e}, bar {tol:.0e}): the preconditioned iteration stalled (a mechanism, "
+             f"backward error {eta[:want_el].max():.1e}, bar {tol:.1e}): the preconditioned iteration stalled (a mechanism, "
              "a zero-energy motion that is not a rigid-body motion, is a common cause); solve with --solver direct")
     out = []
     for j in range(k):
