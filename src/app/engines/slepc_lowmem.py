@@ -140,6 +140,15 @@ def combine(X, z):
     return x
 
 
+def ritz(GA, GM):
+    """Ritz values (ascending) and GM-orthonormal coefficients of the pencil (GA, GM)."""
+    d = 1.0 / np.sqrt(np.diag(GM))
+    Li = np.linalg.inv(np.linalg.cholesky(0.5 * (GM + GM.T) * np.outer(d, d)))
+    H = Li @ (0.5 * (GA + GA.T) * np.outer(d, d)) @ Li.T
+    theta, V = np.linalg.eigh(0.5 * (H + H.T))
+    return theta, (Li.T @ V) * d[:, None]
+
+
 def rayleigh_ritz(K, M, X):
     """Ritz values (ascending) and coefficients of span(X) for K, M."""
     KX, MX = products(K, X), products(M, X)
@@ -147,12 +156,7 @@ def rayleigh_ritz(K, M, X):
     Mr = np.array([[x.dot(y) for y in MX] for x in X])
     for v in KX + MX:
         v.destroy()
-    Kr, Mr = 0.5 * (Kr + Kr.T), 0.5 * (Mr + Mr.T)
-    d = 1.0 / np.sqrt(np.diag(Mr))
-    Li = np.linalg.inv(np.linalg.cholesky(Mr * np.outer(d, d)))
-    C = Li @ (Kr * np.outer(d, d)) @ Li.T
-    theta, W = np.linalg.eigh(0.5 * (C + C.T))
-    return theta, (Li.T @ W) * d[:, None]
+    return ritz(Kr, Mr)
 
 
 class Pencil:
@@ -536,7 +540,6 @@ class Blocks:
     inner products summed over the ranks."""
 
     def __init__(self, pen: Pencil) -> None:
-        self.pen = pen
         lo, hi = pen.K.getOwnershipRange()
         self.nl = hi - lo
         self.chunks = [slice(s, min(self.nl, s + CHUNK)) for s in range(0, self.nl, CHUNK)]
@@ -596,15 +599,6 @@ class Blocks:
         e, Q = np.linalg.eigh(0.5 * (G + G.T) * np.outer(d, d))
         keep = e > tau * max(e.max(initial=0.0), 1e-300)
         return (d[:, None] * Q[:, keep]) / np.sqrt(e[keep])
-
-
-def ritz(GA, GM):
-    """Ritz values (ascending) and GM-orthonormal coefficients of the pencil (GA, GM)."""
-    d = 1.0 / np.sqrt(np.diag(GM))
-    Li = np.linalg.inv(np.linalg.cholesky(0.5 * (GM + GM.T) * np.outer(d, d)))
-    H = Li @ (0.5 * (GA + GA.T) * np.outer(d, d)) @ Li.T
-    theta, V = np.linalg.eigh(0.5 * (H + H.T))
-    return theta, (Li.T @ V) * d[:, None]
 
 
 def lobpcg(pen: Pencil, rigid_vecs, want_el: int):
