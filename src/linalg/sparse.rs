@@ -58,6 +58,26 @@ impl Pattern {
     }
 }
 
+/// How many entries ahead the products ask for the row of x they will read. The rows of a
+/// column come from all over x (gmsh numbers the mid-side nodes after every corner node), so
+/// nearly every read misses the per-core cache and waits on the shared one; asked for this far
+/// ahead, the rows are on their way while the entries before them are summed. Measured on the
+/// 119k-DOF tet10 plate (M·X, 6 columns, 52 products per run): 1.46 s without, 1.23 s at 16,
+/// 0.97–1.19 s at 32 and 64 (two runs each, one binary).
+const PREFETCH_AHEAD: usize = 48;
+
+/// Ask the cache for `xr[at..]` (a hint: nothing happens off x86-64 or past the end).
+#[inline(always)]
+fn prefetch(xr: &[f64], at: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(r) = xr.get(at) {
+        // SAFETY: a prefetch reads nothing and writes nothing; the address is inside xr.
+        unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((r as *const f64).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (xr, at);
+}
+
 /// Block product kernel with the block width known at compile time, so the accumulators stay
 /// in registers: `out[j, c] = Σ_i A[i, j] · x[i, c]` for `x` row-major (`xr`, width B); the
 /// results go straight into the columns of `out`, in parallel chunks of rows.
@@ -68,7 +88,11 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMu
             let j = ch * ROWS + jj;
             let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
             let mut acc = [0.0f64; B];
-            for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+            let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
+            for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
+                if let Some(&q) = ahead.get(k) {
+                    prefetch(xr, q as usize * B);
+                }
                 let i = i as usize;
                 let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
                 for c in 0..B {
@@ -261,7 +285,11 @@ impl SymMatrix {
                 for j in ch * ROWS..((ch + 1) * ROWS).min(n) {
                     acc.fill(0.0);
                     let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
-                    for (&i, &a) in p.row_idx[s..e].iter().zip(&vals[s..e]) {
+                    let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
+                    for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
+                        if let Some(&q) = ahead.get(k) {
+                            prefetch(&xr, q as usize * b);
+                        }
                         let (i, a) = (i as usize, a.abs());
                         for (o, &xv) in acc.iter_mut().zip(&xr[i * b..i * b + b]) {
                             *o += a * xv;
