@@ -106,6 +106,57 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMu
     });
 }
 
+/// Columns `c0..c0 + w` of `x`, each entry through `f`, into `xr` row by row (width `w`).
+fn row_major(x: MatRef<'_, f64>, c0: usize, w: usize, f: impl Fn(f64) -> f64, xr: &mut Vec<f64>) {
+    xr.clear();
+    xr.resize(x.nrows() * w, 0.0);
+    for c in 0..w {
+        for (i, v) in x.col(c0 + c).iter().enumerate() {
+            xr[i * w + c] = f(*v);
+        }
+    }
+}
+
+/// `‖|A|·|x_c|‖₂` for the B columns of `xr` (row-major |x|): the rows' sums in fixed chunks of
+/// rows in parallel, their squares summed in row order within a chunk and the chunks' totals in
+/// chunk order (the same sums whatever the thread count).
+fn abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64]) -> Vec<f64> {
+    const ROWS: usize = 2048;
+    let n = p.n;
+    let parts: Vec<[f64; B]> = (0..n.div_ceil(ROWS))
+        .into_par_iter()
+        .map(|ch| {
+            let mut s2 = [0.0f64; B];
+            for j in ch * ROWS..((ch + 1) * ROWS).min(n) {
+                let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+                let mut acc = [0.0f64; B];
+                let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
+                for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
+                    if let Some(&q) = ahead.get(k) {
+                        prefetch(xr, q as usize * B);
+                    }
+                    let (i, a) = (i as usize, a.abs());
+                    let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
+                    for c in 0..B {
+                        acc[c] += a * xi[c];
+                    }
+                }
+                for c in 0..B {
+                    s2[c] += acc[c] * acc[c];
+                }
+            }
+            s2
+        })
+        .collect();
+    let mut out = [0.0f64; B];
+    for part in &parts {
+        for c in 0..B {
+            out[c] += part[c];
+        }
+    }
+    out.iter().map(|v| v.sqrt()).collect()
+}
+
 /// A symmetric matrix on a shared pattern (both triangles stored).
 #[derive(Clone, Debug)]
 pub struct SymMatrix {
@@ -241,13 +292,7 @@ impl SymMatrix {
             let w = (b - c0).min(8);
             // A row-major copy of the chunk's columns: each row the gather reads is then one
             // contiguous piece.
-            xr.clear();
-            xr.resize(n * w, 0.0);
-            for c in 0..w {
-                for (i, v) in x.col(c0 + c).iter().enumerate() {
-                    xr[i * w + c] = *v;
-                }
-            }
+            row_major(x, c0, w, |v| v, &mut xr);
             let out = y.as_mut().subcols_mut(c0, w);
             match w {
                 1 => gather_rows::<1>(p, vals, &xr, out),
@@ -268,47 +313,28 @@ impl SymMatrix {
         let n = self.n();
         let b = x.ncols();
         assert_eq!(x.nrows(), n);
-        let mut xr = vec![0.0f64; n * b];
-        for c in 0..b {
-            for (i, v) in x.col(c).iter().enumerate() {
-                xr[i * b + c] = v.abs();
-            }
+        let (p, vals) = (&*self.pattern, &self.values);
+        let mut xr = Vec::new();
+        let mut out = Vec::with_capacity(b);
+        // Chunks of at most eight columns with the width known at compile time, as in
+        // `mul_block` (each column's sums are the same in any chunk).
+        let mut c0 = 0;
+        while c0 < b {
+            let w = (b - c0).min(8);
+            row_major(x, c0, w, f64::abs, &mut xr);
+            out.extend(match w {
+                1 => abs_norms::<1>(p, vals, &xr),
+                2 => abs_norms::<2>(p, vals, &xr),
+                3 => abs_norms::<3>(p, vals, &xr),
+                4 => abs_norms::<4>(p, vals, &xr),
+                5 => abs_norms::<5>(p, vals, &xr),
+                6 => abs_norms::<6>(p, vals, &xr),
+                7 => abs_norms::<7>(p, vals, &xr),
+                _ => abs_norms::<8>(p, vals, &xr),
+            });
+            c0 += w;
         }
-        const ROWS: usize = 2048;
-        let p = &*self.pattern;
-        let vals = &self.values;
-        let parts: Vec<Vec<f64>> = (0..n.div_ceil(ROWS))
-            .into_par_iter()
-            .map(|ch| {
-                let mut s2 = vec![0.0f64; b];
-                let mut acc = vec![0.0f64; b];
-                for j in ch * ROWS..((ch + 1) * ROWS).min(n) {
-                    acc.fill(0.0);
-                    let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
-                    let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
-                    for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
-                        if let Some(&q) = ahead.get(k) {
-                            prefetch(&xr, q as usize * b);
-                        }
-                        let (i, a) = (i as usize, a.abs());
-                        for (o, &xv) in acc.iter_mut().zip(&xr[i * b..i * b + b]) {
-                            *o += a * xv;
-                        }
-                    }
-                    for (t, a) in s2.iter_mut().zip(&acc) {
-                        *t += a * a;
-                    }
-                }
-                s2
-            })
-            .collect();
-        let mut out = vec![0.0f64; b];
-        for part in &parts {
-            for (o, v) in out.iter_mut().zip(part) {
-                *o += v;
-            }
-        }
-        out.iter().map(|v| v.sqrt()).collect()
+        out
     }
     /// Bytes of the values (the pattern is shared and counted once elsewhere).
     pub fn value_bytes(&self) -> usize {
