@@ -363,7 +363,12 @@ fn check_request(opts: &ModalOptions) -> Result<usize> {
 /// 13.6 at 120k (9.37 M); 20 keeps the estimate above both.
 const BYTES_PER_ENTRY: u64 = 20;
 /// Each rank's interpreter, PETSc and SLEPc, bytes.
-const RANK_BYTES: u64 = 120 << 20;
+const RANK_BYTES: u64 = 160 << 20;
+/// Bytes per stored entry of K that each rank after the first adds (the distributed matrices'
+/// off-process parts and their communication buffers). Measured, the script's peak on 2 ranks
+/// less 1 rank's (docs/lowmem.md): +150–163 MiB at 120k DOFs (9.37 M entries) and +270 MiB at
+/// 1M (83.1 M): ~140 MiB per rank (in RANK_BYTES) plus 1.6 bytes per entry.
+const GHOST_BYTES_PER_ENTRY: u64 = 2;
 /// The script's LOBPCG (method `lobpcg`) holds nine vectors of n per column of its block (X, W,
 /// P and their products with A and M) plus its slices' temporaries; one more keeps the estimate
 /// above what was measured (docs/lowmem.md). SLEPc's LOBPCG (method `slepc-lobpcg`, kept for
@@ -388,11 +393,13 @@ pub fn default_block(wanted: usize) -> usize {
 
 /// The ranks' memory estimate, bytes, with a LOBPCG block of `block` and `nev` modes asked:
 /// the matrices and the multigrid (per stored entry of K), LOBPCG's vectors (per block column
-/// and per mode) and each rank's interpreter and libraries.
+/// and per mode), each rank's interpreter and libraries, and the off-process parts every rank
+/// after the first adds.
 pub fn ranks_estimate(n: u64, nnz: u64, ranks: u64, nev: usize, block: usize) -> u64 {
     BYTES_PER_ENTRY * nnz
         + 8 * n * (VECTORS_PER_COLUMN * block as u64 + nev as u64 + VECTORS_FIXED)
         + ranks * RANK_BYTES
+        + ranks.saturating_sub(1) * GHOST_BYTES_PER_ENTRY * nnz
 }
 
 /// The largest LOBPCG block (at most `cap`) whose [`ranks_estimate`] fits `avail` bytes; 0 when
@@ -985,6 +992,13 @@ mod tests {
             }
         }
         assert_eq!(choose_block(n, nnz, r, 18, 12, Some(0)).block, 13);
+        // Above what the script was measured to hold at block 16 (docs/lowmem.md), summed over
+        // its ranks: 1M on 1 rank ~3 050 MiB, on 2 ranks 3 320 MiB; 120k on 2 ranks 554 MiB.
+        assert!(est(16) > 3050 << 20 && est(16) < 3400 << 20, "{}", est(16) >> 20);
+        let two = ranks_estimate(n, nnz, 2, 18, 16);
+        assert!(two > 3320 << 20 && two < 3700 << 20, "{}", two >> 20);
+        let two_120k = ranks_estimate(119_181, 9_368_955, 2, 18, 16);
+        assert!(two_120k > 554 << 20, "{}", two_120k >> 20);
         // Few modes: the smallest block is wanted + 1 (the default's 4 extra columns cut).
         let c = choose_block(n, nnz, r, 3, 2, Some(0));
         assert_eq!((c.block, c.default, c.fits), (3, 6, false));
