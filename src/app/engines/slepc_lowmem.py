@@ -802,6 +802,16 @@ def sturm_upper(pen: Pencil, lam_max: float, above) -> dict:
     if budget_mb <= 0:
         sturm["sturm_skipped"] = "no memory was left in the budget for a factorisation"
         return sturm
+    # MUMPS copies K − sM (12 bytes an entry at the least) and analyses it before ICNTL(23) caps
+    # anything, and K is read again in aij for it: with less than that left, an attempt only
+    # overshoots the budget before failing (1M on 2 ranks under 4G: 3.32 → 3.95 GiB for a count
+    # MUMPS then refused).
+    need_mb = int(12 * pen.K.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"] / 2**20 / COMM.getSize()) + 1
+    if budget_mb < need_mb:
+        sturm["sturm_skipped"] = (
+            f"MUMPS's copy of K − sM alone needs about {need_mb} MB per rank, and {budget_mb} MB per rank "
+            "were left in the memory budget")
+        return sturm
     pen.reread("aij")  # MUMPS's Cholesky takes aij or sbaij, not baij
     pen.shift(upper_pt)
     pc = PETSc.PC().create(comm=COMM)
