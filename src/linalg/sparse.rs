@@ -78,6 +78,26 @@ fn prefetch(xr: &[f64], at: usize) {
     let _ = (xr, at);
 }
 
+/// `Σ_i f(A[i, j]) · x[i, c]` for the B columns of `xr` (row-major x), entry by entry in the
+/// stored order, each row of x asked for [`PREFETCH_AHEAD`] entries before its use.
+#[inline(always)]
+fn column_sums<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], j: usize, f: impl Fn(f64) -> f64) -> [f64; B] {
+    let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+    let mut acc = [0.0f64; B];
+    let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
+    for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
+        if let Some(&q) = ahead.get(k) {
+            prefetch(xr, q as usize * B);
+        }
+        let (i, a) = (i as usize, f(a));
+        let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
+        for c in 0..B {
+            acc[c] += a * xi[c];
+        }
+    }
+    acc
+}
+
 /// Block product kernel with the block width known at compile time, so the accumulators stay
 /// in registers: `out[j, c] = Σ_i A[i, j] · x[i, c]` for `x` row-major (`xr`, width B); the
 /// results go straight into the columns of `out`, in parallel chunks of rows.
@@ -85,20 +105,7 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMu
     const ROWS: usize = 256;
     out.par_row_chunks_mut(ROWS).enumerate().for_each(|(ch, mut o)| {
         for jj in 0..o.nrows() {
-            let j = ch * ROWS + jj;
-            let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
-            let mut acc = [0.0f64; B];
-            let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
-            for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
-                if let Some(&q) = ahead.get(k) {
-                    prefetch(xr, q as usize * B);
-                }
-                let i = i as usize;
-                let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
-                for c in 0..B {
-                    acc[c] += a * xi[c];
-                }
-            }
+            let acc = column_sums::<B>(p, vals, xr, ch * ROWS + jj, |a| a);
             for (c, v) in acc.iter().enumerate() {
                 o[(jj, c)] = *v;
             }
@@ -128,19 +135,7 @@ fn abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64]) -> Vec<f64> 
         .map(|ch| {
             let mut s2 = [0.0f64; B];
             for j in ch * ROWS..((ch + 1) * ROWS).min(n) {
-                let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
-                let mut acc = [0.0f64; B];
-                let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
-                for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
-                    if let Some(&q) = ahead.get(k) {
-                        prefetch(xr, q as usize * B);
-                    }
-                    let (i, a) = (i as usize, a.abs());
-                    let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
-                    for c in 0..B {
-                        acc[c] += a * xi[c];
-                    }
-                }
+                let acc = column_sums::<B>(p, vals, xr, j, f64::abs);
                 for c in 0..B {
                     s2[c] += acc[c] * acc[c];
                 }
