@@ -63,7 +63,7 @@ impl Pattern {
 /// nearly every read misses the per-core cache and waits on the shared one; asked for this far
 /// ahead, the rows are on their way while the entries before them are summed. Measured on the
 /// 119k-DOF tet10 plate (M·X, 6 columns, 52 products per run): 1.46 s without, 1.23 s at 16,
-/// 0.97–1.19 s at 32 and 64 (two runs each, one binary).
+/// 0.97–1.19 s at 32 and 64 (two runs each, one binary); 48 lies between them.
 const PREFETCH_AHEAD: usize = 48;
 
 /// Ask the cache for `xr[at..]` (a hint: nothing happens off x86-64 or past the end).
