@@ -430,11 +430,17 @@ def mumps_factor(pc, ooc_mb: int) -> None:
         F.setMumpsIcntl(key, val)
 
 
-def lobpcg_block(want_el: int, default: int) -> int:
-    """LOBPCG's block: params' `lobpcg_block` (default: wanted + max(4, wanted/3)), cut to
+def default_block(want_el: int) -> int:
+    """The block (and SLEPc's nev) for `want_el` elastic modes: wanted + max(4, wanted/3), as the
+    driver's `default_block`."""
+    return want_el + max(4, want_el // 3)
+
+
+def lobpcg_block(want_el: int) -> int:
+    """LOBPCG's block: params' `lobpcg_block` (default: default_block()), cut to
     `lobpcg_block_max` (the largest the driver's memory budget allows) but never below the
     wanted modes + `lobpcg_min_extra` (1)."""
-    block = int(P.get("lobpcg_block", default))
+    block = int(P.get("lobpcg_block", default_block(want_el)))
     if "lobpcg_block_max" in P:
         block = min(block, max(want_el + int(P.get("lobpcg_min_extra", 1)), int(P["lobpcg_block_max"])))
     return max(block, 1)
@@ -453,7 +459,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
         eps.setDeflationSpace(rigid_vecs)
     st = eps.getST()
     ksp = st.getKSP()
-    nev = want_el + max(4, want_el // 3)
+    nev = default_block(want_el)
     info: dict = {}
     eps.setDimensions(nev)
     if method == "slepc-lobpcg":
@@ -463,7 +469,7 @@ def eigensolve(pen: Pencil, rigid_vecs, want_el: int):
         ksp.setType(PETSc.KSP.Type.PREONLY)
         precondition(ksp.getPC(), pen, info)
         # Stop when the wanted pairs converge; the extra vectors only widen the block.
-        block = lobpcg_block(want_el, nev)
+        block = lobpcg_block(want_el)
         eps.setDimensions(want_el, 3 * block)  # LOBPCG holds X, W, P: ncv = 3 × block
         eps.setLOBPCGBlockSize(block)
         # Locking converged pairs made SLEPc 3.18's LOBPCG stagnate at 1e-9–3e-8 on the clustered
@@ -620,8 +626,7 @@ def lobpcg(pen: Pencil, rigid_vecs, want_el: int):
     precondition(ksp.getPC(), pen, info)
     ksp.setFromOptions()
     ksp.setUp()
-    nev = want_el + max(4, want_el // 3)
-    k = lobpcg_block(want_el, nev)
+    k = lobpcg_block(want_el)
     # The bar: half the refinement's, so that no refinement is needed (the backward errors are
     # those of the updated A·X, M·X: at 120k they equal the recomputed ones to 1e-8 relative).
     tol = float(P.get("eig_tol", 0.5 * float(P.get("refine_tol", REFINE_TOL))))
