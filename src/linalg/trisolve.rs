@@ -481,6 +481,8 @@ fn scale_by_pivots<const K: usize>(nd: &Node<'_>, xs: &mut [[f64; K]]) {
 /// them.
 struct Kernels<const K: usize> {
     fma: bool,
+    /// AVX-512VL as well: the off-diagonal kernels with thirty-two vector registers.
+    avx512: bool,
 }
 
 impl<const K: usize> Kernels<K> {
@@ -489,7 +491,11 @@ impl<const K: usize> Kernels<K> {
         let fma = std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma");
         #[cfg(not(target_arch = "x86_64"))]
         let fma = false;
-        Kernels { fma }
+        #[cfg(target_arch = "x86_64")]
+        let avx512 = fma && std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl");
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx512 = false;
+        Kernels { fma, avx512 }
     }
 
     /// The diagonal block's forward substitution on the supernode's rows `xs`.
@@ -505,8 +511,13 @@ impl<const K: usize> Kernels<K> {
     /// `tmp[c·len + i] = Σ_t L_off[lo + i, t]·xs[t][c]` for off-diagonal rows `lo..lo + len`.
     fn forward_off(&self, nd: &Node<'_>, lo: usize, len: usize, xs: &[[f64; K]], tmp: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
-        if self.fma {
+        if self.avx512 {
             // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { avx512::forward_off::<K>(nd, lo, len, xs, tmp) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.fma {
+            // SAFETY: as above.
             return unsafe { fma::forward_off::<K>(nd, lo, len, xs, tmp) };
         }
         forward_off::<K, false>(nd, lo, len, xs, tmp)
@@ -515,8 +526,13 @@ impl<const K: usize> Kernels<K> {
     /// `xs[t][c] −= L_off[:, j0 + t]ᵀ·g[c]` for the columns `j0..j0 + xs.len()`.
     fn backward_off(&self, nd: &Node<'_>, j0: usize, xs: &mut [[f64; K]], g: &[f64]) {
         #[cfg(target_arch = "x86_64")]
-        if self.fma {
+        if self.avx512 {
             // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { avx512::backward_off::<K>(nd, j0, xs, g) };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if self.fma {
+            // SAFETY: as above.
             return unsafe { fma::backward_off::<K>(nd, j0, xs, g) };
         }
         backward_off::<K, false>(nd, j0, xs, g)
@@ -535,202 +551,222 @@ impl<const K: usize> Kernels<K> {
 
 /// The off-diagonal kernels in explicit four-lane vector code (the same arithmetic as
 /// [`forward_off`] and [`backward_off`] with `F`: each lane a fused multiply–add chain over the
-/// columns, the backward lanes summed as (l0 + l1) + (l2 + l3), the remaining rows in order), for
-/// AVX2 with FMA. The number of columns of L per pass over a chunk of right-hand sides keeps the
-/// accumulators, the right-hand sides' vectors and one vector of L within the sixteen registers:
-/// for a six-column chunk two columns forward (the x values broadcast from memory), one
-/// backward (six accumulators, six vectors of g, one of L).
-#[cfg(target_arch = "x86_64")]
-mod fma {
-    use super::{Node, cols};
-    use std::arch::x86_64::*;
+/// columns, the backward lanes summed as (l0 + l1) + (l2 + l3), the remaining rows in order),
+/// compiled twice: for AVX2 with FMA (sixteen vector registers) and for AVX-512VL (the same
+/// four-lane vectors, thirty-two registers). The number of columns of L per pass over a chunk of
+/// right-hand sides (`J` of the tables) keeps the accumulators, the right-hand sides' vectors
+/// and one vector of L within the registers: with AVX2 for a six-column chunk two columns
+/// forward (the x values broadcast from memory), one backward (six accumulators, six vectors of
+/// g, one of L); with AVX-512VL four columns each way (24 accumulators or broadcasts, six
+/// vectors, one of L).
+macro_rules! vector_kernels {
+    ($name:ident, $feat:literal, forward: [$f1:literal, $f2:literal, $f3:literal, $f4:literal, $f5:literal, $f6:literal],
+     backward: [$b1:literal, $b2:literal, $b3:literal, $b4:literal, $b5:literal, $b6:literal]) => {
+        #[cfg(target_arch = "x86_64")]
+        mod $name {
+            use super::{Node, cols};
+            use std::arch::x86_64::*;
 
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn forward_off<const K: usize>(
-        nd: &Node<'_>,
-        lo: usize,
-        len: usize,
-        xs: &[[f64; K]],
-        tmp: &mut [f64],
-    ) {
-        let start = nd.w + lo;
-        tmp[..K * len].fill(0.0);
-        let mut c0 = 0;
-        while c0 + 6 <= K {
-            forward_chunk::<K, 6, 2>(nd, start, len, xs, tmp, c0);
-            c0 += 6;
-        }
-        match K - c0 {
-            0 => {}
-            1 => forward_chunk::<K, 1, 8>(nd, start, len, xs, tmp, c0),
-            2 => forward_chunk::<K, 2, 6>(nd, start, len, xs, tmp, c0),
-            3 => forward_chunk::<K, 3, 4>(nd, start, len, xs, tmp, c0),
-            4 => forward_chunk::<K, 4, 3>(nd, start, len, xs, tmp, c0),
-            _ => forward_chunk::<K, 5, 2>(nd, start, len, xs, tmp, c0),
-        }
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    fn forward_chunk<const K: usize, const KC: usize, const J: usize>(
-        nd: &Node<'_>,
-        start: usize,
-        len: usize,
-        xs: &[[f64; K]],
-        tmp: &mut [f64],
-        c0: usize,
-    ) {
-        let (w, nr) = (nd.w, nd.nr);
-        let mut j0 = 0;
-        while j0 + J <= w {
-            forward_cols::<K, KC, J>(cols::<J>(nd.ls, nr, start, len, j0), &xs[j0..j0 + J], tmp, len, c0);
-            j0 += J;
-        }
-        while j0 < w {
-            forward_cols::<K, KC, 1>(cols::<1>(nd.ls, nr, start, len, j0), &xs[j0..j0 + 1], tmp, len, c0);
-            j0 += 1;
-        }
-    }
-
-    /// `tmp[c·p + i] += Σ_t col[t][i]·xs[t][c]` for `c` in `c0..c0 + KC`.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    fn forward_cols<const K: usize, const KC: usize, const J: usize>(
-        cols: [&[f64]; J],
-        xs: &[[f64; K]],
-        tmp: &mut [f64],
-        p: usize,
-        c0: usize,
-    ) {
-        let tmp = &mut tmp[c0 * p..(c0 + KC) * p];
-        let p4 = p - p % 4;
-        for t in 0..J {
-            assert!(cols[t].len() >= p);
-        }
-        let mut xb = [[_mm256_setzero_pd(); KC]; J];
-        for t in 0..J {
-            for c in 0..KC {
-                xb[t][c] = _mm256_set1_pd(xs[t][c0 + c]);
-            }
-        }
-        let tp = tmp.as_mut_ptr();
-        let mut i = 0;
-        while i < p4 {
-            let mut acc = [_mm256_setzero_pd(); KC];
-            // SAFETY: rows i..i + 4 ≤ p of every column of L and of tmp's KC columns.
-            unsafe {
-                for c in 0..KC {
-                    acc[c] = _mm256_loadu_pd(tp.add(c * p + i));
+            #[target_feature(enable = $feat)]
+            pub(super) unsafe fn forward_off<const K: usize>(
+                nd: &Node<'_>,
+                lo: usize,
+                len: usize,
+                xs: &[[f64; K]],
+                tmp: &mut [f64],
+            ) {
+                let start = nd.w + lo;
+                tmp[..K * len].fill(0.0);
+                let mut c0 = 0;
+                while c0 + 6 <= K {
+                    forward_chunk::<K, 6, $f6>(nd, start, len, xs, tmp, c0);
+                    c0 += 6;
                 }
+                match K - c0 {
+                    0 => {}
+                    1 => forward_chunk::<K, 1, $f1>(nd, start, len, xs, tmp, c0),
+                    2 => forward_chunk::<K, 2, $f2>(nd, start, len, xs, tmp, c0),
+                    3 => forward_chunk::<K, 3, $f3>(nd, start, len, xs, tmp, c0),
+                    4 => forward_chunk::<K, 4, $f4>(nd, start, len, xs, tmp, c0),
+                    _ => forward_chunk::<K, 5, $f5>(nd, start, len, xs, tmp, c0),
+                }
+            }
+
+            #[target_feature(enable = $feat)]
+            #[inline]
+            fn forward_chunk<const K: usize, const KC: usize, const J: usize>(
+                nd: &Node<'_>,
+                start: usize,
+                len: usize,
+                xs: &[[f64; K]],
+                tmp: &mut [f64],
+                c0: usize,
+            ) {
+                let (w, nr) = (nd.w, nd.nr);
+                let mut j0 = 0;
+                while j0 + J <= w {
+                    let l = cols::<J>(nd.ls, nr, start, len, j0);
+                    forward_cols::<K, KC, J>(l, &xs[j0..j0 + J], tmp, len, c0);
+                    j0 += J;
+                }
+                while j0 < w {
+                    let l = cols::<1>(nd.ls, nr, start, len, j0);
+                    forward_cols::<K, KC, 1>(l, &xs[j0..j0 + 1], tmp, len, c0);
+                    j0 += 1;
+                }
+            }
+
+            /// `tmp[c·p + i] += Σ_t col[t][i]·xs[t][c]` for `c` in `c0..c0 + KC`.
+            #[target_feature(enable = $feat)]
+            #[inline]
+            fn forward_cols<const K: usize, const KC: usize, const J: usize>(
+                cols: [&[f64]; J],
+                xs: &[[f64; K]],
+                tmp: &mut [f64],
+                p: usize,
+                c0: usize,
+            ) {
+                let tmp = &mut tmp[c0 * p..(c0 + KC) * p];
+                let p4 = p - p % 4;
                 for t in 0..J {
-                    let a = _mm256_loadu_pd(cols[t].as_ptr().add(i));
+                    assert!(cols[t].len() >= p);
+                }
+                let mut xb = [[_mm256_setzero_pd(); KC]; J];
+                for t in 0..J {
                     for c in 0..KC {
-                        acc[c] = _mm256_fmadd_pd(a, xb[t][c], acc[c]);
+                        xb[t][c] = _mm256_set1_pd(xs[t][c0 + c]);
                     }
                 }
-                for c in 0..KC {
-                    _mm256_storeu_pd(tp.add(c * p + i), acc[c]);
-                }
-            }
-            i += 4;
-        }
-        for i in p4..p {
-            for t in 0..J {
-                let a = cols[t][i];
-                for c in 0..KC {
-                    tmp[c * p + i] = a.mul_add(xs[t][c0 + c], tmp[c * p + i]);
-                }
-            }
-        }
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn backward_off<const K: usize>(nd: &Node<'_>, j0: usize, xs: &mut [[f64; K]], g: &[f64]) {
-        let mut c0 = 0;
-        while c0 + 6 <= K {
-            backward_chunk::<K, 6, 1>(nd, j0, xs, g, c0);
-            c0 += 6;
-        }
-        match K - c0 {
-            0 => {}
-            1 => backward_chunk::<K, 1, 8>(nd, j0, xs, g, c0),
-            2 => backward_chunk::<K, 2, 6>(nd, j0, xs, g, c0),
-            3 => backward_chunk::<K, 3, 4>(nd, j0, xs, g, c0),
-            4 => backward_chunk::<K, 4, 2>(nd, j0, xs, g, c0),
-            _ => backward_chunk::<K, 5, 2>(nd, j0, xs, g, c0),
-        }
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    fn backward_chunk<const K: usize, const KC: usize, const J: usize>(
-        nd: &Node<'_>,
-        j0: usize,
-        xs: &mut [[f64; K]],
-        g: &[f64],
-        c0: usize,
-    ) {
-        let (q, nr, start) = (nd.q(), nd.nr, nd.w);
-        let n = xs.len();
-        let mut j = 0;
-        while j + J <= n {
-            backward_cols::<K, KC, J>(cols::<J>(nd.ls, nr, start, q, j0 + j), &mut xs[j..j + J], g, q, c0);
-            j += J;
-        }
-        while j < n {
-            backward_cols::<K, KC, 1>(cols::<1>(nd.ls, nr, start, q, j0 + j), &mut xs[j..j + 1], g, q, c0);
-            j += 1;
-        }
-    }
-
-    /// `xs[t][c] −= col[t]ᵀ·g[c]` for `c` in `c0..c0 + KC`.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline]
-    fn backward_cols<const K: usize, const KC: usize, const J: usize>(
-        cols: [&[f64]; J],
-        xs: &mut [[f64; K]],
-        g: &[f64],
-        p: usize,
-        c0: usize,
-    ) {
-        let g = &g[c0 * p..(c0 + KC) * p];
-        let p4 = p - p % 4;
-        for t in 0..J {
-            assert!(cols[t].len() >= p);
-        }
-        let gp = g.as_ptr();
-        let mut acc = [[_mm256_setzero_pd(); KC]; J];
-        let mut i = 0;
-        while i < p4 {
-            let mut gv = [_mm256_setzero_pd(); KC];
-            // SAFETY: rows i..i + 4 ≤ p of every column of L and of g's KC columns.
-            unsafe {
-                for c in 0..KC {
-                    gv[c] = _mm256_loadu_pd(gp.add(c * p + i));
-                }
-                for t in 0..J {
-                    let a = _mm256_loadu_pd(cols[t].as_ptr().add(i));
-                    for c in 0..KC {
-                        acc[t][c] = _mm256_fmadd_pd(a, gv[c], acc[t][c]);
+                let tp = tmp.as_mut_ptr();
+                let mut i = 0;
+                while i < p4 {
+                    let mut acc = [_mm256_setzero_pd(); KC];
+                    // SAFETY: rows i..i + 4 ≤ p of every column of L and of tmp's KC columns.
+                    unsafe {
+                        for c in 0..KC {
+                            acc[c] = _mm256_loadu_pd(tp.add(c * p + i));
+                        }
+                        for t in 0..J {
+                            let a = _mm256_loadu_pd(cols[t].as_ptr().add(i));
+                            for c in 0..KC {
+                                acc[c] = _mm256_fmadd_pd(a, xb[t][c], acc[c]);
+                            }
+                        }
+                        for c in 0..KC {
+                            _mm256_storeu_pd(tp.add(c * p + i), acc[c]);
+                        }
                     }
+                    i += 4;
                 }
-            }
-            i += 4;
-        }
-        for t in 0..J {
-            for c in 0..KC {
-                let mut v = [0.0f64; 4];
-                // SAFETY: four lanes into a four-element array.
-                unsafe { _mm256_storeu_pd(v.as_mut_ptr(), acc[t][c]) };
-                let mut sum = (v[0] + v[1]) + (v[2] + v[3]);
                 for i in p4..p {
-                    sum = cols[t][i].mul_add(g[c * p + i], sum);
+                    for t in 0..J {
+                        let a = cols[t][i];
+                        for c in 0..KC {
+                            tmp[c * p + i] = a.mul_add(xs[t][c0 + c], tmp[c * p + i]);
+                        }
+                    }
                 }
-                xs[t][c0 + c] -= sum;
+            }
+
+            #[target_feature(enable = $feat)]
+            pub(super) unsafe fn backward_off<const K: usize>(
+                nd: &Node<'_>,
+                j0: usize,
+                xs: &mut [[f64; K]],
+                g: &[f64],
+            ) {
+                let mut c0 = 0;
+                while c0 + 6 <= K {
+                    backward_chunk::<K, 6, $b6>(nd, j0, xs, g, c0);
+                    c0 += 6;
+                }
+                match K - c0 {
+                    0 => {}
+                    1 => backward_chunk::<K, 1, $b1>(nd, j0, xs, g, c0),
+                    2 => backward_chunk::<K, 2, $b2>(nd, j0, xs, g, c0),
+                    3 => backward_chunk::<K, 3, $b3>(nd, j0, xs, g, c0),
+                    4 => backward_chunk::<K, 4, $b4>(nd, j0, xs, g, c0),
+                    _ => backward_chunk::<K, 5, $b5>(nd, j0, xs, g, c0),
+                }
+            }
+
+            #[target_feature(enable = $feat)]
+            #[inline]
+            fn backward_chunk<const K: usize, const KC: usize, const J: usize>(
+                nd: &Node<'_>,
+                j0: usize,
+                xs: &mut [[f64; K]],
+                g: &[f64],
+                c0: usize,
+            ) {
+                let (q, nr, start) = (nd.q(), nd.nr, nd.w);
+                let n = xs.len();
+                let mut j = 0;
+                while j + J <= n {
+                    let l = cols::<J>(nd.ls, nr, start, q, j0 + j);
+                    backward_cols::<K, KC, J>(l, &mut xs[j..j + J], g, q, c0);
+                    j += J;
+                }
+                while j < n {
+                    let l = cols::<1>(nd.ls, nr, start, q, j0 + j);
+                    backward_cols::<K, KC, 1>(l, &mut xs[j..j + 1], g, q, c0);
+                    j += 1;
+                }
+            }
+
+            /// `xs[t][c] −= col[t]ᵀ·g[c]` for `c` in `c0..c0 + KC`.
+            #[target_feature(enable = $feat)]
+            #[inline]
+            fn backward_cols<const K: usize, const KC: usize, const J: usize>(
+                cols: [&[f64]; J],
+                xs: &mut [[f64; K]],
+                g: &[f64],
+                p: usize,
+                c0: usize,
+            ) {
+                let g = &g[c0 * p..(c0 + KC) * p];
+                let p4 = p - p % 4;
+                for t in 0..J {
+                    assert!(cols[t].len() >= p);
+                }
+                let gp = g.as_ptr();
+                let mut acc = [[_mm256_setzero_pd(); KC]; J];
+                let mut i = 0;
+                while i < p4 {
+                    let mut gv = [_mm256_setzero_pd(); KC];
+                    // SAFETY: rows i..i + 4 ≤ p of every column of L and of g's KC columns.
+                    unsafe {
+                        for c in 0..KC {
+                            gv[c] = _mm256_loadu_pd(gp.add(c * p + i));
+                        }
+                        for t in 0..J {
+                            let a = _mm256_loadu_pd(cols[t].as_ptr().add(i));
+                            for c in 0..KC {
+                                acc[t][c] = _mm256_fmadd_pd(a, gv[c], acc[t][c]);
+                            }
+                        }
+                    }
+                    i += 4;
+                }
+                for t in 0..J {
+                    for c in 0..KC {
+                        let mut v = [0.0f64; 4];
+                        // SAFETY: four lanes into a four-element array.
+                        unsafe { _mm256_storeu_pd(v.as_mut_ptr(), acc[t][c]) };
+                        let mut sum = (v[0] + v[1]) + (v[2] + v[3]);
+                        for i in p4..p {
+                            sum = cols[t][i].mul_add(g[c * p + i], sum);
+                        }
+                        xs[t][c0 + c] -= sum;
+                    }
+                }
             }
         }
-    }
+    };
 }
+
+vector_kernels!(fma, "avx2,fma", forward: [8, 6, 4, 3, 2, 2], backward: [8, 6, 4, 2, 2, 1]);
+vector_kernels!(avx512, "avx2,fma,avx512f,avx512vl", forward: [8, 12, 8, 6, 5, 4], backward: [8, 12, 8, 6, 5, 4]);
 
 #[cfg(target_arch = "x86_64")]
 mod fma_diag {
@@ -965,10 +1001,11 @@ fn backward_cols<const K: usize, const KC: usize, const J: usize, const F: bool>
 mod tests {
     use super::*;
 
-    /// The AVX2 kernels compute the scalar fused definition ([`forward_off`] and
-    /// [`backward_off`] with `F`) bit for bit, for every chunk width (1–13 right-hand sides: the
-    /// six-column chunks and each remainder), panel widths that leave columns over, and row
-    /// counts that leave rows outside the four-row vectors.
+    /// The AVX2 kernels, and the AVX-512VL ones where the machine has them, compute the scalar
+    /// fused definition ([`forward_off`] and [`backward_off`] with `F`) bit for bit, for every
+    /// chunk width (1–13 right-hand sides: the six-column chunks and each remainder), panel
+    /// widths that leave columns over, and row counts that leave rows outside the four-row
+    /// vectors.
     #[test]
     fn vector_kernels_equal_the_scalar_definition() {
         if !(std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")) {
@@ -996,26 +1033,36 @@ mod tests {
                 let xs: Vec<[f64; K]> = (0..w).map(|_| std::array::from_fn(|_| next())).collect();
                 let len = below;
                 let mut t1 = vec![0.0; K * len];
-                let mut t2 = vec![0.0; K * len];
                 forward_off::<K, true>(&nd, 0, len, &xs, &mut t1);
-                // SAFETY: the CPU has AVX2 and FMA (checked above).
-                unsafe { fma::forward_off::<K>(&nd, 0, len, &xs, &mut t2) };
-                assert!(
-                    t1.iter().zip(&t2).all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "forward, K = {K}, w = {w}"
-                );
                 let g: Vec<f64> = (0..K * nd.q()).map(|_| next()).collect();
-                let (mut x1, mut x2) = (xs.clone(), xs.clone());
+                let mut x1 = xs.clone();
                 backward_off::<K, true>(&nd, 0, &mut x1, &g);
-                // SAFETY: as above.
-                unsafe { fma::backward_off::<K>(&nd, 0, &mut x2, &g) };
-                assert!(
-                    x1.iter()
-                        .flatten()
-                        .zip(x2.iter().flatten())
-                        .all(|(a, b)| a.to_bits() == b.to_bits()),
-                    "backward, K = {K}, w = {w}"
-                );
+                type Fwd<const K: usize> = unsafe fn(&Node<'_>, usize, usize, &[[f64; K]], &mut [f64]);
+                type Bwd<const K: usize> = unsafe fn(&Node<'_>, usize, &mut [[f64; K]], &[f64]);
+                let mut variants: Vec<(&str, Fwd<K>, Bwd<K>)> =
+                    vec![("AVX2", fma::forward_off::<K>, fma::backward_off::<K>)];
+                if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("avx512vl") {
+                    variants.push(("AVX-512VL", avx512::forward_off::<K>, avx512::backward_off::<K>));
+                }
+                for (name, fwd, bwd) in variants {
+                    let mut t2 = vec![0.0; K * len];
+                    // SAFETY: the CPU has the variant's features (checked above).
+                    unsafe { fwd(&nd, 0, len, &xs, &mut t2) };
+                    assert!(
+                        t1.iter().zip(&t2).all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "{name} forward, K = {K}, w = {w}"
+                    );
+                    let mut x2 = xs.clone();
+                    // SAFETY: as above.
+                    unsafe { bwd(&nd, 0, &mut x2, &g) };
+                    assert!(
+                        x1.iter()
+                            .flatten()
+                            .zip(x2.iter().flatten())
+                            .all(|(a, b)| a.to_bits() == b.to_bits()),
+                        "{name} backward, K = {K}, w = {w}"
+                    );
+                }
             }
         }
         check::<1>(&mut next);
