@@ -360,7 +360,7 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
                     kern.forward_off(&nd, 0, q, xs, tmp);
                     // Rows inside the subtree (below its root's end) come first; the rest are
                     // in the root's pattern, in the same order.
-                    let mut k = 0;
+                    let mut k = usize::MAX;
                     for idx in 0..q {
                         let r = nd.row(idx);
                         if r < inside_end {
@@ -370,6 +370,9 @@ pub(crate) fn solve<const K: usize>(sn: &SupernodalSymbolic, plan: &SolvePlan, v
                                 xr[c] -= tmp[at(q, idx, c)];
                             }
                         } else {
+                            if k == usize::MAX {
+                                k = root_pat.partition_point(|&x| x < r);
+                            }
                             while root_pat[k] != r {
                                 k += 1;
                             }
