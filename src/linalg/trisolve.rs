@@ -481,7 +481,7 @@ fn scale_by_pivots<const K: usize>(nd: &Node<'_>, xs: &mut [[f64; K]]) {
 }
 
 /// The per-supernode kernels, compiled for AVX2 with fused multiply–adds when the machine has
-/// them.
+/// them (the off-diagonal ones for AVX-512VL too, preferred where present).
 struct Kernels<const K: usize> {
     fma: bool,
     /// AVX-512VL as well: the off-diagonal kernels with thirty-two vector registers.
