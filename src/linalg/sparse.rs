@@ -113,14 +113,24 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMu
     });
 }
 
-/// Columns `c0..c0 + w` of `x`, each entry through `f`, into `xr` row by row (width `w`).
-fn row_major(x: MatRef<'_, f64>, c0: usize, w: usize, f: impl Fn(f64) -> f64, xr: &mut Vec<f64>) {
-    xr.clear();
-    xr.resize(x.nrows() * w, 0.0);
-    for c in 0..w {
-        for (i, v) in x.col(c0 + c).iter().enumerate() {
-            xr[i * w + c] = f(*v);
+/// The columns of `x` in chunks of at most eight, each entry through `f`: `each(c0, w, xr)` with
+/// `xr` the chunk's row-major copy (width `w`), so that each row a product gathers is one
+/// contiguous piece and the chunk's width can be a compile-time constant.
+fn column_chunks(x: MatRef<'_, f64>, f: impl Fn(f64) -> f64, mut each: impl FnMut(usize, usize, &[f64])) {
+    let (n, b) = (x.nrows(), x.ncols());
+    let mut xr = Vec::new();
+    let mut c0 = 0;
+    while c0 < b {
+        let w = (b - c0).min(8);
+        xr.clear();
+        xr.resize(n * w, 0.0);
+        for c in 0..w {
+            for (i, v) in x.col(c0 + c).iter().enumerate() {
+                xr[i * w + c] = f(*v);
+            }
         }
+        each(c0, w, &xr);
+        c0 += w;
     }
 }
 
@@ -281,26 +291,23 @@ impl SymMatrix {
         assert!(x.nrows() == n && y.nrows() == n && y.ncols() == b);
         let p = &*self.pattern;
         let vals = &self.values;
-        let mut xr = Vec::new();
-        let mut c0 = 0;
-        while c0 < b {
-            let w = (b - c0).min(8);
-            // A row-major copy of the chunk's columns: each row the gather reads is then one
-            // contiguous piece.
-            row_major(x, c0, w, |v| v, &mut xr);
-            let out = y.as_mut().subcols_mut(c0, w);
-            match w {
-                1 => gather_rows::<1>(p, vals, &xr, out),
-                2 => gather_rows::<2>(p, vals, &xr, out),
-                3 => gather_rows::<3>(p, vals, &xr, out),
-                4 => gather_rows::<4>(p, vals, &xr, out),
-                5 => gather_rows::<5>(p, vals, &xr, out),
-                6 => gather_rows::<6>(p, vals, &xr, out),
-                7 => gather_rows::<7>(p, vals, &xr, out),
-                _ => gather_rows::<8>(p, vals, &xr, out),
-            }
-            c0 += w;
-        }
+        column_chunks(
+            x,
+            |v| v,
+            |c0, w, xr| {
+                let out = y.as_mut().subcols_mut(c0, w);
+                match w {
+                    1 => gather_rows::<1>(p, vals, xr, out),
+                    2 => gather_rows::<2>(p, vals, xr, out),
+                    3 => gather_rows::<3>(p, vals, xr, out),
+                    4 => gather_rows::<4>(p, vals, xr, out),
+                    5 => gather_rows::<5>(p, vals, xr, out),
+                    6 => gather_rows::<6>(p, vals, xr, out),
+                    7 => gather_rows::<7>(p, vals, xr, out),
+                    _ => gather_rows::<8>(p, vals, xr, out),
+                }
+            },
+        );
     }
     /// `‖|A|·|x_c|‖₂` for each column `x_c` of `x` (|A|: the entries' magnitudes), the scale of
     /// the rounding in forming `A x_c`. Parallel over fixed chunks of rows, summed in order.
@@ -309,26 +316,20 @@ impl SymMatrix {
         let b = x.ncols();
         assert_eq!(x.nrows(), n);
         let (p, vals) = (&*self.pattern, &self.values);
-        let mut xr = Vec::new();
         let mut out = Vec::with_capacity(b);
-        // Chunks of at most eight columns with the width known at compile time, as in
-        // `mul_block` (each column's sums are the same in any chunk).
-        let mut c0 = 0;
-        while c0 < b {
-            let w = (b - c0).min(8);
-            row_major(x, c0, w, f64::abs, &mut xr);
+        // Each column's sums are the same in any chunk.
+        column_chunks(x, f64::abs, |_, w, xr| {
             out.extend(match w {
-                1 => abs_norms::<1>(p, vals, &xr),
-                2 => abs_norms::<2>(p, vals, &xr),
-                3 => abs_norms::<3>(p, vals, &xr),
-                4 => abs_norms::<4>(p, vals, &xr),
-                5 => abs_norms::<5>(p, vals, &xr),
-                6 => abs_norms::<6>(p, vals, &xr),
-                7 => abs_norms::<7>(p, vals, &xr),
-                _ => abs_norms::<8>(p, vals, &xr),
-            });
-            c0 += w;
-        }
+                1 => abs_norms::<1>(p, vals, xr),
+                2 => abs_norms::<2>(p, vals, xr),
+                3 => abs_norms::<3>(p, vals, xr),
+                4 => abs_norms::<4>(p, vals, xr),
+                5 => abs_norms::<5>(p, vals, xr),
+                6 => abs_norms::<6>(p, vals, xr),
+                7 => abs_norms::<7>(p, vals, xr),
+                _ => abs_norms::<8>(p, vals, xr),
+            })
+        });
         out
     }
     /// Bytes of the values (the pattern is shared and counted once elsewhere).
