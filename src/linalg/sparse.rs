@@ -116,19 +116,25 @@ fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMu
 /// The columns of `x` in chunks of at most eight, each entry through `f`: `each(c0, w, xr)` with
 /// `xr` the chunk's row-major copy (width `w`), so that each row a product gathers is one
 /// contiguous piece and the chunk's width can be a compile-time constant.
-fn column_chunks(x: MatRef<'_, f64>, f: impl Fn(f64) -> f64, mut each: impl FnMut(usize, usize, &[f64])) {
+fn column_chunks(x: MatRef<'_, f64>, f: impl Fn(f64) -> f64 + Sync, mut each: impl FnMut(usize, usize, &[f64])) {
+    /// Rows per parallel piece of the copy.
+    const ROWS: usize = 4096;
     let (n, b) = (x.nrows(), x.ncols());
-    let mut xr = Vec::new();
     let mut c0 = 0;
     while c0 < b {
         let w = (b - c0).min(8);
-        xr.clear();
-        xr.resize(n * w, 0.0);
-        for c in 0..w {
-            for (i, v) in x.col(c0 + c).iter().enumerate() {
-                xr[i * w + c] = f(*v);
+        // Zeroed by the allocator (fresh pages come zeroed, without a pass over them): the copy
+        // below, in parallel, is the first to touch them.
+        let mut xr = vec![0.0f64; n * w];
+        xr.par_chunks_mut(ROWS * w).enumerate().for_each(|(ch, piece)| {
+            let i0 = ch * ROWS;
+            for c in 0..w {
+                let col = x.col(c0 + c);
+                for (r, row) in piece.chunks_exact_mut(w).enumerate() {
+                    row[c] = f(col[i0 + r]);
+                }
             }
-        }
+        });
         each(c0, w, &xr);
         c0 += w;
     }
