@@ -11,6 +11,7 @@
 use crate::dof::DofMap;
 use crate::linalg::sparse::SymMatrix;
 use faer::{Mat, MatRef};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// Frequency in Hz of an eigenvalue λ = ω² (negative λ, from rounding, gives a negative f).
@@ -94,25 +95,23 @@ pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatR
                 xd[e] = x[d];
             }
         }
-        let mass: f64 = (0..dofs.n_free).map(|i| mr0[(i, d)]).sum();
-        let mom: f64 = (0..dofs.n_free).map(|i| mr0[(i, d)] * xd[i]).sum();
+        let mass: f64 = col(mr0.as_ref(), d).iter().sum();
+        let mom = dot(col(mr0.as_ref(), d), &xd);
         c[d] = if mass > 0.0 { mom / mass } else { 0.0 };
     }
     let r = rigid_vectors(dofs, nodes, c);
     let mut mr = Mat::zeros(dofs.n_free, 6);
     m.mul_block(r.as_ref(), mr.as_mut());
-    let mut total = [0.0; 6];
-    for d in 0..6 {
-        total[d] = (0..dofs.n_free).map(|i| r[(i, d)] * mr[(i, d)]).sum();
-    }
-    // Gram matrix of the rigid-body vectors, G = RᵀMR, and its pseudo-inverse (a model may not
-    // carry all six motions, e.g. fixed DOFs remove parts of them).
+    // Gram matrix of the rigid-body vectors, G = RᵀMR (its diagonal: the totals), and its
+    // pseudo-inverse (a model may not carry all six motions, e.g. fixed DOFs remove parts of
+    // them).
     let mut g = nalgebra::DMatrix::zeros(6, 6);
     for i in 0..6 {
         for j in 0..6 {
-            g[(i, j)] = (0..dofs.n_free).map(|k| r[(k, i)] * mr[(k, j)]).sum::<f64>();
+            g[(i, j)] = dot(col(r.as_ref(), i), col(mr.as_ref(), j));
         }
     }
+    let total: [f64; 6] = std::array::from_fn(|d| g[(d, d)]);
     let g = (&g + g.transpose()) * 0.5;
     let eig = g.clone().symmetric_eigen();
     let emax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -128,11 +127,16 @@ pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatR
     let mut modes = Vec::with_capacity(phi.ncols());
     let mut cumulative_ratio = Vec::with_capacity(phi.ncols());
     let mut acc = [0.0; 6];
-    for k in 0..phi.ncols() {
+    // Γ_kd = φ_kᵀ M r_d, each a dot product in row order (modes in parallel).
+    let gammas: Vec<[f64; 6]> = (0..phi.ncols())
+        .into_par_iter()
+        .map(|k| std::array::from_fn(|d| dot(col(phi, k), col(mr.as_ref(), d))))
+        .collect();
+    for gk in &gammas {
         let mut factor = [0.0; 6];
         let mut effective = [0.0; 6];
         for d in 0..6 {
-            let g: f64 = (0..dofs.n_free).map(|i| phi[(i, k)] * mr[(i, d)]).sum();
+            let g = gk[d];
             factor[d] = g;
             effective[d] = g * g;
             acc[d] += g * g;
@@ -450,22 +454,36 @@ fn modes_in_span(
     mr: &Mat<f64>,
 ) -> Vec<bool> {
     let n = comp.len();
-    let mut rigid = vec![false; phi.ncols()];
     let mut mphi = Mat::<f64>::zeros(n, phi.ncols());
     m.mul_block(phi, mphi.as_mut());
-    for (k, flag) in rigid.iter_mut().enumerate() {
-        let mut p = vec![nalgebra::Vector6::<f64>::zeros(); nc];
-        for e in 0..n {
-            let v = phi[(e, k)];
-            if v != 0.0 {
-                for i in 0..6 {
-                    p[comp[e]][i] += v * mr[(e, i)];
+    let mr: [&[f64]; 6] = std::array::from_fn(|i| col(mr.as_ref(), i));
+    (0..phi.ncols())
+        .into_par_iter()
+        .map(|k| {
+            let phik = col(phi, k);
+            let mut p = vec![nalgebra::Vector6::<f64>::zeros(); nc];
+            for (e, &v) in phik.iter().enumerate() {
+                if v != 0.0 {
+                    let pc = &mut p[comp[e]];
+                    for i in 0..6 {
+                        pc[i] += v * mr[i][e];
+                    }
                 }
             }
-        }
-        let inside: f64 = basis.iter().map(|(c, y)| p[*c].dot(y).powi(2)).sum();
-        let norm: f64 = (0..n).map(|e| phi[(e, k)] * mphi[(e, k)]).sum();
-        *flag = norm > 0.0 && 1.0 - inside / norm < 1e-8;
-    }
-    rigid
+            let inside: f64 = basis.iter().map(|(c, y)| p[*c].dot(y).powi(2)).sum();
+            let norm = dot(phik, col(mphi.as_ref(), k));
+            norm > 0.0 && 1.0 - inside / norm < 1e-8
+        })
+        .collect()
+}
+
+/// Column `j` of `a` as a slice (`a` column-major with contiguous columns, as every `Mat` and
+/// the views of whole columns here are).
+fn col(a: MatRef<'_, f64>, j: usize) -> &[f64] {
+    a.col(j).try_as_col_major().expect("contiguous column").as_slice()
+}
+
+/// `Σ_i a_i·b_i`, in index order.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
