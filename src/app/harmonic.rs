@@ -185,6 +185,9 @@ pub struct HarmonicReport {
     pub notes: Vec<String>,
     /// Times.
     pub timings_s: HarmonicTimings,
+    /// Peak resident memory of the process when the response was complete, bytes (Linux
+    /// VmHWM), if known.
+    pub peak_memory_bytes: Option<u64>,
 }
 
 /// A force as applied.
@@ -387,6 +390,7 @@ pub fn run_with(sys: &System, mesh: &Mesh, req: &HarmonicRequest, keep: Fields) 
         points,
         notes,
         timings_s: tm,
+        peak_memory_bytes: crate::util::memory::peak_memory(),
     };
     Ok(HarmonicRun {
         report,
