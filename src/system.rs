@@ -20,6 +20,7 @@
 
 use crate::assembly::{NodeGraph, assemble, dof_pattern, pattern_nnz};
 use crate::dof::{DofMap, NCOMP};
+use crate::linalg::coarse::{CoarseModel, Prolongation};
 use crate::linalg::factor::SymbolicFactor;
 use crate::linalg::ordering::{Ordering, expand_node_order, factor_entries, node_nested_dissection};
 use crate::linalg::sparse::{Pattern, SymMatrix};
@@ -44,6 +45,10 @@ pub struct SystemOptions {
     pub max_memory: Option<u64>,
     /// Assemble the mass matrix too (statics alone does not need it).
     pub mass: bool,
+    /// Form the Galerkin model on the corner space of a quadratic mesh
+    /// ([`System::take_coarse_model`]) once K and M are assembled, while the ordering still
+    /// runs (the lowest modes' one-factorisation solve starts from it); needs `mass`.
+    pub coarse_model: bool,
 }
 
 impl Default for SystemOptions {
@@ -52,6 +57,7 @@ impl Default for SystemOptions {
             ordering: Ordering::Metis,
             max_memory: None,
             mass: true,
+            coarse_model: false,
         }
     }
 }
@@ -79,7 +85,10 @@ pub struct System {
     symbolic: Option<Arc<SymbolicFactor>>,
     ordering: Ordering,
     /// The corner space of the model, built on first use ([`System::coarse_space`]).
-    coarse: std::sync::OnceLock<Option<crate::linalg::coarse::Prolongation>>,
+    coarse: std::sync::OnceLock<Option<Prolongation>>,
+    /// The Galerkin model on it, when [`SystemOptions::coarse_model`] asked for it and until
+    /// taken ([`System::take_coarse_model`]).
+    coarse_model: std::sync::Mutex<Option<CoarseModel>>,
     /// Time spent building.
     pub timings: SystemTimings,
 }
@@ -160,12 +169,19 @@ impl System {
             || {
                 let t_km = Instant::now();
                 let km = assemble(pattern.clone(), &model.dofs, &sets, opts.mass);
-                (km, t_km.elapsed().as_secs_f64())
+                let km_s = t_km.elapsed().as_secs_f64();
+                // The ordering runs longer than the assembly on a quadratic mesh: this thread
+                // forms the coarse model meanwhile.
+                let coarse = match &km {
+                    Ok(km) if opts.coarse_model && opts.mass => coarse_model(&model, km),
+                    _ => None,
+                };
+                (km.map(|km| (km, coarse)), km_s)
             },
         );
         drop(sets);
         drop(graph);
-        let km = km?;
+        let (km, coarse) = km?;
         let symbolic = order_result?;
         log::debug!(
             "{source}: graph and estimates {t_graph:.3} s, pattern {pat_s:.3} s; alongside: ordering {ordering_time:.3} s and symbolic analysis {symbolic_time:.3} s, K and M {km_s:.3} s"
@@ -181,6 +197,10 @@ impl System {
         );
         check_memory(source, &symbolic, &pattern, opts.max_memory)?;
         release_free_memory();
+        let (coarse_space, coarse_model) = match coarse {
+            Some((pr, cm)) => (std::sync::OnceLock::from(Some(pr)), Some(cm)),
+            None => (std::sync::OnceLock::new(), None),
+        };
         Ok(System {
             model: Arc::new(model),
             source: source.to_string(),
@@ -189,7 +209,8 @@ impl System {
             m: opts.mass.then_some(km.m),
             symbolic: Some(Arc::new(symbolic)),
             ordering: opts.ordering,
-            coarse: Default::default(),
+            coarse: coarse_space,
+            coarse_model: std::sync::Mutex::new(coarse_model),
             timings: SystemTimings {
                 assemble: t_graph + pat_s + km_s,
                 order: ordering_time + symbolic_time,
@@ -229,6 +250,7 @@ impl System {
             m: Some(km.m),
             symbolic: None,
             coarse: Default::default(),
+            coarse_model: Default::default(),
             ordering: Ordering::Natural,
             timings: SystemTimings {
                 assemble: t.elapsed().as_secs_f64(),
@@ -292,6 +314,8 @@ impl System {
                 self.source
             )));
         }
+        // A coarse model formed from the previous K is not this K's.
+        self.take_coarse_model();
         Ok(std::mem::replace(&mut self.k, k))
     }
 
@@ -320,8 +344,15 @@ impl System {
 
     /// The corner space of a quadratic mesh ([`Model::corner_space`]), which the eigen solver
     /// uses to place its shift above the wanted modes; `None` for linear meshes.
-    pub fn coarse_space(&self) -> Option<&crate::linalg::coarse::Prolongation> {
+    pub fn coarse_space(&self) -> Option<&Prolongation> {
         self.coarse.get_or_init(|| self.model.corner_space()).as_ref()
+    }
+
+    /// The Galerkin model on [`System::coarse_space`] formed during the build
+    /// ([`SystemOptions::coarse_model`]), handed over once: `None` when it was not asked for,
+    /// the mesh is linear, or it was taken already.
+    pub fn take_coarse_model(&self) -> Option<CoarseModel> {
+        self.coarse_model.lock().ok().and_then(|mut c| c.take())
     }
 
     /// The ordering used.
@@ -334,6 +365,24 @@ impl System {
     pub fn describe_equation(&self, eq: usize) -> String {
         describe_equation(&self.model, eq)
     }
+}
+
+/// The corner space of `model` and the Galerkin model of the assembled K and M on it; `None`
+/// for a linear mesh, or when forming it failed (the eigen solver then forms it itself, and
+/// says why if it cannot).
+fn coarse_model(model: &Model, km: &crate::assembly::Assembled) -> Option<(Prolongation, CoarseModel)> {
+    let t = Instant::now();
+    let pr = model.corner_space()?;
+    if pr.n_fine != km.k.n() {
+        return None;
+    }
+    let cm = CoarseModel::new(&pr, &km.k, &km.m).ok()?;
+    log::debug!(
+        "coarse model alongside the ordering: corner space, PᵀKP, PᵀMP and their ordering {:.3} s ({} unknowns)",
+        t.elapsed().as_secs_f64(),
+        pr.n_coarse
+    );
+    Some((pr, cm))
 }
 
 /// Name equation `eq` of `model` in the user's terms (see [`System::describe_equation`]).

@@ -818,6 +818,7 @@ pub fn run_buckling(
             ordering: opts.ordering,
             max_memory: opts.max_memory,
             mass: false,
+            ..Default::default()
         },
         source,
     )?;

@@ -226,6 +226,8 @@ impl ModalOptions {
             ordering: self.ordering,
             max_memory: self.max_memory,
             mass: true,
+            // The lowest modes (no shift) start from the corner space's Galerkin model.
+            coarse_model: matches!(self.target, ModalTarget::Modes(_)) && self.shift_hz.is_none(),
         }
     }
 
@@ -332,7 +334,7 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
         max_applications: opts.max_applications,
         ..Default::default()
     };
-    let sol = eigen::solve_with(k_mat, m_mat, sym, &params, sys.coarse_space())
+    let sol = eigen::solve_with_prepared(k_mat, m_mat, sym, &params, sys.coarse_space(), sys.take_coarse_model())
         .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
     tm.factor = sol.time_factor;
     tm.solve = sol.time_iterate;

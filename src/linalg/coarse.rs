@@ -8,6 +8,7 @@
 //! interpolation from the element corners ([`crate::model::Model::corner_space`]): the coarse
 //! model is the mesh's linear elements.
 
+use crate::linalg::factor::SymbolicFactor;
 use crate::linalg::sparse::{Pattern, SymMatrix};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -177,5 +178,35 @@ impl Prolongation {
             },
             SymMatrix { pattern, values: mv },
         )
+    }
+}
+
+/// The Galerkin model on a prolongation, ready to solve: PᵀKP, PᵀMP and the symbolic analysis
+/// of their factorisation. Built once K and M are assembled ([`CoarseModel::new`]), so that
+/// [`crate::system::System::build`] can form it while the model's own ordering is still
+/// running on the other thread.
+pub struct CoarseModel {
+    /// Number of coarse unknowns (the prolongation's columns).
+    pub n_coarse: usize,
+    /// PᵀKP.
+    pub k: SymMatrix,
+    /// PᵀMP.
+    pub m: SymMatrix,
+    /// Ordering and elimination structure of PᵀKP − σPᵀMP.
+    pub symbolic: Arc<SymbolicFactor>,
+}
+
+impl CoarseModel {
+    /// The Galerkin model of (`k`, `m`) on `pr`, with its symbolic analysis (AMD: the coarse
+    /// model is small).
+    pub fn new(pr: &Prolongation, k: &SymMatrix, m: &SymMatrix) -> crate::Result<CoarseModel> {
+        let (kc, mc) = pr.galerkin(k, m);
+        let symbolic = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
+        Ok(CoarseModel {
+            n_coarse: pr.n_coarse,
+            k: kc,
+            m: mc,
+            symbolic,
+        })
     }
 }

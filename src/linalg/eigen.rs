@@ -28,7 +28,7 @@
 //! for free–free models (six rigid-body modes, K singular), and the lowest modes are sought.
 //! A user shift finds the modes nearest to it.
 
-use super::coarse::Prolongation;
+use super::coarse::{CoarseModel, Prolongation};
 use super::factor::{Factor, SymbolicFactor};
 use super::floor::SolveWork;
 use super::tall;
@@ -359,7 +359,22 @@ pub fn solve_with(
     p: &EigenParams,
     coarse: Option<&Prolongation>,
 ) -> Result<EigenSolution> {
-    solve_inner(k, m, sym, p, coarse, true)
+    solve_inner(k, m, sym, p, coarse.map(|pr| (pr, None)), true)
+}
+
+/// [`solve_with`], with the Galerkin model on `coarse` already formed (by
+/// [`crate::system::System::build`], alongside the ordering): the same solve, without forming
+/// it here. `prepared` must be the Galerkin model of this K and M on `coarse`; it is freed
+/// before the model's factorisation.
+pub fn solve_with_prepared(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    sym: &Arc<SymbolicFactor>,
+    p: &EigenParams,
+    coarse: Option<&Prolongation>,
+    prepared: Option<CoarseModel>,
+) -> Result<EigenSolution> {
+    solve_inner(k, m, sym, p, coarse.map(|pr| (pr, prepared)), true)
 }
 
 /// The solver. Without `check`, the Sturm count, the refinement step and the verification are
@@ -379,7 +394,7 @@ fn solve_inner(
     m: &SymMatrix,
     sym: &Arc<SymbolicFactor>,
     p: &EigenParams,
-    coarse: Option<&Prolongation>,
+    coarse: Option<(&Prolongation, Option<CoarseModel>)>,
     check: bool,
 ) -> Result<EigenSolution> {
     let n = k.n();
@@ -399,17 +414,18 @@ fn solve_inner(
     let (sigma, band) = first_shift(k, m, p)?;
     let pb = Problem { k, m, sym, p, check };
     let mut tally = Tally::default();
-    if let (Some(pr), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
+    if let (Some((pr, prepared)), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
         if n > p.dense_below && nm < n && !big_request(n, nm) {
             let est = Estimate {
                 t0,
                 factorizations: &mut tally.factorizations,
                 memory: &mut tally.memory,
             };
-            if let Some(sol) = solve_below_bound(k, m, sym, p, pr, nm, est, &notes)? {
+            if let Some(sol) = solve_below_bound(k, m, sym, p, (pr, prepared), nm, est, &notes)? {
                 return Ok(sol);
             }
         }
+        // A prepared coarse model not used is dropped here, before the factorisation.
     }
     let shift = factor_at_shift(&pb, sigma, &mut tally)?;
     let sigma = shift.sigma;
@@ -1048,7 +1064,7 @@ fn solve_below_bound(
     m: &SymMatrix,
     sym: &Arc<SymbolicFactor>,
     p: &EigenParams,
-    pr: &Prolongation,
+    (pr, prepared): (&Prolongation, Option<CoarseModel>),
     nm: usize,
     est: Estimate<'_>,
     notes: &[String],
@@ -1058,7 +1074,7 @@ fn solve_below_bound(
         return Ok(None);
     }
     let tc = Instant::now();
-    let Some((lc, start)) = coarse_estimate(k, m, p, pr, nm, tc)? else {
+    let Some((lc, start)) = coarse_estimate(k, m, p, (pr, prepared), nm, tc)? else {
         return Ok(None);
     };
     // The coarse model's matrices and factor are freed: give the memory back before the
@@ -1174,18 +1190,34 @@ fn coarse_estimate(
     k: &SymMatrix,
     m: &SymMatrix,
     p: &EigenParams,
-    pr: &Prolongation,
+    (pr, prepared): (&Prolongation, Option<CoarseModel>),
     nm: usize,
     tc: Instant,
 ) -> Result<Option<(Vec<f64>, Mat<f64>)>> {
-    let (kc, mc) = pr.galerkin(k, m);
-    let t_galerkin = tc.elapsed().as_secs_f64();
-    let symc = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
-    log::debug!(
-        "coarse model: PᵀKP and PᵀMP {t_galerkin:.3} s, ordering {:.3} s, {} entries in L",
-        tc.elapsed().as_secs_f64() - t_galerkin,
-        symc.nnz_l
-    );
+    let cm = match prepared {
+        Some(cm) if cm.n_coarse == pr.n_coarse => {
+            log::debug!(
+                "coarse model: formed alongside the ordering, {} entries in L",
+                cm.symbolic.nnz_l
+            );
+            cm
+        }
+        _ => {
+            let cm = CoarseModel::new(pr, k, m)?;
+            log::debug!(
+                "coarse model: PᵀKP, PᵀMP and ordering {:.3} s, {} entries in L",
+                tc.elapsed().as_secs_f64(),
+                cm.symbolic.nnz_l
+            );
+            cm
+        }
+    };
+    let CoarseModel {
+        k: kc,
+        m: mc,
+        symbolic: symc,
+        ..
+    } = cm;
     // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error of
     // a Ritz value is of the order of its residual squared): ample for placing a shift.
     let pc = EigenParams {

@@ -212,6 +212,7 @@ pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
         ordering: ordering(&a.ordering)?,
         max_memory: a.max_memory.as_deref().map(parse_bytes).transpose()?,
         mass: true,
+        ..Default::default()
     };
     let sys = crate::system::System::build(model, &opts, &a.mesh)?;
     let run = h::run_with(&sys, &mesh, &req, h::Fields::Peak)?;
