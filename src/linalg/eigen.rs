@@ -247,8 +247,26 @@ fn components(k: &SymMatrix, min_size: usize) -> usize {
 /// with the conditioning of slender or thin parts (where Kx is a small difference of large
 /// terms).
 pub fn backward_errors(k: &SymMatrix, m: &SymMatrix, lambda: &[f64], x: MatRef<'_, f64>) -> Vec<f64> {
-    let (kx, mx) = products(k, m, x);
-    backward_errors_of(k, m, lambda, x, &kx, &mx)
+    let pn = products_and_norms(k, m, x);
+    backward_errors_of(lambda, &pn)
+}
+
+/// K·X and M·X with the norms ‖|K|·|x_c|‖ and ‖|M|·|x_c|‖ of the backward errors, one pass
+/// over each matrix.
+struct ProductsAndNorms {
+    kx: Mat<f64>,
+    mx: Mat<f64>,
+    ak: Vec<f64>,
+    am: Vec<f64>,
+}
+
+fn products_and_norms(k: &SymMatrix, m: &SymMatrix, x: MatRef<'_, f64>) -> ProductsAndNorms {
+    let (n, nc) = (x.nrows(), x.ncols());
+    let mut kx = Mat::zeros(n, nc);
+    let mut mx = Mat::zeros(n, nc);
+    let ak = k.mul_block_abs_norms(x, kx.as_mut());
+    let am = m.mul_block_abs_norms(x, mx.as_mut());
+    ProductsAndNorms { kx, mx, ak, am }
 }
 
 /// K·X and M·X.
@@ -270,23 +288,15 @@ pub fn verify_with_backward_errors(
     x: MatRef<'_, f64>,
     sigma: f64,
 ) -> (Vec<f64>, f64, Vec<f64>) {
-    let (kx, mx) = products(k, m, x);
-    let (res, orth) = verify_of(lambda, x, &kx, &mx, sigma);
-    (res, orth, backward_errors_of(k, m, lambda, x, &kx, &mx))
+    let pn = products_and_norms(k, m, x);
+    let (res, orth) = verify_of(lambda, x, &pn.kx, &pn.mx, sigma);
+    (res, orth, backward_errors_of(lambda, &pn))
 }
 
-/// [`backward_errors`] from K·X and M·X.
-fn backward_errors_of(
-    k: &SymMatrix,
-    m: &SymMatrix,
-    lambda: &[f64],
-    x: MatRef<'_, f64>,
-    kx: &Mat<f64>,
-    mx: &Mat<f64>,
-) -> Vec<f64> {
-    let nc = x.ncols();
-    let ak = k.abs_mul_norms(x);
-    let am = m.abs_mul_norms(x);
+/// [`backward_errors`] from K·X, M·X and their norms.
+fn backward_errors_of(lambda: &[f64], pn: &ProductsAndNorms) -> Vec<f64> {
+    let ProductsAndNorms { kx, mx, ak, am } = pn;
+    let nc = kx.ncols();
     use rayon::prelude::*;
     (0..nc)
         .into_par_iter()

@@ -98,6 +98,48 @@ fn column_sums<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], j: usize, 
     acc
 }
 
+/// [`column_sums`] of `A` and of `|A|` on `|x|` at once (one pass over the column and the rows
+/// of x for both): the same sums, in the same order, as two calls.
+#[inline(always)]
+fn column_sums_and_abs<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], j: usize) -> ([f64; B], [f64; B]) {
+    let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+    let (mut acc, mut abs) = ([0.0f64; B], [0.0f64; B]);
+    let ahead = p.row_idx.get(s + PREFETCH_AHEAD..e + PREFETCH_AHEAD).unwrap_or(&[]);
+    for (k, (&i, &a)) in p.row_idx[s..e].iter().zip(&vals[s..e]).enumerate() {
+        if let Some(&q) = ahead.get(k) {
+            prefetch(xr, q as usize * B);
+        }
+        let i = i as usize;
+        let xi: &[f64; B] = xr[i * B..i * B + B].try_into().expect("row of width B");
+        for c in 0..B {
+            acc[c] += a * xi[c];
+            abs[c] += a.abs() * xi[c].abs();
+        }
+    }
+    (acc, abs)
+}
+
+/// [`gather_rows`] and [`abs_norms`] in one pass: `out = A x` and `‖|A|·|x_c|‖₂`, in
+/// [`abs_norms`]' chunks of rows, so both are the same bits as alone.
+fn gather_rows_and_abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMut<'_, f64>) -> Vec<f64> {
+    let parts: Vec<[f64; B]> = out
+        .par_row_chunks_mut(ABS_ROWS)
+        .enumerate()
+        .map(|(ch, mut o)| {
+            let mut s2 = [0.0f64; B];
+            for jj in 0..o.nrows() {
+                let (acc, abs) = column_sums_and_abs::<B>(p, vals, xr, ch * ABS_ROWS + jj);
+                for c in 0..B {
+                    o[(jj, c)] = acc[c];
+                    s2[c] += abs[c] * abs[c];
+                }
+            }
+            s2
+        })
+        .collect();
+    summed_norms(&parts)
+}
+
 /// Block product kernel with the block width known at compile time, so the accumulators stay
 /// in registers: `out[j, c] = Σ_i A[i, j] · x[i, c]` for `x` row-major (`xr`, width B); the
 /// results go straight into the columns of `out`, in parallel chunks of rows.
@@ -144,13 +186,12 @@ fn column_chunks(x: MatRef<'_, f64>, f: impl Fn(f64) -> f64 + Sync, mut each: im
 /// rows in parallel, their squares summed in row order within a chunk and the chunks' totals in
 /// chunk order (the same sums whatever the thread count).
 fn abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64]) -> Vec<f64> {
-    const ROWS: usize = 2048;
     let n = p.n;
-    let parts: Vec<[f64; B]> = (0..n.div_ceil(ROWS))
+    let parts: Vec<[f64; B]> = (0..n.div_ceil(ABS_ROWS))
         .into_par_iter()
         .map(|ch| {
             let mut s2 = [0.0f64; B];
-            for j in ch * ROWS..((ch + 1) * ROWS).min(n) {
+            for j in ch * ABS_ROWS..((ch + 1) * ABS_ROWS).min(n) {
                 let acc = column_sums::<B>(p, vals, xr, j, f64::abs);
                 for c in 0..B {
                     s2[c] += acc[c] * acc[c];
@@ -159,8 +200,16 @@ fn abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64]) -> Vec<f64> 
             s2
         })
         .collect();
+    summed_norms(&parts)
+}
+
+/// Rows per chunk of [`abs_norms`] (the chunks' sums are added in chunk order).
+const ABS_ROWS: usize = 2048;
+
+/// The square roots of the chunks' sums of squares, added in chunk order.
+fn summed_norms<const B: usize>(parts: &[[f64; B]]) -> Vec<f64> {
     let mut out = [0.0f64; B];
-    for part in &parts {
+    for part in parts {
         for c in 0..B {
             out[c] += part[c];
         }
@@ -336,6 +385,33 @@ impl SymMatrix {
                 _ => abs_norms::<8>(p, vals, xr),
             })
         });
+        out
+    }
+    /// [`SymMatrix::mul_block`] into `y` and [`SymMatrix::abs_mul_norms`] returned, in one pass
+    /// over the matrix (the same bits as the two calls).
+    pub fn mul_block_abs_norms(&self, x: MatRef<'_, f64>, mut y: MatMut<'_, f64>) -> Vec<f64> {
+        let n = self.n();
+        let b = x.ncols();
+        assert!(x.nrows() == n && y.nrows() == n && y.ncols() == b);
+        let (p, vals) = (&*self.pattern, &self.values);
+        let mut out = Vec::with_capacity(b);
+        column_chunks(
+            x,
+            |v| v,
+            |c0, w, xr| {
+                let o = y.as_mut().subcols_mut(c0, w);
+                out.extend(match w {
+                    1 => gather_rows_and_abs_norms::<1>(p, vals, xr, o),
+                    2 => gather_rows_and_abs_norms::<2>(p, vals, xr, o),
+                    3 => gather_rows_and_abs_norms::<3>(p, vals, xr, o),
+                    4 => gather_rows_and_abs_norms::<4>(p, vals, xr, o),
+                    5 => gather_rows_and_abs_norms::<5>(p, vals, xr, o),
+                    6 => gather_rows_and_abs_norms::<6>(p, vals, xr, o),
+                    7 => gather_rows_and_abs_norms::<7>(p, vals, xr, o),
+                    _ => gather_rows_and_abs_norms::<8>(p, vals, xr, o),
+                })
+            },
+        );
         out
     }
     /// Bytes of the values (the pattern is shared and counted once elsewhere).

@@ -543,7 +543,8 @@ fn mass_without_zeros_gives_the_modes_of_the_full_pattern() {
 /// their width known at compile time, rows of x asked for ahead of use) against a plain loop
 /// over the stored entries, for 1 to 19 columns (every chunk width, and a remainder after full
 /// chunks): each column equal to its product alone, bit for bit, and to the plain sums to
-/// rounding (1e-13 relative: sums of ~80 products of like magnitude in another order).
+/// rounding (1e-13 relative: sums of ~80 products of like magnitude in another order). The
+/// fused `mul_block_abs_norms` gives both, bit for bit.
 #[test]
 fn sparse_block_products_equal_plain_sums() {
     let sys = hex20_box([0.3, 0.2, 0.2], [4, 3, 3]);
@@ -567,7 +568,21 @@ fn sparse_block_products_equal_plain_sums() {
         let mut y = faer::Mat::zeros(n, cols);
         k.mul_block(xs, y.as_mut());
         let norms = k.abs_mul_norms(xs);
+        let mut fused = faer::Mat::zeros(n, cols);
+        let fused_norms = k.mul_block_abs_norms(xs, fused.as_mut());
         for c in 0..cols {
+            assert_eq!(
+                fused_norms[c].to_bits(),
+                norms[c].to_bits(),
+                "{cols} columns: fused norm {c}"
+            );
+            for i in 0..n {
+                assert_eq!(
+                    fused[(i, c)].to_bits(),
+                    y[(i, c)].to_bits(),
+                    "{cols} columns: fused ({i}, {c})"
+                );
+            }
             let mut alone = faer::Mat::zeros(n, 1);
             k.mul_block(x.get(.., c..c + 1), alone.as_mut());
             let want = plain(c, false);
