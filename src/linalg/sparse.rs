@@ -78,6 +78,22 @@ fn prefetch(xr: &[f64], at: usize) {
     let _ = (xr, at);
 }
 
+/// `f::<w>(args)` for a chunk width `w` of 1 to 8 (the compile-time widths of the kernels).
+macro_rules! by_width {
+    ($w:expr, $f:ident($($a:expr),*)) => {
+        match $w {
+            1 => $f::<1>($($a),*),
+            2 => $f::<2>($($a),*),
+            3 => $f::<3>($($a),*),
+            4 => $f::<4>($($a),*),
+            5 => $f::<5>($($a),*),
+            6 => $f::<6>($($a),*),
+            7 => $f::<7>($($a),*),
+            _ => $f::<8>($($a),*),
+        }
+    };
+}
+
 /// `Σ_i f(A[i, j]) · x[i, c]` for the B columns of `xr` (row-major x), entry by entry in the
 /// stored order, each row of x asked for [`PREFETCH_AHEAD`] entries before its use.
 #[inline(always)]
@@ -351,16 +367,7 @@ impl SymMatrix {
             |v| v,
             |c0, w, xr| {
                 let out = y.as_mut().subcols_mut(c0, w);
-                match w {
-                    1 => gather_rows::<1>(p, vals, xr, out),
-                    2 => gather_rows::<2>(p, vals, xr, out),
-                    3 => gather_rows::<3>(p, vals, xr, out),
-                    4 => gather_rows::<4>(p, vals, xr, out),
-                    5 => gather_rows::<5>(p, vals, xr, out),
-                    6 => gather_rows::<6>(p, vals, xr, out),
-                    7 => gather_rows::<7>(p, vals, xr, out),
-                    _ => gather_rows::<8>(p, vals, xr, out),
-                }
+                by_width!(w, gather_rows(p, vals, xr, out))
             },
         );
     }
@@ -373,18 +380,7 @@ impl SymMatrix {
         let (p, vals) = (&*self.pattern, &self.values);
         let mut out = Vec::with_capacity(b);
         // Each column's sums are the same in any chunk.
-        column_chunks(x, f64::abs, |_, w, xr| {
-            out.extend(match w {
-                1 => abs_norms::<1>(p, vals, xr),
-                2 => abs_norms::<2>(p, vals, xr),
-                3 => abs_norms::<3>(p, vals, xr),
-                4 => abs_norms::<4>(p, vals, xr),
-                5 => abs_norms::<5>(p, vals, xr),
-                6 => abs_norms::<6>(p, vals, xr),
-                7 => abs_norms::<7>(p, vals, xr),
-                _ => abs_norms::<8>(p, vals, xr),
-            })
-        });
+        column_chunks(x, f64::abs, |_, w, xr| out.extend(by_width!(w, abs_norms(p, vals, xr))));
         out
     }
     /// [`SymMatrix::mul_block`] into `y` and [`SymMatrix::abs_mul_norms`] returned, in one pass
@@ -400,16 +396,7 @@ impl SymMatrix {
             |v| v,
             |c0, w, xr| {
                 let o = y.as_mut().subcols_mut(c0, w);
-                out.extend(match w {
-                    1 => gather_rows_and_abs_norms::<1>(p, vals, xr, o),
-                    2 => gather_rows_and_abs_norms::<2>(p, vals, xr, o),
-                    3 => gather_rows_and_abs_norms::<3>(p, vals, xr, o),
-                    4 => gather_rows_and_abs_norms::<4>(p, vals, xr, o),
-                    5 => gather_rows_and_abs_norms::<5>(p, vals, xr, o),
-                    6 => gather_rows_and_abs_norms::<6>(p, vals, xr, o),
-                    7 => gather_rows_and_abs_norms::<7>(p, vals, xr, o),
-                    _ => gather_rows_and_abs_norms::<8>(p, vals, xr, o),
-                })
+                out.extend(by_width!(w, gather_rows_and_abs_norms(p, vals, xr, o)))
             },
         );
         out
