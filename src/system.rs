@@ -124,6 +124,16 @@ impl System {
         let pattern = Arc::new(dof_pattern(&graph, &model.dofs)?);
         let pat_s = t_pat.elapsed().as_secs_f64();
         let t_graph = t.elapsed().as_secs_f64() - pat_s;
+        // The coarse model (below) is formed only when the factorisation is unlikely to be
+        // refused once the ordering sizes it: when the budget holds 32 times the factor's lower
+        // bound (the factor of a 3D quadratic mesh is 10–20 times it: 16 at 119k DOFs). A refusal
+        // sends `--solver auto` to the low-memory path, where the coarse model would be time and
+        // memory spent for nothing (K and M of the corner mesh, ~1/12 of the model's).
+        let coarse_fits = opts.coarse_model
+            && opts.mass
+            && budget
+                .as_ref()
+                .is_none_or(|b| 8 * 32 * factor + mats * 16 * nnz <= b.bytes);
         // The fill-reducing ordering and the symbolic factorisation (sequential, from the graph
         // and the pattern) run alongside the assembly of K and M (parallel, from the pattern):
         // neither reads what the other writes. The refined factor estimate is checked once the
@@ -173,7 +183,7 @@ impl System {
                 // The ordering runs longer than the assembly on a quadratic mesh: this thread
                 // forms the coarse model meanwhile.
                 let coarse = match &km {
-                    Ok(km) if opts.coarse_model && opts.mass => coarse_model(&model, km),
+                    Ok(km) if coarse_fits => coarse_model(&model, km),
                     _ => None,
                 };
                 (km.map(|km| (km, coarse)), km_s)
