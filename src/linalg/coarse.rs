@@ -186,9 +186,7 @@ impl Prolongation {
 /// [`crate::system::System::build`] can form it while the model's own ordering is still
 /// running on the other thread.
 pub struct CoarseModel {
-    /// Number of coarse unknowns (the prolongation's columns).
-    pub n_coarse: usize,
-    /// PᵀKP.
+    /// PᵀKP (its order: the prolongation's columns).
     pub k: SymMatrix,
     /// PᵀMP.
     pub m: SymMatrix,
@@ -202,11 +200,6 @@ impl CoarseModel {
     pub fn new(pr: &Prolongation, k: &SymMatrix, m: &SymMatrix) -> crate::Result<CoarseModel> {
         let (kc, mc) = pr.galerkin(k, m);
         let symbolic = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
-        Ok(CoarseModel {
-            n_coarse: pr.n_coarse,
-            k: kc,
-            m: mc,
-            symbolic,
-        })
+        Ok(CoarseModel { k: kc, m: mc, symbolic })
     }
 }

@@ -369,7 +369,7 @@ pub fn solve_with(
     p: &EigenParams,
     coarse: Option<&Prolongation>,
 ) -> Result<EigenSolution> {
-    solve_inner(k, m, sym, p, coarse.map(|pr| (pr, None)), true)
+    solve_with_prepared(k, m, sym, p, coarse, None)
 }
 
 /// [`solve_with`], with the Galerkin model on `coarse` already formed (by
@@ -1205,7 +1205,7 @@ fn coarse_estimate(
     tc: Instant,
 ) -> Result<Option<(Vec<f64>, Mat<f64>)>> {
     let cm = match prepared {
-        Some(cm) if cm.n_coarse == pr.n_coarse => {
+        Some(cm) if cm.k.n() == pr.n_coarse => {
             log::debug!(
                 "coarse model: formed alongside the ordering, {} entries in L",
                 cm.symbolic.nnz_l
@@ -1226,7 +1226,6 @@ fn coarse_estimate(
         k: kc,
         m: mc,
         symbolic: symc,
-        ..
     } = cm;
     // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error of
     // a Ritz value is of the order of its residual squared): ample for placing a shift.
