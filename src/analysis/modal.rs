@@ -332,6 +332,7 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
         shift: opts.shift_hz.map(lambda_of_hz),
         block: opts.block,
         max_applications: opts.max_applications,
+        null_candidates: Some(rigid_candidates(sys.model())),
         ..Default::default()
     };
     let sol = eigen::solve_with_prepared(k_mat, m_mat, sym, &params, sys.coarse_space(), sys.take_coarse_model())
@@ -340,6 +341,24 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
     tm.solve = sol.time_iterate;
     tm.verify = sol.time_verify;
     finish(sys, sol, tm, t_all, params.verify_tol)
+}
+
+/// The six rigid-body motions about the centre of the nodes' bounding box, offered to the
+/// eigen solver as candidates for K's null space (it keeps those that are: a free model's).
+fn rigid_candidates(model: &crate::model::Model) -> eigen::NullCandidates {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for x in model.nodes.iter() {
+        for d in 0..3 {
+            lo[d] = lo[d].min(x[d]);
+            hi[d] = hi[d].max(x[d]);
+        }
+    }
+    let c: [f64; 3] = std::array::from_fn(|d| if lo[d] <= hi[d] { 0.5 * (lo[d] + hi[d]) } else { 0.0 });
+    eigen::NullCandidates(std::sync::Arc::new(crate::post::modal::rigid_vectors(
+        &model.dofs,
+        &model.nodes,
+        c,
+    )))
 }
 
 /// The report of a verified eigen solution of `sys` (from [`eigen::solve`], or from another

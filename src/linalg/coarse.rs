@@ -64,6 +64,27 @@ impl Prolongation {
             .zip(self.w[r].iter().copied())
     }
 
+    /// The columns of `x` (over the fine equations) at the coarse unknowns, by injection: row
+    /// `c` of the result is the fine row that P maps from unknown `c` alone with weight 1 (a
+    /// corner DOF of the corner space). Exact for any `x` in P's range; `None` when some
+    /// coarse unknown has no such row.
+    pub fn inject(&self, x: faer::MatRef<'_, f64>) -> Option<faer::Mat<f64>> {
+        if x.nrows() != self.n_fine {
+            return None;
+        }
+        let mut fine_of = vec![usize::MAX; self.n_coarse];
+        for i in 0..self.n_fine {
+            let r = self.ptr[i]..self.ptr[i + 1];
+            if r.len() == 1 && self.w[r.start] == 1.0 {
+                fine_of[self.col[r.start] as usize] = i;
+            }
+        }
+        if fine_of.contains(&usize::MAX) {
+            return None;
+        }
+        Some(faer::Mat::from_fn(self.n_coarse, x.ncols(), |c, j| x[(fine_of[c], j)]))
+    }
+
     /// y = P x.
     pub fn apply(&self, x: &[f64]) -> Vec<f64> {
         (0..self.n_fine)

@@ -68,6 +68,23 @@ pub struct EigenParams {
     pub verify_tol: f64,
     /// Models with at most this many free DOFs are solved densely (all modes, exact).
     pub dense_below: usize,
+    /// Candidates for K's null space (the rigid-body motions from the node coordinates): the
+    /// one-factorisation solve deflates those that are null vectors to rounding
+    /// ([`null_vectors`]) rather than iterating for them.
+    pub null_candidates: Option<NullCandidates>,
+}
+
+/// Vectors over the free DOFs offered as candidates for K's null space, typically the six
+/// rigid-body motions ([`crate::post::modal::rigid_vectors`]). The solver keeps only those that
+/// K maps to zero to rounding, so wrong or partly constrained candidates cost nothing but a
+/// product.
+#[derive(Clone)]
+pub struct NullCandidates(pub Arc<Mat<f64>>);
+
+impl std::fmt::Debug for NullCandidates {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "NullCandidates({} × {})", self.0.nrows(), self.0.ncols())
+    }
 }
 
 impl Default for EigenParams {
@@ -81,6 +98,7 @@ impl Default for EigenParams {
             seed: 0x5eed_cafe_f00d_0001,
             verify_tol: 1e-10,
             dense_below: 300,
+            null_candidates: None,
         }
     }
 }
@@ -317,6 +335,101 @@ fn backward_errors_of(lambda: &[f64], pn: &ProductsAndNorms) -> Vec<f64> {
         .collect()
 }
 
+/// Backward error at or below which a candidate null vector is deflated: the rounding level
+/// (an exact rigid-body motion of a free model gives ~1e-16), two orders below the acceptance
+/// bar, so that a deflated pair is as accurate as any the iteration returns.
+const NULL_KEPT: f64 = 1e-12;
+
+/// The null vectors of K among the candidates `cand` (columns: three translations, then
+/// rotations, as [`crate::post::modal::rigid_vectors`] gives them), M-orthonormal, and their
+/// M-images: (Z, MZ). A candidate is kept when its backward error as an eigenvector at λ = 0
+/// ([`backward_errors`]) is at most [`NULL_KEPT`]: a clamped model keeps none (`None`), one on
+/// rollers the motions they allow; a null combination of several rejected candidates is left
+/// to the iteration. The kept translations are M-orthonormalised first; the kept rotations,
+/// M-orthogonalised against them (which moves their axes through the centre of mass), are
+/// turned to the principal axes of inertia, least inertia first. Their eigenvalue is 0: their
+/// Rayleigh quotients are rounding (~1e-6 rad²/s² on a 119k-DOF plate), and reporting 0
+/// keeps them in the order built here.
+fn null_vectors(k: &SymMatrix, m: &SymMatrix, cand: MatRef<'_, f64>) -> Option<Null> {
+    let (n, c) = (cand.nrows(), cand.ncols());
+    if n != k.n() || c == 0 {
+        return None;
+    }
+    let pn = products_and_norms(k, m, cand);
+    let eta = backward_errors_of(&vec![0.0; c], &pn);
+    let kept: Vec<usize> = (0..c).filter(|&j| eta[j] <= NULL_KEPT && pn.am[j] > 0.0).collect();
+    log::debug!(
+        "null vectors: {} of {c} candidates kept (backward errors at λ = 0: {})",
+        kept.len(),
+        eta.iter().map(|e| format!("{e:.1e}")).collect::<Vec<_>>().join(" ")
+    );
+    if kept.is_empty() {
+        return None;
+    }
+    let (_, cand) = select(&vec![0.0; c], &cand.to_owned(), &kept);
+    let (_, mc) = select(&vec![0.0; c], &pn.mx, &kept);
+    let c = kept.len();
+    let g = tall::gram(cand.as_ref(), mc.as_ref());
+    let g = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
+    let ip = |a: &nalgebra::DVector<f64>, b: &nalgebra::DVector<f64>| a.dot(&(&g * b));
+    let unit = |j: usize| nalgebra::DVector::from_fn(c, |i, _| if i == j { 1.0 } else { 0.0 });
+    let project = |v: &mut nalgebra::DVector<f64>, t: &[nalgebra::DVector<f64>]| {
+        for _ in 0..2 {
+            for q in t {
+                let a = ip(q, v);
+                v.axpy(-a, q, 1.0);
+            }
+        }
+    };
+    // Coefficients of the M-orthonormal combinations, in the kept candidates' coordinates.
+    let mut t: Vec<nalgebra::DVector<f64>> = Vec::new();
+    let ntr = kept.iter().filter(|&&j| j < 3).count();
+    for j in 0..ntr {
+        let mut v = unit(j);
+        project(&mut v, &t);
+        let s = ip(&v, &v);
+        if s > 1e-10 * g[(j, j)] {
+            t.push(v / s.sqrt());
+        }
+    }
+    let rest: Vec<nalgebra::DVector<f64>> = (ntr..c)
+        .map(|j| {
+            let mut v = unit(j);
+            project(&mut v, &t);
+            v
+        })
+        .collect();
+    if !rest.is_empty() {
+        let q = rest.len();
+        let gr = nalgebra::DMatrix::from_fn(q, q, |i, j| ip(&rest[i], &rest[j]));
+        let scale = (ntr..c).map(|j| g[(j, j)]).fold(0.0f64, f64::max);
+        let e = gr.symmetric_eigen();
+        let mut order: Vec<usize> = (0..q).collect();
+        order.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
+        for &kk in &order {
+            let s = e.eigenvalues[kk];
+            if !(s > 1e-10 * scale) {
+                continue;
+            }
+            let mut v = nalgebra::DVector::zeros(c);
+            for (i, r) in rest.iter().enumerate() {
+                v.axpy(e.eigenvectors[(i, kk)], r, 1.0);
+            }
+            // A fixed sign: the largest rotation component positive.
+            let big = (ntr..c).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(0);
+            let sign = if v[big] < 0.0 { -1.0 } else { 1.0 };
+            t.push(v * (sign / s.sqrt()));
+        }
+    }
+    // Z = C·T and MZ = (MC)·T: combinations of null vectors are null vectors.
+    let tm = Mat::from_fn(c, t.len(), |i, j| t[j][i]);
+    let mut z = Mat::zeros(n, t.len());
+    tall::mul(z.as_mut(), Accum::Replace, cand.as_ref(), tm.as_ref(), 1.0);
+    let mut mz = Mat::zeros(n, t.len());
+    tall::mul(mz.as_mut(), Accum::Replace, mc.as_ref(), tm.as_ref(), 1.0);
+    Some((z, mz))
+}
+
 /// Default shift: a small negative fraction of the typical diagonal ratio K_ii/M_ii (which
 /// is of the order of the largest eigenvalue), so that A = K − σM is positive definite and
 /// well enough conditioned even when K is singular.
@@ -422,7 +535,31 @@ fn solve_inner(
     let (pl, mut notes) = adjusted_params(k, p);
     let p = &pl;
     let (sigma, band) = first_shift(k, m, p)?;
-    let pb = Problem { k, m, sym, p, check };
+    // For the lowest modes by Lanczos, K's null vectors among the candidates (the rigid-body
+    // motions of a free model) are exact eigenpairs at λ = 0: deflated, the iteration looks
+    // only for the others.
+    let null = match (p.target, p.shift, &p.null_candidates) {
+        (Target::Nearest(nm), None, Some(c)) if n > p.dense_below && nm < n && !big_request(n, nm) => {
+            null_vectors(k, m, (*c.0).as_ref()).filter(|(z, _)| z.ncols() < nm)
+        }
+        _ => None,
+    };
+    if let Some((z, _)) = &null {
+        let level = if check { log::Level::Info } else { log::Level::Debug };
+        log::log!(
+            level,
+            "{} null vectors of K (rigid-body motions) deflated: the iteration seeks the other modes",
+            z.ncols()
+        );
+    }
+    let pb = Problem {
+        k,
+        m,
+        sym,
+        p,
+        check,
+        null: null.as_ref(),
+    };
     let mut tally = Tally::default();
     if let (Some((pr, prepared)), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
         if n > p.dense_below && nm < n && !big_request(n, nm) {
@@ -431,7 +568,7 @@ fn solve_inner(
                 factorizations: &mut tally.factorizations,
                 memory: &mut tally.memory,
             };
-            if let Some(sol) = solve_below_bound(k, m, sym, p, (pr, prepared), nm, est, &notes)? {
+            if let Some(sol) = solve_below_bound(k, m, sym, p, (pr, prepared), nm, est, &notes, null.as_ref())? {
                 return Ok(sol);
             }
         }
@@ -452,6 +589,7 @@ fn solve_inner(
         time_verify: 0.0,
         lower_count_at_shift: shift.fa.negative_pivots,
         upper_known: None,
+        nz: 0,
     };
     let want = rounds.wanted_count()?;
     if want == 0 {
@@ -467,14 +605,22 @@ fn solve_inner(
     }
     rounds.dense = dense;
     rounds.notes = notes;
+    // Dense solves and bands deflate nothing (no null vectors were sought for them).
+    rounds.nz = if dense { 0 } else { null_count(pb.null) };
     let lz = match shift.lz {
         Some(lz) if !dense => lz,
-        _ => Lanczos::new(
-            n,
-            if dense { 1 } else { want },
-            p,
-            if band.is_some() { Side::Above } else { Side::Both },
-        ),
+        _ => {
+            let mut lz = Lanczos::new(
+                n,
+                if dense { 1 } else { want - rounds.nz },
+                p,
+                if band.is_some() { Side::Above } else { Side::Both },
+            );
+            if rounds.nz > 0 {
+                lz.deflate = pb.null.map(|(z, _)| z.clone());
+            }
+            lz
+        }
     };
     rounds.run(lz, shift.fa, want, shift.early, ti)
 }
@@ -553,6 +699,36 @@ struct Problem<'a> {
     p: &'a EigenParams,
     /// Prove the result (Sturm counts, refinement, verification): see [`solve_inner`].
     check: bool,
+    /// K's null vectors and their M-images, deflated ([`null_vectors`]; lowest modes only).
+    null: Option<&'a Null>,
+}
+
+/// Deflated null vectors of K and their M-images, (Z, MZ) ([`null_vectors`]).
+type Null = (Mat<f64>, Mat<f64>);
+
+/// The number of deflated vectors.
+fn null_count(null: Option<&Null>) -> usize {
+    null.map_or(0, |(z, _)| z.ncols())
+}
+
+/// Y with its components along the deflated vectors removed: A⁻¹M keeps their complement
+/// only up to rounding (this keeps the pairs M-orthogonal to them to ~1e-15 rather than ~1e-13).
+fn project_out(null: Option<&Null>, y: &mut Mat<f64>) {
+    if let Some((z, mz)) = null {
+        let c = tall::gram(mz.as_ref(), y.as_ref());
+        tall::mul(y.as_mut(), Accum::Add, z.as_ref(), c.as_ref(), -1.0);
+    }
+}
+
+/// The deflated pairs (at λ = 0) before the pairs (λ, X) of an iteration.
+fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f64>) {
+    let Some((z, _)) = null else { return (l, x) };
+    let mut lambda = vec![0.0; z.ncols()];
+    lambda.extend_from_slice(&l);
+    let mut xs = Mat::zeros(x.nrows(), z.ncols() + x.ncols());
+    xs.get_mut(.., 0..z.ncols()).copy_from(z);
+    xs.get_mut(.., z.ncols()..).copy_from(&x);
+    (lambda, xs)
 }
 
 /// What a solve counts as it goes.
@@ -617,11 +793,13 @@ fn probe_spectrum(pb: &Problem<'_>, nm: usize, fa: Factor, sigma: f64, tally: &m
     let mut probe_lz = None;
     let mut early = None;
     let mut time_probe = 0.0;
+    let nz = null_count(pb.null);
     for _ in 0..6 {
         // Estimates past the block: several free parts put more than six rigid-body modes
         // first, and the first elastic scale must be among the estimates.
         let nb = (nm + 6).min(12.max(p.block + 6)).min(n);
-        let mut lz = Lanczos::new(n, nm.min(n), p, Side::Both);
+        let mut lz = Lanczos::new(n, nm.min(n) - nz, p, Side::Both);
+        lz.deflate = pb.null.map(|(z, _)| z.clone());
         lz.pause_after = Some(nb.div_ceil(lz.b).max(3));
         let tp = Instant::now();
         early = lz.run(p, &fa, m, sigma, &mut tally.applications)?;
@@ -639,7 +817,8 @@ fn probe_spectrum(pb: &Problem<'_>, nm: usize, fa: Factor, sigma: f64, tally: &m
             break;
         }
         let Some(&last) = est.last() else { break };
-        let mut lam_est = est[nm.min(est.len()) - 1];
+        // The deflated null vectors are not among the estimates.
+        let mut lam_est = est[(nm - nz).clamp(1, est.len()) - 1];
         if lam_est < 1e-6 * last {
             lam_est = last; // the wanted ones are rigid-body modes: use the first elastic scale
         }
@@ -688,6 +867,9 @@ struct Rounds<'a> {
     /// The Sturm count at the band's upper end, kept for the final check: (point asked for,
     /// point used, count).
     upper_known: Option<(f64, f64, usize)>,
+    /// Null vectors deflated (put before the pairs of each iteration; 0 once a second round
+    /// locks them in its basis with the other pairs found).
+    nz: usize,
 }
 
 impl Rounds<'_> {
@@ -783,7 +965,7 @@ impl Rounds<'_> {
                 .as_ref()
                 .ok_or_else(|| Error::Factorization("lost the shift factor".into()))?;
             if !self.dense {
-                lz.set_want(want);
+                lz.set_want(want - self.nz);
             }
             let (lambda, x) = self.iterate_once(&mut lz, f, early.take())?;
             self.time_iterate += if attempt == 1 {
@@ -812,6 +994,9 @@ impl Rounds<'_> {
                 // was freed for the Sturm factorisation).
                 want = (want + (sturm.expected - sturm.found) + p.block.min(4)).min(n);
                 log::info!("iterating again for {want} modes, the {} found locked", lambda.len());
+                // The deflated vectors are among the pairs found: locked with them from here.
+                self.nz = 0;
+                lz.deflate = None;
                 lz.set_want(want.max(lambda.len()));
                 lz.restart_from(&lambda, x.as_ref(), m, self.sigma);
                 continue;
@@ -856,11 +1041,16 @@ impl Rounds<'_> {
         // One step of inverse iteration and a Rayleigh–Ritz on the result: damps the
         // high-frequency rounding the Krylov vectors carry (which K amplifies in the residual)
         // at the cost of one block solve.
+        let null = if self.nz > 0 { self.pb.null } else { None };
         if check {
             self.tally.applications += x.ncols();
-            refine(k, m, f, &x)
+            let mut y = inverse_images(m, f, x.as_ref());
+            drop(x);
+            project_out(null, &mut y);
+            let (l, x) = rayleigh_ritz(k, m, y)?;
+            Ok(with_null(null, l, x))
         } else {
-            Ok((l, x))
+            Ok(with_null(null, l, x))
         }
     }
 
@@ -1078,6 +1268,7 @@ fn solve_below_bound(
     nm: usize,
     est: Estimate<'_>,
     notes: &[String],
+    null: Option<&Null>,
 ) -> Result<Option<EigenSolution>> {
     let n = k.n();
     if pr.n_fine != n || pr.n_coarse <= nm {
@@ -1115,10 +1306,14 @@ fn solve_below_bound(
     }
     let time_factor = est.t0.elapsed().as_secs_f64();
     let ti = Instant::now();
-    let mut lz = Lanczos::new(n, count, p, Side::Below);
+    // The deflated null vectors (nz < nm ≤ count) are among the eigenvalues below U.
+    let nz = null_count(null);
+    let mut lz = Lanczos::new(n, count - nz, p, Side::Below);
     lz.keep_image = true;
     lz.start = Some(prolongated(pr, &start));
+    lz.deflate = null.map(|(z, _)| z.clone());
     let mut bb = BelowBound {
+        null,
         k,
         m,
         p,
@@ -1130,7 +1325,7 @@ fn solve_below_bound(
         applications: 0,
         memory: est.memory,
     };
-    let mut want = count;
+    let mut want = count - nz;
     let mut attempt = 0;
     let done = loop {
         attempt += 1;
@@ -1141,6 +1336,12 @@ fn solve_below_bound(
                 // A cluster wider than the block, or a pair that had not converged: iterate
                 // on, with the pairs found locked at the start of a new basis.
                 want = (want + (count - below) + p.block.min(4)).min(n);
+                // The deflated pairs are among those found: from here on they are locked in
+                // the basis like the others.
+                if bb.null.take().is_some() {
+                    lz.deflate = None;
+                    want = (want + nz).min(n);
+                }
                 log::info!(
                     "{below} of the {count} eigenvalues below U found: iterating for more, the pairs found locked"
                 );
@@ -1229,9 +1430,16 @@ fn coarse_estimate(
     } = cm;
     // Ritz values converged to 1e-6 are within ~1e-12 of the coarse eigenvalues (the error of
     // a Ritz value is of the order of its residual squared): ample for placing a shift.
+    // The model's null-space candidates at the corners are the coarse model's (exact for
+    // rigid motions, which the corner space holds on straight cells; verified there anyway).
     let pc = EigenParams {
         target: Target::Nearest(nm + 1),
         tol: 1e-6,
+        null_candidates: p
+            .null_candidates
+            .as_ref()
+            .and_then(|c| pr.inject((*c.0).as_ref()))
+            .map(|z| NullCandidates(Arc::new(z))),
         ..p.clone()
     };
     let coarse = match solve_inner(&kc, &mc, &symc, &pc, None, false) {
@@ -1286,6 +1494,9 @@ fn prolongated(pr: &Prolongation, cv: &Mat<f64>) -> Mat<f64> {
 
 /// The iteration of [`solve_below_bound`] on the factorisation at U.
 struct BelowBound<'a> {
+    /// Deflated null vectors of K and their M-images ([`null_vectors`]), put before the pairs
+    /// of each Lanczos run (at λ = 0); `None` once a second round locks them in its basis.
+    null: Option<&'a Null>,
     k: &'a SymMatrix,
     m: &'a SymMatrix,
     p: &'a EigenParams,
@@ -1378,7 +1589,10 @@ impl BelowBound<'_> {
         };
         // The Lanczos vectors are spent: free them before the Rayleigh–Ritz step allocates.
         drop(x);
-        rayleigh_ritz(k, m, y)
+        let mut y = y;
+        project_out(self.null, &mut y);
+        let (l, x) = rayleigh_ritz(k, m, y)?;
+        Ok(with_null(self.null, l, x))
     }
 
     /// The pairs below U, verified, refined again (up to three steps in all) while their
@@ -1678,6 +1892,10 @@ struct Lanczos {
     /// Op·X of the Ritz vectors X last returned, from the Lanczos relation
     /// Op·V = V·T + W·R·E_lastᵀ: X·Θ + W·R·(last block rows of the Ritz coefficients).
     image: Option<Mat<f64>>,
+    /// M-orthonormal invariant vectors kept out of the basis (K's null vectors, see
+    /// [`null_vectors`]): every new block is M-orthogonalised against them too, so the
+    /// iteration works in their complement and never returns them.
+    deflate: Option<Mat<f64>>,
 }
 
 impl Lanczos {
@@ -1706,6 +1924,7 @@ impl Lanczos {
             peak_bytes: std::cell::Cell::new(0),
             keep_image: false,
             image: None,
+            deflate: None,
         }
     }
 
@@ -1738,14 +1957,21 @@ impl Lanczos {
     fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize) -> Mat<f64> {
         let bw = w.ncols();
         let mut coef = Mat::zeros(upto, bw);
-        if upto == 0 {
+        let z = self.deflate.as_ref().filter(|z| z.ncols() > 0);
+        if upto == 0 && z.is_none() {
             return coef;
         }
         for _ in 0..2 {
-            let c = tall::gram(self.v.get(.., 0..upto), mw.as_ref());
-            tall::mul(w.as_mut(), Accum::Add, self.v.get(.., 0..upto), c.as_ref(), -1.0);
+            if upto > 0 {
+                let c = tall::gram(self.v.get(.., 0..upto), mw.as_ref());
+                tall::mul(w.as_mut(), Accum::Add, self.v.get(.., 0..upto), c.as_ref(), -1.0);
+                coef += &c;
+            }
+            if let Some(z) = z {
+                let c = tall::gram(z.as_ref(), mw.as_ref());
+                tall::mul(w.as_mut(), Accum::Add, z.as_ref(), c.as_ref(), -1.0);
+            }
             m.mul_block(w.as_ref(), mw.as_mut());
-            coef += &c;
         }
         coef
     }
@@ -1880,7 +2106,10 @@ impl Lanczos {
         let mut w = Self::apply(fa, m, x0.as_ref(), apps);
         let mut mw = Mat::zeros(n, b);
         m.mul_block(w.as_ref(), mw.as_mut());
-        let _ = self.normalise(&mut w, &mut mw, m, 0, 0.0);
+        let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
+        // Out of the deflated vectors' span (a no-op without them).
+        let _ = self.orthogonalise(&mut w, &mut mw, m, 0);
+        let _ = self.normalise(&mut w, &mut mw, m, 0, if self.deflate.is_some() { scale2 } else { 0.0 });
         self.v.get_mut(.., 0..b).copy_from(&w);
         self.m_next = mw;
         // `cur` columns have images in T; the block at cur..cur+b is the next to apply.
