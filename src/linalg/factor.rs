@@ -477,6 +477,16 @@ impl Factor {
     /// Measure [`Factor::probe_residual`] against the matrix that was factorised: `K − σM` for
     /// `shift = Some((M, σ))`, K alone for `None`.
     pub fn probe_shifted(&mut self, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>) {
+        let b = Self::probe_rhs(k, shift);
+        let mut y = faer::Mat::from_fn(b.len(), 1, |i, _| b[i]);
+        self.solve_in_place(y.as_mut());
+        self.probe_residual = Self::probe_error(k, shift, &b, y.col(0).try_as_col_major().unwrap().as_slice());
+    }
+
+    /// The probe's right-hand side b = A x, x a fixed pseudo-random vector, A = K − σM (K for
+    /// `shift = None`): a caller may solve it along with other columns and pass the solution to
+    /// [`Factor::probe_error`] (what [`Factor::probe_shifted`] does with a solve of its own).
+    pub fn probe_rhs(k: &SymMatrix, shift: Option<(&SymMatrix, f64)>) -> Vec<f64> {
         let n = k.n();
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let x: Vec<f64> = (0..n)
@@ -487,23 +497,26 @@ impl Factor {
                 (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             })
             .collect();
-        let apply = |x: &[f64]| {
-            let mut y = k.mul_vec(x);
-            if let Some((m, sigma)) = shift {
-                for (a, b) in y.iter_mut().zip(m.mul_vec(x)) {
-                    *a -= sigma * b;
-                }
-            }
-            y
-        };
-        let b = apply(&x);
-        let mut y = faer::Mat::from_fn(n, 1, |i, _| b[i]);
-        self.solve_in_place(y.as_mut());
-        let yv: Vec<f64> = (0..n).map(|i| y[(i, 0)]).collect();
-        let ay = apply(&yv);
-        let num: f64 = ay.iter().zip(&b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt();
+        Self::shifted_product(k, shift, &x)
+    }
+
+    /// The probe's backward error ‖A y − b‖/‖b‖ for the computed solution `y` of A y = b.
+    pub fn probe_error(k: &SymMatrix, shift: Option<(&SymMatrix, f64)>, b: &[f64], y: &[f64]) -> f64 {
+        let ay = Self::shifted_product(k, shift, y);
+        let num: f64 = ay.iter().zip(b).map(|(p, q)| (p - q) * (p - q)).sum::<f64>().sqrt();
         let den: f64 = b.iter().map(|q| q * q).sum::<f64>().sqrt();
-        self.probe_residual = if den > 0.0 { num / den } else { 0.0 };
+        if den > 0.0 { num / den } else { 0.0 }
+    }
+
+    /// (K − σM) x, or K x without a shift.
+    fn shifted_product(k: &SymMatrix, shift: Option<(&SymMatrix, f64)>, x: &[f64]) -> Vec<f64> {
+        let mut y = k.mul_vec(x);
+        if let Some((m, sigma)) = shift {
+            for (a, b) in y.iter_mut().zip(m.mul_vec(x)) {
+                *a -= sigma * b;
+            }
+        }
+        y
     }
 
     /// The factor's values (faer's simplicial layout, or the packed supernodal one of
