@@ -346,14 +346,8 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
 /// The six rigid-body motions about the centre of the nodes' bounding box, offered to the
 /// eigen solver as candidates for K's null space (it keeps those that are: a free model's).
 fn rigid_candidates(model: &crate::model::Model) -> eigen::NullCandidates {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for x in model.nodes.iter() {
-        for d in 0..3 {
-            lo[d] = lo[d].min(x[d]);
-            hi[d] = hi[d].max(x[d]);
-        }
-    }
-    let c: [f64; 3] = std::array::from_fn(|d| if lo[d] <= hi[d] { 0.5 * (lo[d] + hi[d]) } else { 0.0 });
+    let (lo, hi) = crate::mesh::bounding_box(&model.nodes);
+    let c: [f64; 3] = std::array::from_fn(|d| 0.5 * (lo[d] + hi[d]));
     eigen::NullCandidates(std::sync::Arc::new(crate::post::modal::rigid_vectors(
         &model.dofs,
         &model.nodes,

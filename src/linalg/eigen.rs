@@ -371,8 +371,8 @@ fn null_vectors(k: &SymMatrix, m: &SymMatrix, cand: MatRef<'_, f64>) -> Option<N
     if kept.is_empty() {
         return None;
     }
-    let (_, cand) = select(&vec![0.0; c], &cand.to_owned(), &kept);
-    let (_, mc) = select(&vec![0.0; c], &pn.mx, &kept);
+    let cand = Mat::from_fn(n, kept.len(), |i, j| cand[(i, kept[j])]);
+    let mc = Mat::from_fn(n, kept.len(), |i, j| pn.mx[(i, kept[j])]);
     let c = kept.len();
     let g = tall::gram(cand.as_ref(), mc.as_ref());
     let g = nalgebra::DMatrix::from_fn(c, c, |i, j| 0.5 * (g[(i, j)] + g[(j, i)]));
@@ -432,7 +432,7 @@ fn null_vectors(k: &SymMatrix, m: &SymMatrix, cand: MatRef<'_, f64>) -> Option<N
     tall::mul(z.as_mut(), Accum::Replace, cand.as_ref(), tm.as_ref(), 1.0);
     let mut mz = Mat::zeros(n, t.len());
     tall::mul(mz.as_mut(), Accum::Replace, mc.as_ref(), tm.as_ref(), 1.0);
-    Some((z, mz))
+    Some((Arc::new(z), mz))
 }
 
 /// Default shift: a small negative fraction of the typical diagonal ratio K_ii/M_ii (which
@@ -599,7 +599,7 @@ fn solve_inner(
         time_verify: 0.0,
         lower_count_at_shift: shift.fa.negative_pivots,
         upper_known: None,
-        nz: 0,
+        null: None,
     };
     let want = rounds.wanted_count()?;
     if want == 0 {
@@ -616,19 +616,17 @@ fn solve_inner(
     rounds.dense = dense;
     rounds.notes = notes;
     // Dense solves and bands deflate nothing (no null vectors were sought for them).
-    rounds.nz = if dense { 0 } else { null_count(pb.null) };
+    rounds.null = if dense { None } else { pb.null };
     let lz = match shift.lz {
         Some(lz) if !dense => lz,
         _ => {
             let mut lz = Lanczos::new(
                 n,
-                if dense { 1 } else { want - rounds.nz },
+                if dense { 1 } else { want - null_count(rounds.null) },
                 p,
                 if band.is_some() { Side::Above } else { Side::Both },
             );
-            if rounds.nz > 0 {
-                lz.deflate = pb.null.map(|(z, _)| z.clone());
-            }
+            lz.deflate = rounds.null.map(|(z, _)| z.clone());
             lz
         }
     };
@@ -713,8 +711,9 @@ struct Problem<'a> {
     null: Option<&'a Null>,
 }
 
-/// Deflated null vectors of K and their M-images, (Z, MZ) ([`null_vectors`]).
-type Null = (Mat<f64>, Mat<f64>);
+/// Deflated null vectors of K and their M-images, (Z, MZ) ([`null_vectors`]); Z shared with the
+/// Lanczos runs that deflate it.
+type Null = (Arc<Mat<f64>>, Mat<f64>);
 
 /// The number of deflated vectors.
 fn null_count(null: Option<&Null>) -> usize {
@@ -726,7 +725,7 @@ fn null_count(null: Option<&Null>) -> usize {
 fn project_out(null: Option<&Null>, y: &mut Mat<f64>) {
     if let Some((z, mz)) = null {
         let c = tall::gram(mz.as_ref(), y.as_ref());
-        tall::mul(y.as_mut(), Accum::Add, z.as_ref(), c.as_ref(), -1.0);
+        tall::mul(y.as_mut(), Accum::Add, (**z).as_ref(), c.as_ref(), -1.0);
     }
 }
 
@@ -736,7 +735,7 @@ fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f6
     let mut lambda = vec![0.0; z.ncols()];
     lambda.extend_from_slice(&l);
     let mut xs = Mat::zeros(x.nrows(), z.ncols() + x.ncols());
-    xs.get_mut(.., 0..z.ncols()).copy_from(z);
+    xs.get_mut(.., 0..z.ncols()).copy_from(&**z);
     xs.get_mut(.., z.ncols()..).copy_from(&x);
     (lambda, xs)
 }
@@ -877,9 +876,9 @@ struct Rounds<'a> {
     /// The Sturm count at the band's upper end, kept for the final check: (point asked for,
     /// point used, count).
     upper_known: Option<(f64, f64, usize)>,
-    /// Null vectors deflated (put before the pairs of each iteration; 0 once a second round
-    /// locks them in its basis with the other pairs found).
-    nz: usize,
+    /// Null vectors deflated (put before the pairs of each iteration; `None` once a second
+    /// round locks them in its basis with the other pairs found).
+    null: Option<&'a Null>,
 }
 
 impl Rounds<'_> {
@@ -984,7 +983,7 @@ impl Rounds<'_> {
                 .as_ref()
                 .ok_or_else(|| Error::Factorization("lost the shift factor".into()))?;
             if !self.dense {
-                lz.set_want(want - self.nz);
+                lz.set_want(want - null_count(self.null));
             }
             let (lambda, x) = self.iterate_once(&mut lz, f, early.take())?;
             self.time_iterate += if attempt == 1 {
@@ -1014,7 +1013,7 @@ impl Rounds<'_> {
                 want = (want + (sturm.expected - sturm.found) + p.block.min(4)).min(n);
                 log::info!("iterating again for {want} modes, the {} found locked", lambda.len());
                 // The deflated vectors are among the pairs found: locked with them from here.
-                self.nz = 0;
+                self.null = None;
                 lz.deflate = None;
                 lz.set_want(want.max(lambda.len()));
                 lz.restart_from(&lambda, x.as_ref(), m, self.sigma);
@@ -1060,7 +1059,7 @@ impl Rounds<'_> {
         // One step of inverse iteration and a Rayleigh–Ritz on the result: damps the
         // high-frequency rounding the Krylov vectors carry (which K amplifies in the residual)
         // at the cost of one block solve.
-        let null = if self.nz > 0 { self.pb.null } else { None };
+        let null = self.null;
         if check {
             self.tally.applications += x.ncols();
             let mut y = inverse_images(m, f, x.as_ref());
@@ -1971,7 +1970,7 @@ struct Lanczos {
     /// M-orthonormal invariant vectors kept out of the basis (K's null vectors, see
     /// [`null_vectors`]): every new block is M-orthogonalised against them too, so the
     /// iteration works in their complement and never returns them.
-    deflate: Option<Mat<f64>>,
+    deflate: Option<Arc<Mat<f64>>>,
 }
 
 impl Lanczos {
@@ -2034,7 +2033,7 @@ impl Lanczos {
     fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize) -> Mat<f64> {
         let bw = w.ncols();
         let mut coef = Mat::zeros(upto, bw);
-        let z = self.deflate.as_ref().filter(|z| z.ncols() > 0);
+        let z = self.deflate.as_deref().filter(|z| z.ncols() > 0);
         if upto == 0 && z.is_none() {
             return coef;
         }

@@ -187,18 +187,7 @@ impl Mesh {
 
     /// Axis-aligned bounding box `(min, max)`; zeros for an empty mesh.
     pub fn bounding_box(&self) -> ([f64; 3], [f64; 3]) {
-        if self.nodes.is_empty() {
-            return ([0.0; 3], [0.0; 3]);
-        }
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for p in &self.nodes {
-            for d in 0..3 {
-                lo[d] = lo[d].min(p[d]);
-                hi[d] = hi[d].max(p[d]);
-            }
-        }
-        (lo, hi)
+        bounding_box(&self.nodes)
     }
 
     /// Multiply all coordinates by `s` (length-unit conversion).
@@ -209,4 +198,20 @@ impl Mesh {
             }
         }
     }
+}
+
+/// Axis-aligned bounding box `(min, max)` of points; zeros for none.
+pub fn bounding_box(nodes: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    if nodes.is_empty() {
+        return ([0.0; 3], [0.0; 3]);
+    }
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in nodes {
+        for d in 0..3 {
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+    }
+    (lo, hi)
 }
