@@ -1044,6 +1044,16 @@ fn backward_cols<const K: usize, const KC: usize, const J: usize, const F: bool>
 mod tests {
     use super::*;
 
+    /// Pseudo-random numbers in [−0.5, 0.5) (xorshift64) from `state`.
+    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     /// The diagonal forward substitution, four rows at a time, is the column-by-column one bit
     /// for bit (fused and not, and compiled for AVX2), for panel widths with and without rows
     /// over a multiple of four.
@@ -1099,13 +1109,7 @@ mod tests {
                 }
             }
         }
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         check::<1>(&mut next);
         check::<2>(&mut next);
         check::<4>(&mut next);
@@ -1124,13 +1128,7 @@ mod tests {
         if !(std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")) {
             return;
         }
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = uniform(0x2545_f491_4f6c_dd1d);
         fn check<const K: usize>(next: &mut dyn FnMut() -> f64) {
             for (w, below) in [(1usize, 3usize), (5, 17), (7, 30), (64, 9)] {
                 let nr = w + below;
