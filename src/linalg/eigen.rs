@@ -2599,14 +2599,8 @@ fn _assert_send(_: MatMut<'_, f64>) {}
 mod tests {
     use super::*;
 
-    /// Refinement at U, above the wanted modes, amplifies a mode between U and 2U in the lowest
-    /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here); one step from below the spectrum
-    /// ([`refine_below_spectrum`]) damps it by λ₁/λ₇. Fixed–free chain of 200 unit masses and
-    /// springs, whose modes are known in closed form: x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)),
-    /// λ_j = 4 sin²((2j − 1)π/(4n + 2)).
-    #[test]
-    fn refinement_below_the_spectrum_removes_what_refinement_at_u_amplifies() {
-        let n = 200;
+    /// K and M (on K's pattern) of a fixed–free chain of `n` unit masses and unit springs.
+    fn fixed_free_chain(n: usize) -> (SymMatrix, SymMatrix) {
         let mut kt = Vec::new();
         let mut mt = Vec::new();
         for i in 0..n {
@@ -2618,6 +2612,18 @@ mod tests {
         }
         let k = SymMatrix::from_triplets(n, &kt);
         let m = SymMatrix::from_triplets(n, &mt).on_pattern(k.pattern.clone());
+        (k, m)
+    }
+
+    /// Refinement at U, above the wanted modes, amplifies a mode between U and 2U in the lowest
+    /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here); one step from below the spectrum
+    /// ([`refine_below_spectrum`]) damps it by λ₁/λ₇. Fixed–free chain of 200 unit masses and
+    /// springs, whose modes are known in closed form: x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)),
+    /// λ_j = 4 sin²((2j − 1)π/(4n + 2)).
+    #[test]
+    fn refinement_below_the_spectrum_removes_what_refinement_at_u_amplifies() {
+        let n = 200;
+        let (k, m) = fixed_free_chain(n);
         let angle = |j: usize| (2 * j - 1) as f64 * std::f64::consts::PI / (2 * n + 1) as f64;
         let exact = |j: usize| 4.0 * (0.5 * angle(j)).sin().powi(2);
         let mode = |j: usize, i: usize| (angle(j) * (i + 1) as f64).sin();
@@ -2679,17 +2685,7 @@ mod tests {
     fn released_lanczos_runs_again_for_more_modes() {
         // A fixed–free chain of 200 unit masses and springs: λ_j = 4 sin²((2j − 1)π/(4n + 2)).
         let n = 200;
-        let mut kt = Vec::new();
-        let mut mt = Vec::new();
-        for i in 0..n {
-            kt.push((i, i, if i + 1 < n { 2.0 } else { 1.0 }));
-            if i + 1 < n {
-                kt.push((i, i + 1, -1.0));
-            }
-            mt.push((i, i, 1.0));
-        }
-        let k = SymMatrix::from_triplets(n, &kt);
-        let m = SymMatrix::from_triplets(n, &mt).on_pattern(k.pattern.clone());
+        let (k, m) = fixed_free_chain(n);
         let exact = |j: usize| {
             let s = ((2 * j - 1) as f64 * std::f64::consts::PI / (4 * n + 2) as f64).sin();
             4.0 * s * s
