@@ -1382,6 +1382,8 @@ fn solve_below_bound(
     );
     let factor_backward_error = bb.probe();
     bb.memory.add_solves(&fa);
+    // The deflated vectors, unless a second round locked them in its basis as ordinary pairs.
+    let null = bb.null.and(null);
     let BelowBound {
         memory,
         mut applications,
