@@ -720,13 +720,17 @@ fn null_count(null: Option<&Null>) -> usize {
     null.map_or(0, |(z, _)| z.ncols())
 }
 
-/// Y with its components along the deflated vectors removed: A⁻¹M keeps their complement
-/// only up to rounding (this keeps the pairs M-orthogonal to them to ~1e-15 rather than ~1e-13).
-fn project_out(null: Option<&Null>, y: &mut Mat<f64>) {
+/// Rayleigh–Ritz on the span of `y` with the deflated null vectors taken out of it (A⁻¹M keeps
+/// their complement only up to rounding: taken out, the pairs stay M-orthogonal to them to
+/// ~1e-15 rather than ~1e-13), then the null vectors put back in front at λ = 0
+/// ([`with_null`]): the refinement of the pairs an iteration that deflates them returned.
+fn ritz_deflated(k: &SymMatrix, m: &SymMatrix, null: Option<&Null>, mut y: Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     if let Some((z, mz)) = null {
         let c = tall::gram(mz.as_ref(), y.as_ref());
         tall::mul(y.as_mut(), Accum::Add, (**z).as_ref(), c.as_ref(), -1.0);
     }
+    let (l, x) = rayleigh_ritz(k, m, y)?;
+    Ok(with_null(null, l, x))
 }
 
 /// The deflated pairs (at λ = 0) before the pairs (λ, X) of an iteration.
@@ -1062,11 +1066,9 @@ impl Rounds<'_> {
         let null = self.null;
         if check {
             self.tally.applications += x.ncols();
-            let mut y = inverse_images(m, f, x.as_ref());
+            let y = inverse_images(m, f, x.as_ref());
             drop(x);
-            project_out(null, &mut y);
-            let (l, x) = rayleigh_ritz(k, m, y)?;
-            Ok(with_null(null, l, x))
+            ritz_deflated(k, m, null, y)
         } else {
             Ok(with_null(null, l, x))
         }
@@ -1445,17 +1447,16 @@ fn refine_below_spectrum(
 ) -> Result<Option<(Purification, f64)>> {
     let nz = null_count(null);
     let sigma = default_shift(k, m);
-    let (fb, sigma) = factor_at(k, m, sym, sigma, count)?;
+    // Its probe rides along the step's block solve (warned about there, as for the one at U).
+    let (fb, sigma) = factor_at_checked(k, m, sym, sigma, count, false, false)?;
     memory.add_factor(&fb);
     let x = done.vectors.get(.., nz..);
     *applications += x.ncols();
-    let mut y = inverse_images(m, &fb, x);
+    let (y, _) = inverse_images_probed(k, m, &fb, sigma, x);
     memory.add_solves(&fb);
     let seconds = fb.numeric_seconds;
     drop(fb);
-    project_out(null, &mut y);
-    let (l, x) = rayleigh_ritz(k, m, y)?;
-    let (lambda, vectors) = with_null(null, l, x);
+    let (lambda, vectors) = ritz_deflated(k, m, null, y)?;
     let tv = Instant::now();
     let verified = verify_with_backward_errors(k, m, &lambda, vectors.as_ref(), u);
     let worst = verified.0.iter().fold(0.0f64, |a, &r| a.max(r));
@@ -1697,10 +1698,7 @@ impl BelowBound<'_, '_> {
         };
         // The Lanczos vectors are spent: free them before the Rayleigh–Ritz step allocates.
         drop(x);
-        let mut y = y;
-        project_out(self.null, &mut y);
-        let (l, x) = rayleigh_ritz(k, m, y)?;
-        Ok(with_null(self.null, l, x))
+        ritz_deflated(k, m, self.null, y)
     }
 
     /// The pairs below U, verified, refined again (up to three steps in all) while their
