@@ -2616,7 +2616,8 @@ mod tests {
     }
 
     /// Refinement at U, above the wanted modes, amplifies a mode between U and 2U in the lowest
-    /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here); one step from below the spectrum
+    /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here), and the refinement undoes such a
+    /// step; one step from below the spectrum
     /// ([`refine_below_spectrum`]) damps it by λ₁/λ₇. Fixed–free chain of 200 unit masses and
     /// springs, whose modes are known in closed form: x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)),
     /// λ_j = 4 sin²((2j − 1)π/(4n + 2)).
@@ -2645,6 +2646,31 @@ mod tests {
         let (l1, x1) = refine(&k, &m, &fa, &x0).unwrap();
         let r1 = worst(&verified(&l1, &x1));
         assert!(r1 > 3.0 * r0, "refinement at U: {r0:.1e} → {r1:.1e}");
+        // The one-factorisation solve's refinement ([`BelowBound::purify`]) takes that step,
+        // sees the largest residual rise and undoes it: it hands back the start's pairs, as
+        // verified, one step counted and the step's solves among the applications.
+        let p = EigenParams::default();
+        let mut mem = EigenMemory::default();
+        let mut bb = BelowBound {
+            null: None,
+            k: &k,
+            m: &m,
+            p: &p,
+            fa: &fa,
+            u,
+            zero: default_shift(&k, &m).abs(),
+            count: nm,
+            nm,
+            applications: 0,
+            memory: &mut mem,
+            probe: None,
+        };
+        let Purified::Done(undone) = bb.purify(l0.clone(), x0.clone(), 1).unwrap() else {
+            panic!("every pair below U is there")
+        };
+        assert_eq!((undone.steps, undone.worst, undone.found), (1, r0, nm));
+        assert_eq!(undone.lambda, l0);
+        assert_eq!(bb.applications, nm);
         drop(fa);
         let done = Purification {
             lambda: l0,
