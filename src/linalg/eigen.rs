@@ -432,7 +432,7 @@ fn null_vectors(k: &SymMatrix, m: &SymMatrix, cand: MatRef<'_, f64>) -> Option<N
     tall::mul(z.as_mut(), Accum::Replace, cand.as_ref(), tm.as_ref(), 1.0);
     let mut mz = Mat::zeros(n, t.len());
     tall::mul(mz.as_mut(), Accum::Replace, mc.as_ref(), tm.as_ref(), 1.0);
-    Some((Arc::new(z), mz))
+    Some((Arc::new(z), Arc::new(mz)))
 }
 
 /// Default shift: a small negative fraction of the typical diagonal ratio K_ii/M_ii (which
@@ -626,7 +626,7 @@ fn solve_inner(
                 p,
                 if band.is_some() { Side::Above } else { Side::Both },
             );
-            lz.deflate = rounds.null.map(|(z, _)| z.clone());
+            lz.deflate = rounds.null.cloned();
             lz
         }
     };
@@ -713,7 +713,7 @@ struct Problem<'a> {
 
 /// Deflated null vectors of K and their M-images, (Z, MZ) ([`null_vectors`]); Z shared with the
 /// Lanczos runs that deflate it.
-type Null = (Arc<Mat<f64>>, Mat<f64>);
+type Null = (Arc<Mat<f64>>, Arc<Mat<f64>>);
 
 /// The number of deflated vectors.
 fn null_count(null: Option<&Null>) -> usize {
@@ -726,7 +726,7 @@ fn null_count(null: Option<&Null>) -> usize {
 /// ([`with_null`]): the refinement of the pairs an iteration that deflates them returned.
 fn ritz_deflated(k: &SymMatrix, m: &SymMatrix, null: Option<&Null>, mut y: Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     if let Some((z, mz)) = null {
-        let c = tall::gram(mz.as_ref(), y.as_ref());
+        let c = tall::gram((**mz).as_ref(), y.as_ref());
         tall::mul(y.as_mut(), Accum::Add, (**z).as_ref(), c.as_ref(), -1.0);
     }
     let (l, x) = rayleigh_ritz(k, m, y)?;
@@ -812,7 +812,7 @@ fn probe_spectrum(pb: &Problem<'_>, nm: usize, fa: Factor, sigma: f64, tally: &m
         // first, and the first elastic scale must be among the estimates.
         let nb = (nm + 6).min(12.max(p.block + 6)).min(n);
         let mut lz = Lanczos::new(n, nm.min(n) - nz, p, Side::Both);
-        lz.deflate = pb.null.map(|(z, _)| z.clone());
+        lz.deflate = pb.null.cloned();
         lz.pause_after = Some(nb.div_ceil(lz.b).max(3));
         let tp = Instant::now();
         early = lz.run(p, &fa, m, sigma, &mut tally.applications)?;
@@ -1334,7 +1334,7 @@ fn solve_below_bound(
     let mut lz = Lanczos::new(n, count - nz, p, Side::Below);
     lz.keep_image = true;
     lz.start = Some(prolongated(pr, &start));
-    lz.deflate = null.map(|(z, _)| z.clone());
+    lz.deflate = null.cloned();
     let mut bb = BelowBound {
         null,
         k,
@@ -2006,12 +2006,15 @@ struct Lanczos {
     m_max: usize,
     /// Basis (columns `0..cur` in use, plus the next block at `cur..cur + b`).
     v: Mat<f64>,
-    /// M times the next block (the only M-image kept: the basis's own would double the
-    /// iteration's largest allocation, for M products that cost ~4 % of the run to redo).
-    m_next: Mat<f64>,
-    /// A block of the same size kept for the next step's M-image (no allocation per step: the
-    /// freed blocks would stay in the allocator's heap, fragmented, and add to the peak).
-    spare: Mat<f64>,
+    /// M-images of the basis columns (the next block's included). With them the coefficients
+    /// against the basis are (MV)ᵀw, formed from w itself: the Gram–Schmidt passes need no M
+    /// product of their own, one per block step instead of three, for an allocation the size
+    /// of the basis.
+    mv: Mat<f64>,
+    /// Two blocks of the same size kept for the next step's solve and M-image (no allocation
+    /// per step: the freed blocks would stay in the allocator's heap, fragmented, and add to
+    /// the peak).
+    spare: [Mat<f64>; 2],
     /// Projected matrix (full storage, symmetrised at use).
     t: Mat<f64>,
     /// Columns whose operator image is in `t`.
@@ -2043,7 +2046,7 @@ struct Lanczos {
     /// M-orthonormal invariant vectors kept out of the basis (K's null vectors, see
     /// [`null_vectors`]): every new block is M-orthogonalised against them too, so the
     /// iteration works in their complement and never returns them.
-    deflate: Option<Arc<Mat<f64>>>,
+    deflate: Option<Null>,
 }
 
 impl Lanczos {
@@ -2058,8 +2061,8 @@ impl Lanczos {
             want,
             m_max,
             v: Mat::zeros(n, m_max + b),
-            m_next: Mat::zeros(n, b),
-            spare: Mat::zeros(0, 0),
+            mv: Mat::zeros(n, m_max + b),
+            spare: [Mat::zeros(0, 0), Mat::zeros(0, 0)],
             t: Mat::zeros(m_max + b, m_max + b),
             cur: 0,
             rng: Rng(p.seed | 1),
@@ -2077,11 +2080,11 @@ impl Lanczos {
         }
     }
 
-    /// Bytes of the basis, the next block's M-image and the projected matrix held now.
+    /// Bytes of the basis, its M-images, the spare blocks and the projected matrix held now.
     fn bytes(&self) -> u64 {
         8 * (self.v.nrows() * self.v.ncols()
-            + self.m_next.nrows() * self.m_next.ncols()
-            + self.spare.nrows() * self.spare.ncols()
+            + self.mv.nrows() * self.mv.ncols()
+            + self.spare.iter().map(|s| s.nrows() * s.ncols()).sum::<usize>()
             + self.t.nrows() * self.t.ncols()) as u64
     }
 
@@ -2100,29 +2103,37 @@ impl Lanczos {
         w
     }
 
-    /// M-orthogonalise `w` against basis columns `0..upto`, twice (classical Gram–Schmidt with
-    /// the coefficients Vᵀ(M w)); `mw` is its M-image on entry and, recomputed after each pass,
-    /// on return. Returns the summed coefficients.
-    fn orthogonalise(&self, w: &mut Mat<f64>, mw: &mut Mat<f64>, m: &SymMatrix, upto: usize) -> Mat<f64> {
+    /// M-orthogonalise `w` against basis columns `0..upto` and the deflated vectors, twice
+    /// (classical Gram–Schmidt with the coefficients (MV)ᵀw from the stored M-images, so that
+    /// the second pass sees the rounding the first left in w itself). Returns the coefficients
+    /// against the basis, summed over the passes, and each column's M-norm² removed (Σ of the
+    /// squared coefficients, deflated vectors included: by Pythagoras, the M-norm² before is
+    /// that plus the M-norm² after). The caller forms the M-image of the result.
+    fn orthogonalise(&self, w: &mut Mat<f64>, upto: usize) -> (Mat<f64>, Vec<f64>) {
         let bw = w.ncols();
         let mut coef = Mat::zeros(upto, bw);
-        let z = self.deflate.as_deref().filter(|z| z.ncols() > 0);
-        if upto == 0 && z.is_none() {
-            return coef;
-        }
+        let mut removed = vec![0.0; bw];
+        let z = self.deflate.as_ref().filter(|(z, _)| z.ncols() > 0);
+        let mut zcoef = z.map(|(z, _)| Mat::<f64>::zeros(z.ncols(), bw));
         for _ in 0..2 {
             if upto > 0 {
-                let c = tall::gram(self.v.get(.., 0..upto), mw.as_ref());
+                let c = tall::gram(self.mv.get(.., 0..upto), w.as_ref());
                 tall::mul(w.as_mut(), Accum::Add, self.v.get(.., 0..upto), c.as_ref(), -1.0);
                 coef += &c;
             }
-            if let Some(z) = z {
-                let c = tall::gram(z.as_ref(), mw.as_ref());
-                tall::mul(w.as_mut(), Accum::Add, z.as_ref(), c.as_ref(), -1.0);
+            if let (Some((z, mz)), Some(zc)) = (z, zcoef.as_mut()) {
+                let c = tall::gram((**mz).as_ref(), w.as_ref());
+                tall::mul(w.as_mut(), Accum::Add, (**z).as_ref(), c.as_ref(), -1.0);
+                *zc += &c;
             }
-            m.mul_block(w.as_ref(), mw.as_mut());
         }
-        coef
+        for (j, r) in removed.iter_mut().enumerate() {
+            *r = (0..upto).map(|i| coef[(i, j)] * coef[(i, j)]).sum::<f64>()
+                + zcoef
+                    .as_ref()
+                    .map_or(0.0, |zc| (0..zc.nrows()).map(|i| zc[(i, j)] * zc[(i, j)]).sum());
+        }
+        (coef, removed)
     }
 
     /// M-orthonormalise `w` (already orthogonal to the basis columns `0..upto`; `mw` is its
@@ -2182,7 +2193,8 @@ impl Lanczos {
                 break;
             }
             // Second pass: clean rounding (and orthogonalise random replacements).
-            let _ = self.orthogonalise(w, mw, m, upto);
+            let _ = self.orthogonalise(w, upto);
+            m.mul_block(w.as_ref(), mw.as_mut());
         }
         // A fresh M-image: the algebraic updates above lose accuracy when a block is nearly
         // in the span of the basis (its scaling amplifies their rounding).
@@ -2253,14 +2265,14 @@ impl Lanczos {
             }
         }
         let mut w = Self::apply(fa, m, x0.as_ref(), apps);
+        // Out of the deflated vectors' span (a no-op without them).
+        let (_, removed) = self.orthogonalise(&mut w, 0);
         let mut mw = Mat::zeros(n, b);
         m.mul_block(w.as_ref(), mw.as_mut());
-        let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
-        // Out of the deflated vectors' span (a no-op without them).
-        let _ = self.orthogonalise(&mut w, &mut mw, m, 0);
+        let scale2 = norm2_before(&w, &mw, &removed);
         let _ = self.normalise(&mut w, &mut mw, m, 0, if self.deflate.is_some() { scale2 } else { 0.0 });
         self.v.get_mut(.., 0..b).copy_from(&w);
-        self.m_next = mw;
+        self.mv.get_mut(.., 0..b).copy_from(&mw);
         // `cur` columns have images in T; the block at cur..cur+b is the next to apply.
         self.cur = 0;
         self.iterate(p, fa, m, sigma, apps)
@@ -2271,8 +2283,8 @@ impl Lanczos {
     fn release(&mut self) {
         self.peak_bytes.set(self.peak_bytes());
         self.v = Mat::zeros(0, 0);
-        self.m_next = Mat::zeros(0, 0);
-        self.spare = Mat::zeros(0, 0);
+        self.mv = Mat::zeros(0, 0);
+        self.spare = [Mat::zeros(0, 0), Mat::zeros(0, 0)];
         self.t = Mat::zeros(0, 0);
         self.m_max = 0;
         self.cur = 0;
@@ -2290,18 +2302,19 @@ impl Lanczos {
             return;
         }
         self.v.get_mut(.., 0..c).copy_from(x);
+        m.mul_block(x, self.mv.get_mut(.., 0..c));
         self.t.fill(0.0);
         for (k, &l) in lambda.iter().enumerate().take(c) {
             self.t[(k, k)] = 1.0 / (l - sigma);
         }
         let mut w = Mat::from_fn(n, b, |_, _| self.rng.next());
+        let (_, removed) = self.orthogonalise(&mut w, c);
         let mut mw = Mat::zeros(n, b);
         m.mul_block(w.as_ref(), mw.as_mut());
-        let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
-        let _ = self.orthogonalise(&mut w, &mut mw, m, c);
+        let scale2 = norm2_before(&w, &mw, &removed);
         let _ = self.normalise(&mut w, &mut mw, m, c, scale2);
         self.v.get_mut(.., c..c + b).copy_from(&w);
-        self.m_next = mw;
+        self.mv.get_mut(.., c..c + b).copy_from(&mw);
         self.cur = c;
         self.started = true;
     }
@@ -2323,16 +2336,16 @@ impl Lanczos {
         if m_max > self.m_max {
             let cols = m_max + b;
             let mut v = Mat::zeros(self.n, cols);
+            let mut mv = Mat::zeros(self.n, cols);
             let mut t = Mat::zeros(cols, cols);
             let old = self.v.ncols();
             if old > 0 {
                 v.get_mut(.., 0..old).copy_from(&self.v);
+                mv.get_mut(.., 0..old).copy_from(&self.mv);
                 t.get_mut(0..old, 0..old).copy_from(&self.t);
             }
-            if self.m_next.nrows() != self.n {
-                self.m_next = Mat::zeros(self.n, b);
-            }
             self.v = v;
+            self.mv = mv;
             self.t = t;
             self.m_max = m_max;
         }
@@ -2406,21 +2419,23 @@ impl Lanczos {
     fn block_step(&mut self, fa: &Factor, m: &SymMatrix, apps: &mut usize, lap: &mut Lap) -> Result<Mat<f64>> {
         let (n, b, blk) = (self.n, self.b, self.cur);
         // Op V_blk = A⁻¹ (M V_blk), and M V_blk is already stored.
-        let mut w = std::mem::replace(&mut self.m_next, Mat::zeros(0, 0));
+        let [mut w, mut mw] = std::mem::replace(&mut self.spare, [Mat::zeros(0, 0), Mat::zeros(0, 0)]);
+        for a in [&mut w, &mut mw] {
+            if a.nrows() != n || a.ncols() != b {
+                *a = Mat::zeros(n, b);
+            }
+        }
+        w.copy_from(self.mv.get(.., blk..blk + b));
         fa.solve_in_place(w.as_mut());
         *apps += b;
         lap.lap(&mut self.times, 0);
-        let mut mw = std::mem::replace(&mut self.spare, Mat::zeros(0, 0));
-        if mw.nrows() != n || mw.ncols() != b {
-            mw = Mat::zeros(n, b);
-        }
-        m.mul_block(w.as_ref(), mw.as_mut());
-        lap.lap(&mut self.times, 1);
-        let scale2 = tall::col_dots(w.as_ref(), mw.as_ref()).into_iter().fold(0.0, f64::max);
-        let coef = self.orthogonalise(&mut w, &mut mw, m, blk + b);
+        let (coef, removed) = self.orthogonalise(&mut w, blk + b);
         // Column block `blk` of T: rows 0..blk+b.
         self.t.get_mut(0..blk + b, blk..blk + b).copy_from(&coef);
         lap.lap(&mut self.times, 2);
+        m.mul_block(w.as_ref(), mw.as_mut());
+        lap.lap(&mut self.times, 1);
+        let scale2 = norm2_before(&w, &mw, &removed);
         let r = self.normalise(&mut w, &mut mw, m, blk + b, scale2);
         lap.lap(&mut self.times, 3);
         self.cur = blk + b;
@@ -2430,8 +2445,8 @@ impl Lanczos {
             return Err(Error::EigenNotConverged("internal basis overflow".into()));
         }
         self.v.get_mut(.., nb..nb + b).copy_from(&w);
-        self.m_next = mw;
-        self.spare = w;
+        self.mv.get_mut(.., nb..nb + b).copy_from(&mw);
+        self.spare = [w, mw];
         self.t.get_mut(nb..nb + b, blk..blk + b).copy_from(&r);
         self.t.get_mut(blk..blk + b, nb..nb + b).copy_from(r.transpose());
         Ok(r)
@@ -2512,9 +2527,11 @@ impl Lanczos {
         // In place (no copies of the basis at the memory peak): the Ritz vectors into the first
         // columns, then the next block after them (keep + b ≤ c = nb). The next block's
         // M-image moves along with it.
-        tall::combine_columns_in_place(self.v.as_mut(), yk.as_ref());
-        let (head, tail) = self.v.as_mut().split_at_col_mut(nb);
-        head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
+        for a in [&mut self.v, &mut self.mv] {
+            tall::combine_columns_in_place(a.as_mut(), yk.as_ref());
+            let (head, tail) = a.as_mut().split_at_col_mut(nb);
+            head.get_mut(.., keep..keep + b).copy_from(tail.get(.., 0..b));
+        }
         self.t.fill(0.0);
         for k in 0..keep {
             self.t[(k, k)] = ritz.theta[k];
@@ -2544,6 +2561,16 @@ impl Lanczos {
             .map(|t| sigma + 1.0 / t)
             .max_by(f64::total_cmp)
     }
+}
+
+/// The largest M-norm² of the columns of a block before [`Lanczos::orthogonalise`] took
+/// `removed` out of them: `w` and `mw` are the block after it and its M-image.
+fn norm2_before(w: &Mat<f64>, mw: &Mat<f64>, removed: &[f64]) -> f64 {
+    tall::col_dots(w.as_ref(), mw.as_ref())
+        .into_iter()
+        .zip(removed)
+        .map(|(a, r)| a + r)
+        .fold(0.0, f64::max)
 }
 
 /// One Rayleigh–Ritz step of [`Lanczos::iterate`]: Ritz values θ and vectors Y of T (wanted
