@@ -347,9 +347,12 @@ impl SymMatrix {
         };
         self.value_bytes() + own
     }
-    /// Diagonal entries.
+    /// Diagonal entries (parallel over columns: a binary search in each reads most of the
+    /// pattern, ~7 ms for K at 119k DOFs on one thread, and a modal run asks several times).
     pub fn diagonal(&self) -> Vec<f64> {
         (0..self.n())
+            .into_par_iter()
+            .with_min_len(4096)
             .map(|j| self.pattern.position(j, j).map_or(0.0, |p| self.values[p]))
             .collect()
     }
