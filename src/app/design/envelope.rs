@@ -817,7 +817,7 @@ fn aggregate(runs: &[EnvelopeRun]) -> Vec<CheckEnvelope> {
                     out.min = out.min.min(c.value);
                     out.max = out.max.max(c.value);
                     out.ok &= c.ok;
-                    if c.margin < out.worst_margin || c.margin.is_nan() {
+                    if worse(c.margin, out.worst_margin) {
                         out.worst_margin = c.margin;
                         out.worst_run = r.label.clone();
                     }
@@ -826,6 +826,14 @@ fn aggregate(runs: &[EnvelopeRun]) -> Vec<CheckEnvelope> {
             out
         })
         .collect()
+}
+
+/// Whether margin `a` is worse than `b` (or not a number): lower by more than 1e-9 of their
+/// size. Margins that agree to rounding are one tie, and the first run keeps it, so that the
+/// "worst at" of two runs that are the same in exact arithmetic (two corners whose bands do not
+/// touch the check) does not follow the last digits of the eigen solutions (verified to ~1e-12).
+fn worse(a: f64, b: f64) -> bool {
+    a.is_nan() || a < b - 1e-9 * a.abs().max(b.abs())
 }
 
 /// How the envelope's 3D machine runs were made, in words.
@@ -1069,4 +1077,52 @@ pub fn write_tuning_chart(path: &std::path::Path, e: &EnvelopeResult) -> Result<
     }
     root.present().map_err(|x| err(&x))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(label: &str, margin: f64) -> EnvelopeRun {
+        EnvelopeRun {
+            label: label.into(),
+            case: "nominal".into(),
+            at: BTreeMap::new(),
+            values: BTreeMap::new(),
+            design: Design::default(),
+            checks: vec![Check {
+                id: "overrun".into(),
+                name: "coil overrun".into(),
+                value: margin,
+                limit: 1.0,
+                margin,
+                ok: true,
+                upper: false,
+            }],
+            working_detuning: f64::NAN,
+        }
+    }
+
+    /// Two corners whose margins differ by rounding are one tie: the first keeps "worst at";
+    /// a margin lower by a real amount (1e-6) takes it.
+    #[test]
+    fn worst_run_ignores_rounding_ties() {
+        let m = 6.274;
+        let tie = [
+            run("nominal", 7.0),
+            run("eccentric corner 2", m),
+            run("share corner 2", m * (1.0 - 1e-14)),
+            run("empty corner 1", 9.0),
+        ];
+        let e = aggregate(&tie);
+        assert_eq!((e[0].worst_run.as_str(), e[0].worst_margin), ("eccentric corner 2", m));
+        let lower = [
+            run("nominal", 7.0),
+            run("eccentric corner 2", m),
+            run("share corner 2", m * (1.0 - 1e-6)),
+        ];
+        assert_eq!(aggregate(&lower)[0].worst_run, "share corner 2");
+        let nan = [run("nominal", 7.0), run("eccentric corner 2", f64::NAN)];
+        assert_eq!(aggregate(&nan)[0].worst_run, "eccentric corner 2");
+    }
 }
