@@ -2127,11 +2127,9 @@ impl Lanczos {
                 *zc += &c;
             }
         }
+        let squares = |c: &Mat<f64>, j: usize| (0..c.nrows()).map(|i| c[(i, j)] * c[(i, j)]).sum::<f64>();
         for (j, r) in removed.iter_mut().enumerate() {
-            *r = (0..upto).map(|i| coef[(i, j)] * coef[(i, j)]).sum::<f64>()
-                + zcoef
-                    .as_ref()
-                    .map_or(0.0, |zc| (0..zc.nrows()).map(|i| zc[(i, j)] * zc[(i, j)]).sum());
+            *r = squares(&coef, j) + zcoef.as_ref().map_or(0.0, |zc| squares(zc, j));
         }
         (coef, removed)
     }
@@ -2264,15 +2262,10 @@ impl Lanczos {
                 }
             }
         }
-        let mut w = Self::apply(fa, m, x0.as_ref(), apps);
+        let w = Self::apply(fa, m, x0.as_ref(), apps);
         // Out of the deflated vectors' span (a no-op without them).
-        let (_, removed) = self.orthogonalise(&mut w, 0);
-        let mut mw = Mat::zeros(n, b);
-        m.mul_block(w.as_ref(), mw.as_mut());
-        let scale2 = norm2_before(&w, &mw, &removed);
-        let _ = self.normalise(&mut w, &mut mw, m, 0, if self.deflate.is_some() { scale2 } else { 0.0 });
-        self.v.get_mut(.., 0..b).copy_from(&w);
-        self.mv.get_mut(.., 0..b).copy_from(&mw);
+        let deflated = self.deflate.is_some();
+        self.place_block(w, m, 0, deflated);
         // `cur` columns have images in T; the block at cur..cur+b is the next to apply.
         self.cur = 0;
         self.iterate(p, fa, m, sigma, apps)
@@ -2307,16 +2300,25 @@ impl Lanczos {
         for (k, &l) in lambda.iter().enumerate().take(c) {
             self.t[(k, k)] = 1.0 / (l - sigma);
         }
-        let mut w = Mat::from_fn(n, b, |_, _| self.rng.next());
-        let (_, removed) = self.orthogonalise(&mut w, c);
-        let mut mw = Mat::zeros(n, b);
-        m.mul_block(w.as_ref(), mw.as_mut());
-        let scale2 = norm2_before(&w, &mw, &removed);
-        let _ = self.normalise(&mut w, &mut mw, m, c, scale2);
-        self.v.get_mut(.., c..c + b).copy_from(&w);
-        self.mv.get_mut(.., c..c + b).copy_from(&mw);
+        let w = Mat::from_fn(n, b, |_, _| self.rng.next());
+        self.place_block(w, m, c, true);
         self.cur = c;
         self.started = true;
+    }
+
+    /// A start block `w`: M-orthonormalised against the basis columns `0..at` and the deflated
+    /// vectors, then put at `at..at + b` with its M-image. `scaled`: the normalisation judges
+    /// deficient directions against the block's M-norm² before the orthogonalisation (else
+    /// against its own largest).
+    fn place_block(&mut self, mut w: Mat<f64>, m: &SymMatrix, at: usize, scaled: bool) {
+        let b = w.ncols();
+        let (_, removed) = self.orthogonalise(&mut w, at);
+        let mut mw = Mat::zeros(w.nrows(), b);
+        m.mul_block(w.as_ref(), mw.as_mut());
+        let scale2 = if scaled { norm2_before(&w, &mw, &removed) } else { 0.0 };
+        let _ = self.normalise(&mut w, &mut mw, m, at, scale2);
+        self.v.get_mut(.., at..at + b).copy_from(&w);
+        self.mv.get_mut(.., at..at + b).copy_from(&mw);
     }
 
     /// Grow the wanted count (and the basis capacity), keeping the current state.
