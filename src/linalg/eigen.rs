@@ -29,7 +29,7 @@
 //! A user shift finds the modes nearest to it.
 
 use super::coarse::{CoarseModel, Prolongation};
-use super::factor::{Factor, SymbolicFactor};
+use super::factor::{Factor, Prefault, SymbolicFactor};
 use super::floor::SolveWork;
 use super::tall;
 use crate::linalg::sparse::SymMatrix;
@@ -538,6 +538,13 @@ fn solve_inner(
     }
     let t0 = Instant::now();
     let (mut pl, mut notes) = adjusted_params(k, p);
+    // The one-factorisation solve (with a coarse model, for the lowest modes, to be proved);
+    // its factor's pages made resident during the set-up and the coarse estimate ([`Prefault`]).
+    let below_bound = match (coarse.is_some(), pl.target, pl.shift, check) {
+        (true, Target::Nearest(nm), None, true) => n > pl.dense_below && nm < n && !big_request(n, nm),
+        _ => false,
+    };
+    let mut prefault = if below_bound { Prefault::start(sym) } else { None };
     let (sigma, band) = first_shift(k, m, &pl)?;
     let p = &pl;
     // For the lowest modes by Lanczos, K's null vectors among the candidates (the rigid-body
@@ -571,19 +578,19 @@ fn solve_inner(
         null: null.as_ref(),
     };
     let mut tally = Tally::default();
-    if let (Some((pr, prepared)), Target::Nearest(nm), None, true) = (coarse, p.target, p.shift, check) {
-        if n > p.dense_below && nm < n && !big_request(n, nm) {
-            let est = Estimate {
-                t0,
-                factorizations: &mut tally.factorizations,
-                memory: &mut tally.memory,
-            };
-            if let Some(sol) = solve_below_bound(k, m, sym, p, (pr, prepared), nm, est, &notes, null.as_ref())? {
-                return Ok(sol);
-            }
+    if let (Some((pr, prepared)), Target::Nearest(nm), true) = (coarse, p.target, below_bound) {
+        let est = Estimate {
+            t0,
+            factorizations: &mut tally.factorizations,
+            memory: &mut tally.memory,
+        };
+        let pre = prefault.take();
+        if let Some(sol) = solve_below_bound(k, m, sym, p, (pr, prepared), nm, est, &notes, null.as_ref(), pre)? {
+            return Ok(sol);
         }
         // A prepared coarse model not used is dropped here, before the factorisation.
     }
+    drop(prefault);
     let shift = factor_at_shift(&pb, sigma, &mut tally)?;
     let sigma = shift.sigma;
     let mut rounds = Rounds {
@@ -776,7 +783,16 @@ struct ShiftFactor {
 fn factor_at_shift(pb: &Problem<'_>, sigma: f64, tally: &mut Tally) -> Result<ShiftFactor> {
     let (k, m, sym, p) = (pb.k, pb.m, pb.sym, pb.p);
     let n = k.n();
-    let (fa, sigma) = factor_at_checked(k, m, sym, sigma, &mut tally.factorizations, p.shift.is_some(), true)?;
+    let (fa, sigma) = factor_at_checked(
+        k,
+        m,
+        sym,
+        sigma,
+        &mut tally.factorizations,
+        p.shift.is_some(),
+        true,
+        None,
+    )?;
     tally.memory.add_factor(&fa);
     if let (None, Target::Nearest(nm)) = (p.shift, p.target) {
         if n > p.dense_below && !big_request(n, nm.min(n)) {
@@ -979,6 +995,7 @@ impl Rounds<'_> {
                         &mut self.tally.factorizations,
                         p.shift.is_some(),
                         true,
+                        None,
                     )?
                     .0,
                 );
@@ -1291,6 +1308,7 @@ fn solve_below_bound(
     est: Estimate<'_>,
     notes: &[String],
     null: Option<&Null>,
+    prefault: Option<Prefault>,
 ) -> Result<Option<EigenSolution>> {
     let n = k.n();
     if pr.n_fine != n || pr.n_coarse <= nm {
@@ -1318,7 +1336,7 @@ fn solve_below_bound(
         lc[nm]
     );
     // Its probe is solved with the first refinement step's block ([`inverse_images_probed`]).
-    let (fa, u) = factor_at_checked(k, m, sym, u, est.factorizations, false, false)?;
+    let (fa, u) = factor_at_checked(k, m, sym, u, est.factorizations, false, false, prefault)?;
     est.memory.add_factor(&fa);
     let count = fa.negative_pivots;
     if count < nm || count > 2 * nm + 12 {
@@ -1448,7 +1466,7 @@ fn refine_below_spectrum(
     let nz = null_count(null);
     let sigma = default_shift(k, m);
     // Its probe rides along the step's block solve (warned about there, as for the one at U).
-    let (fb, sigma) = factor_at_checked(k, m, sym, sigma, count, false, false)?;
+    let (fb, sigma) = factor_at_checked(k, m, sym, sigma, count, false, false, None)?;
     memory.add_factor(&fb);
     let x = done.vectors.get(.., nz..);
     *applications += x.ncols();
@@ -1786,14 +1804,17 @@ fn factor_at(
     sigma: f64,
     count: &mut usize,
 ) -> Result<(Factor, f64)> {
-    factor_at_checked(k, m, sym, sigma, count, false, true)
+    factor_at_checked(k, m, sym, sigma, count, false, true, None)
 }
 
 /// [`factor_at`]; with `strict`, a pivot below 1e-8 of its own diagonal entry
-/// (σ on an eigenvalue) also moves the shift. Without `probe`, the factor's probe is left to
-/// the caller (who solves it along with a block of its own: [`inverse_images_probed`]). Only a user's operator shift is checked so: Sturm
-/// points need only the count, and small shifts next to rigid-body modes are legitimately
-/// ill-conditioned (their pivots are small without being wrong).
+/// (σ on an eigenvalue) also moves the shift. Only a user's operator shift is checked so:
+/// Sturm points need only the count, and small shifts next to rigid-body modes are
+/// legitimately ill-conditioned (their pivots are small without being wrong). Without `probe`,
+/// the factor's probe is left to the caller (who solves it along with a block of its own:
+/// [`inverse_images_probed`]). The first attempt factors into `buffer` when given (a
+/// [`Prefault`] for this structure).
+#[allow(clippy::too_many_arguments)]
 fn factor_at_checked(
     k: &SymMatrix,
     m: &SymMatrix,
@@ -1802,12 +1823,17 @@ fn factor_at_checked(
     count: &mut usize,
     strict: bool,
     probe: bool,
+    mut buffer: Option<Prefault>,
 ) -> Result<(Factor, f64)> {
     let mut s = sigma;
     let mut last_err = None;
     for i in 0..4 {
         *count += 1;
-        match Factor::new_shifted(sym.clone(), k, Some((m, s))) {
+        let f = match buffer.take() {
+            Some(b) => Factor::new_shifted_prefaulted(sym.clone(), k, Some((m, s)), b),
+            None => Factor::new_shifted(sym.clone(), k, Some((m, s))),
+        };
+        match f {
             Ok(mut f) if !strict || f.min_rel_pivot > 1e-8 => {
                 if probe {
                     f.probe_shifted(k, Some((m, s)));

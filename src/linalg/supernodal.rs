@@ -173,6 +173,9 @@ pub struct Input<'a> {
     pub shift: Option<(&'a SymMatrix, f64)>,
     /// The elimination order.
     pub perm: Option<(&'a [usize], &'a [usize])>,
+    /// `values[resident_from..]` are resident already (written by a [`super::factor::Prefault`]):
+    /// their supernodes are not cleared first.
+    pub resident_from: usize,
 }
 
 /// The values array shared by the workers: each supernode's block is written by exactly one
@@ -219,7 +222,8 @@ pub fn workspace_bytes(n: usize, plan: &Plan, threads: usize) -> usize {
     threads.max(1) * Work::bytes(n, plan)
 }
 
-/// Factor into `values` (length `sn.len_val()`, faer's supernodal LDLᵀ layout). A zero pivot
+/// Factor into `values` (length `sn.len_val()`, faer's supernodal LDLᵀ layout, all zero on
+/// entry: the caller's fresh zeroed allocation, whose pages need not be resident). A zero pivot
 /// is returned as faer reports it (counted from 1, in elimination order).
 pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f64]) -> Result<(), LdltError> {
     assert_eq!(values.len(), sn.len_val());
@@ -324,7 +328,12 @@ fn node(
     debug_assert!(cp[s + 1] <= shared.1);
     // SAFETY: supernode s's block is written by this task only (see `Shared`).
     let ls_vals = unsafe { std::slice::from_raw_parts_mut(shared.0.add(cp[s]), cp[s + 1] - cp[s]) };
-    ls_vals.fill(0.0);
+    // The block is zero already, but a page of it never written is the shared zero page: the
+    // first `+=` below would read it there and fault again to write, flushing the other
+    // threads' TLBs (4× the system time of the 119k-DOF factorisation). Written once here, the
+    // pages are the block's own (the part a prefault made resident needs nothing).
+    let clear = input.resident_from.saturating_sub(cp[s]).min(ls_vals.len());
+    ls_vals[..clear].fill(0.0);
     for (i, &row) in s_pattern.iter().enumerate() {
         w.g2l[row] = i + s_ncols;
     }

@@ -125,6 +125,23 @@ pub fn release_free_memory() {
     }
 }
 
+/// Lower the calling thread's scheduling priority to the least (nice 19), so that it runs on
+/// cores the others leave idle. Best effort: nothing happens where that is not supported.
+pub fn lower_thread_priority() {
+    #[cfg(target_os = "linux")]
+    {
+        unsafe extern "C" {
+            fn setpriority(which: i32, who: u32, prio: i32) -> i32;
+            fn gettid() -> i32;
+        }
+        // SAFETY: PRIO_PROCESS (0) with a thread id changes that thread's nice value only.
+        unsafe {
+            let tid = gettid();
+            let _ = setpriority(0, tid as u32, 19);
+        }
+    }
+}
+
 /// Resident set size of this process now (bytes), from /proc/self/status.
 pub fn resident_memory() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
