@@ -550,6 +550,8 @@ pub struct Prefault {
     values: Option<Vec<f64>>,
     stop: Arc<std::sync::atomic::AtomicBool>,
     worker: Option<std::thread::JoinHandle<usize>>,
+    /// Pages made resident, once the thread is joined.
+    done: usize,
 }
 
 impl Prefault {
@@ -561,17 +563,22 @@ impl Prefault {
         if sym.plan.is_none() || !matches!(sym.sym.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
             return None;
         }
-        let bytes = sym.factor_bytes();
         let room = crate::util::memory::memory_budget(None).map_or(0, |b| b.bytes);
-        if room < 2 * bytes as u64 {
+        if room < 2 * sym.factor_bytes() as u64 {
             return None;
         }
+        Self::start_limited(sym, usize::MAX)
+    }
+
+    /// [`Prefault::start`] without its checks, making at most `bytes` resident (whole pages,
+    /// from the end). `None` when the buffer cannot be allocated.
+    pub fn start_limited(sym: &SymbolicFactor, bytes: usize) -> Option<Prefault> {
         let len = sym.sym.len_val();
         let mut values = zeroed(len)?;
         let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
         let (ptr, flag) = (values.as_mut_ptr() as usize, stop.clone());
         // Entry `len − 1 − 512·i` for i = 0, 1, …: one in each 4 KiB page from the last down.
-        let pages = len.div_ceil(512);
+        let pages = len.div_ceil(512).min(bytes / 4096);
         let worker = std::thread::Builder::new()
             .name("prefault".into())
             .spawn(move || {
@@ -580,7 +587,7 @@ impl Prefault {
                 while done < pages && !flag.load(std::sync::atomic::Ordering::Relaxed) {
                     for _ in 0..64.min(pages - done) {
                         // SAFETY: `len − 1 − 512·done ≥ 0` inside the buffer, which no other
-                        // thread touches until `finish` has joined this one; zero over zero.
+                        // thread touches until this one is joined; zero over zero.
                         unsafe { std::ptr::write_volatile((ptr as *mut f64).add(len - 1 - 512 * done), 0.0) };
                         done += 1;
                     }
@@ -592,35 +599,40 @@ impl Prefault {
             values: Some(values),
             stop,
             worker,
+            done: 0,
         })
+    }
+
+    /// Wait until the thread has made its share resident.
+    pub fn wait(mut self) -> Prefault {
+        self.join(false);
+        self
     }
 
     /// Stop the thread and hand over the buffer with the index from which its pages are
     /// resident (`len` when none is).
     pub fn finish(mut self) -> Option<(Vec<f64>, usize)> {
-        let done = self.join();
+        self.join(true);
         let values = self.values.take()?;
-        let from = if done == 0 {
-            values.len()
-        } else {
-            values.len() + 511 - 512 * done
+        let from = match self.done {
+            0 => values.len(),
+            d => values.len() + 511 - 512 * d,
         };
         Some((values, from))
     }
 
-    fn join(&mut self) -> usize {
-        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
-        let done = self.worker.take().map_or(0, |w| w.join().unwrap_or(0));
-        if done > 0 {
-            log::debug!("prefault: {} MiB of the factor made resident ahead", done >> 8);
+    fn join(&mut self, stop: bool) {
+        self.stop.store(stop, std::sync::atomic::Ordering::Relaxed);
+        if let Some(w) = self.worker.take() {
+            self.done = w.join().unwrap_or(0);
+            log::debug!("prefault: {} MiB of the factor made resident ahead", self.done >> 8);
         }
-        done
     }
 }
 
 impl Drop for Prefault {
     fn drop(&mut self) {
-        self.join();
+        self.join(true);
     }
 }
 

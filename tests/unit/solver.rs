@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 use vibrofem::linalg::eigen::{EigenParams, Target, solve};
-use vibrofem::linalg::factor::{Factor, SymbolicFactor};
+use vibrofem::linalg::factor::{Factor, Prefault, SymbolicFactor};
 use vibrofem::linalg::sparse::SymMatrix;
 
 /// `copies` uncoupled free–free chains of `n` masses, interleaved so that copies share no
@@ -300,6 +300,50 @@ fn subtree_parallel_factor_equals_faers_bit_for_bit() {
             .filter(|(x, y)| x.to_bits() != y.to_bits())
             .count();
         assert_eq!(differ, 0, "{threads} threads: {differ} entries of L differ from faer's");
+    }
+}
+
+/// A factor made in a prefaulted buffer ([`Prefault`]: its pages made resident ahead by a
+/// thread of its own, from the end) is the fresh allocation's factor bit for bit, with none, a
+/// third and all of the pages resident when the factorisation starts (the supernodes that
+/// straddle the boundary cleared in part), and with the thread possibly still running when the
+/// factorisation takes the buffer (it is stopped and joined first). A thread still writing its
+/// zeros during the factorisation, or a buffer not zero, would show as entries of L that differ.
+#[test]
+fn prefaulted_factor_equals_the_fresh_one_bit_for_bit() {
+    let sys = hex20_box([0.6, 0.3, 0.1], [12, 6, 3]);
+    let (k, m) = (sys.k(), sys.m().unwrap());
+    let sym = sys.symbolic().unwrap().clone();
+    let sigma = -50.0 * vibrofem::linalg::eigen::default_shift(k, m);
+    let fresh = Factor::new_shifted(sym.clone(), k, Some((m, sigma))).unwrap();
+    assert!(
+        fresh.is_supernodal(),
+        "the test must exercise the supernodal factorisation"
+    );
+    let bytes = sym.factor_bytes();
+    let buffers = [
+        ("none resident", Prefault::start_limited(&sym, 0).unwrap().wait()),
+        (
+            "a third resident",
+            Prefault::start_limited(&sym, bytes / 3).unwrap().wait(),
+        ),
+        (
+            "all resident",
+            Prefault::start_limited(&sym, usize::MAX).unwrap().wait(),
+        ),
+        ("still running", Prefault::start_limited(&sym, usize::MAX).unwrap()),
+    ];
+    for (what, buffer) in buffers {
+        let f = Factor::new_shifted_prefaulted(sym.clone(), k, Some((m, sigma)), buffer).unwrap();
+        assert_eq!(f.negative_pivots, fresh.negative_pivots, "{what}");
+        assert_eq!(f.values().len(), fresh.values().len(), "{what}");
+        let differ = f
+            .values()
+            .iter()
+            .zip(fresh.values())
+            .filter(|(x, y)| x.to_bits() != y.to_bits())
+            .count();
+        assert_eq!(differ, 0, "{what}: {differ} entries of L differ");
     }
 }
 
