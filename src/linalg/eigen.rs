@@ -590,6 +590,7 @@ fn solve_inner(
         }
         // A prepared coarse model not used is dropped here, before the factorisation.
     }
+    // So is a prefaulted buffer not used (the factorisation below allocates its own).
     drop(prefault);
     let shift = factor_at_shift(&pb, sigma, &mut tally)?;
     let sigma = shift.sigma;
@@ -2672,10 +2673,9 @@ mod tests {
 
     /// Refinement at U, above the wanted modes, amplifies a mode between U and 2U in the lowest
     /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here), and the refinement undoes such a
-    /// step; one step from below the spectrum
-    /// ([`refine_below_spectrum`]) damps it by λ₁/λ₇. Fixed–free chain of 200 unit masses and
-    /// springs, whose modes are known in closed form: x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)),
-    /// λ_j = 4 sin²((2j − 1)π/(4n + 2)).
+    /// step; one step from below the spectrum ([`refine_below_spectrum`]) damps it by λ₁/λ₇.
+    /// Fixed–free chain of 200 unit masses and springs, whose modes are known in closed form:
+    /// x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)), λ_j = 4 sin²((2j − 1)π/(4n + 2)).
     #[test]
     fn refinement_below_the_spectrum_removes_what_refinement_at_u_amplifies() {
         let n = 200;

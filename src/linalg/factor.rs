@@ -174,13 +174,13 @@ impl Factor {
     /// factorisation reads the entries straight from K and M; faer's (simplicial structures,
     /// or machines without the kernel) is given the shifted matrix, built for it.
     pub fn new_shifted(sym: Arc<SymbolicFactor>, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>) -> Result<Self> {
-        Self::factorise(sym, k, shift, true)
+        Self::factorise_into(sym, k, shift, true, None)
     }
 
     /// faer's own numeric factorisation of `a` (a reference for tests and benchmarks of the
     /// subtree-parallel one, which should give the same values).
     pub fn new_faer(sym: Arc<SymbolicFactor>, a: &SymMatrix) -> Result<Self> {
-        Self::factorise(sym, a, None, false)
+        Self::factorise_into(sym, a, None, false, None)
     }
 
     /// [`Factor::new_shifted`] into the zeroed buffer of a [`Prefault`] of the same structure
@@ -195,10 +195,9 @@ impl Factor {
         Self::factorise_into(sym, k, shift, true, values)
     }
 
-    fn factorise(sym: Arc<SymbolicFactor>, k: &SymMatrix, shift: Option<(&SymMatrix, f64)>, own: bool) -> Result<Self> {
-        Self::factorise_into(sym, k, shift, own, None)
-    }
-
+    /// Factor into `buffer` (a zeroed buffer of the structure's length and the index from
+    /// which its pages are resident) or a fresh allocation; `own`: the subtree-parallel
+    /// factorisation where the structure has its plan, else faer's.
     fn factorise_into(
         sym: Arc<SymbolicFactor>,
         k: &SymMatrix,
@@ -560,7 +559,7 @@ impl Prefault {
     /// (the buffer is resident before the coarse model is freed; an allocation that fails
     /// later is reported by the factorisation itself).
     pub fn start(sym: &SymbolicFactor) -> Option<Prefault> {
-        if sym.plan.is_none() || !matches!(sym.sym.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+        if !sym.reads_k_and_m() {
             return None;
         }
         let room = crate::util::memory::memory_budget(None).map_or(0, |b| b.bytes);
