@@ -370,13 +370,21 @@ pub fn finish(
     let k_mat = sys.k();
     let t = Instant::now();
     let nodes = &model.nodes;
-    let part: ParticipationTable = participation(m_mat, &model.dofs, nodes, sol.vectors.as_ref());
-    // Rigid-body modes: shapes in the span of the free rigid motions of the model's connected
-    // parts (they come first).
-    let parts = crate::post::modal::rigid_analysis(k_mat, m_mat, &model.dofs, nodes, sol.vectors.as_ref());
+    // Participation; rigid-body modes: shapes in the span of the free rigid motions of the
+    // model's connected parts (they come first); the shapes at the nodes. Independent, side by
+    // side: the parts' search is sequential (0.03 s of the 0.16 s at 119k DOFs).
+    let ((part, parts), shapes) = rayon::join(
+        || {
+            rayon::join(
+                || participation(m_mat, &model.dofs, nodes, sol.vectors.as_ref()),
+                || crate::post::modal::rigid_analysis(k_mat, m_mat, &model.dofs, nodes, sol.vectors.as_ref()),
+            )
+        },
+        || node_shapes(model, &sol),
+    );
+    let part: ParticipationTable = part;
     let n_rigid = parts.rigid.iter().take_while(|&&r| r).count();
     let modes = mode_rows(&sol, &part, &parts);
-    let shapes = node_shapes(model, &sol);
     tm.post = t.elapsed().as_secs_f64();
     tm.total = t_all.elapsed().as_secs_f64() + sys.timings.wall;
     let (volume, solid_mass) = model.volume_and_mass()?;

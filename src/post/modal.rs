@@ -258,7 +258,11 @@ fn connected_parts(k: &SymMatrix, dofs: &DofMap, n_nodes: usize) -> (Vec<usize>,
     }
     let pat = &k.pattern;
     for j in 0..pat.n {
+        // Both triangles are stored: each coupling once, from its upper entry.
         for &i in &pat.row_idx[pat.col_ptr[j]..pat.col_ptr[j + 1]] {
+            if i as usize >= j {
+                continue;
+            }
             let (a, b) = (find(&mut parent, i as usize), find(&mut parent, j));
             if a != b {
                 parent[a.max(b)] = a.min(b);
@@ -274,14 +278,18 @@ fn connected_parts(k: &SymMatrix, dofs: &DofMap, n_nodes: usize) -> (Vec<usize>,
             }
         }
     }
-    let mut comp_of_root = std::collections::HashMap::new();
+    // Parts numbered in order of their first equation.
+    let mut comp_of_root = vec![usize::MAX; n];
     let mut comp = vec![0usize; n];
+    let mut nc = 0;
     for e in 0..n {
         let r = find(&mut parent, e);
-        let next = comp_of_root.len();
-        comp[e] = *comp_of_root.entry(r).or_insert(next);
+        if comp_of_root[r] == usize::MAX {
+            comp_of_root[r] = nc;
+            nc += 1;
+        }
+        comp[e] = comp_of_root[r];
     }
-    let nc = comp_of_root.len();
     (comp, nc)
 }
 
