@@ -236,28 +236,10 @@ const MAX_AUTO_BLOCK: usize = 60;
 
 /// Number of connected parts (of at least `min_size` equations) of the graph of `k`.
 fn components(k: &SymMatrix, min_size: usize) -> usize {
-    let p = &k.pattern;
-    let n = p.n;
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for j in 0..n {
-        for &i in &p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]] {
-            let (a, b) = (find(&mut parent, i as usize), find(&mut parent, j));
-            if a != b {
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let mut size = vec![0usize; n];
-    for i in 0..n {
-        let r = find(&mut parent, i);
-        size[r] += 1;
+    let (label, count) = crate::linalg::graph::Parts::of_pattern(&k.pattern).labels();
+    let mut size = vec![0usize; count];
+    for l in label {
+        size[l] += 1;
     }
     size.iter().filter(|&&s| s >= min_size).count()
 }

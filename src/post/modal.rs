@@ -246,51 +246,14 @@ pub fn rigid_analysis(
 /// equations of one node among the first `n_nodes`): the part of each equation, numbered by
 /// first equation, and the number of parts.
 fn connected_parts(k: &SymMatrix, dofs: &DofMap, n_nodes: usize) -> (Vec<usize>, usize) {
-    let n = dofs.n_free;
-    // Union-find over equations.
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    let pat = &k.pattern;
-    for j in 0..pat.n {
-        // Both triangles are stored: each coupling once, from its upper entry.
-        for &i in &pat.row_idx[pat.col_ptr[j]..pat.col_ptr[j + 1]] {
-            if i as usize >= j {
-                continue;
-            }
-            let (a, b) = (find(&mut parent, i as usize), find(&mut parent, j));
-            if a != b {
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
+    let mut parts = crate::linalg::graph::Parts::of_pattern(&k.pattern);
     for a in 0..n_nodes.min(dofs.n_nodes()) {
         let (lo, hi) = (dofs.first[a], dofs.first[a + 1]);
         for e in lo + 1..hi {
-            let (x, y) = (find(&mut parent, lo), find(&mut parent, e));
-            if x != y {
-                parent[x.max(y)] = x.min(y);
-            }
+            parts.join(lo, e);
         }
     }
-    // Parts numbered in order of their first equation.
-    let mut comp_of_root = vec![usize::MAX; n];
-    let mut comp = vec![0usize; n];
-    let mut nc = 0;
-    for e in 0..n {
-        let r = find(&mut parent, e);
-        if comp_of_root[r] == usize::MAX {
-            comp_of_root[r] = nc;
-            nc += 1;
-        }
-        comp[e] = comp_of_root[r];
-    }
-    (comp, nc)
+    parts.labels()
 }
 
 /// Per part: its number of nodes with free DOFs, its first node, its centroid and its size
