@@ -382,7 +382,6 @@ pub fn finish(
         },
         || node_shapes(model, &sol),
     );
-    let part: ParticipationTable = part;
     let n_rigid = parts.rigid.iter().take_while(|&&r| r).count();
     let modes = mode_rows(&sol, &part, &parts);
     tm.post = t.elapsed().as_secs_f64();

@@ -522,20 +522,16 @@ fn solve_inner(
     let (mut pl, mut notes) = adjusted_params(k, p);
     // The one-factorisation solve (with a coarse model, for the lowest modes, to be proved);
     // its factor's pages made resident during the set-up and the coarse estimate ([`Prefault`]).
-    let below_bound = match (coarse.is_some(), pl.target, pl.shift, check) {
-        (true, Target::Nearest(nm), None, true) => n > pl.dense_below && nm < n && !big_request(n, nm),
-        _ => false,
-    };
+    let lowest = lowest_by_lanczos(n, &pl);
+    let below_bound = coarse.is_some() && check && lowest.is_some();
     let mut prefault = if below_bound { Prefault::start(sym) } else { None };
     let (sigma, band) = first_shift(k, m, &pl)?;
     let p = &pl;
     // For the lowest modes by Lanczos, K's null vectors among the candidates (the rigid-body
     // motions of a free model) are exact eigenpairs at λ = 0: deflated, the iteration looks
     // only for the others.
-    let null = match (p.target, p.shift, &p.null_candidates) {
-        (Target::Nearest(nm), None, Some(c)) if n > p.dense_below && nm < n && !big_request(n, nm) => {
-            null_vectors(k, m, (*c.0).as_ref()).filter(|(z, _)| z.ncols() < nm)
-        }
+    let null = match (lowest, &p.null_candidates) {
+        (Some(nm), Some(c)) => null_vectors(k, m, (*c.0).as_ref()).filter(|(z, _)| z.ncols() < nm),
         _ => None,
     };
     if let Some((z, _)) = &null {
@@ -560,7 +556,7 @@ fn solve_inner(
         null: null.as_ref(),
     };
     let mut tally = Tally::default();
-    if let (Some((pr, prepared)), Target::Nearest(nm), true) = (coarse, p.target, below_bound) {
+    if let (Some((pr, prepared)), Some(nm), true) = (coarse, lowest, below_bound) {
         let est = Estimate {
             t0,
             factorizations: &mut tally.factorizations,
@@ -621,6 +617,15 @@ fn solve_inner(
         }
     };
     rounds.run(lz, shift.fa, want, shift.early, ti)
+}
+
+/// The count `nm` of a request for the `nm` lowest modes (no shift) that Lanczos solves: not
+/// the whole spectrum, not a small model or a large share of the spectrum (solved densely).
+fn lowest_by_lanczos(n: usize, p: &EigenParams) -> Option<usize> {
+    match (p.target, p.shift) {
+        (Target::Nearest(nm), None) if n > p.dense_below && nm < n && !big_request(n, nm) => Some(nm),
+        _ => None,
+    }
 }
 
 /// Requests for a large share of the spectrum are solved densely when that is affordable
