@@ -21,7 +21,6 @@ use faer::linalg::cholesky::ldlt::factor::{
     LdltError, LdltRegularization, cholesky_in_place, cholesky_in_place_scratch,
 };
 use faer::{MatMut, Par};
-use rayon::prelude::*;
 
 type Symbolic = faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky<usize>;
 
@@ -276,7 +275,8 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
             .and_then(|mut p| p.pop())
             .unwrap_or_else(|| Work::new(n, plan))
     };
-    subtrees.par_iter().with_max_len(1).try_for_each(|&(_, root)| {
+    // Taken heaviest first by whichever worker is free.
+    let done = crate::util::queue::map(&subtrees, |_, &(_, root)| {
         let mut w = take();
         // The subtree's supernodes, ascending (children before parents).
         let mut nodes = Vec::new();
@@ -294,7 +294,8 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
             p.push(w);
         }
         r
-    })?;
+    });
+    done.into_iter().collect::<Result<(), _>>()?;
     let t_sub = tq.elapsed().as_secs_f64();
     let ntop = top.len();
     top.sort_unstable();

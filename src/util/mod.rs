@@ -1,9 +1,10 @@
 //! Helpers at the bottom of the crate, for every layer: the formatting of numbers for
-//! messages ([`fmt`]) and the memory of the process ([`memory`]). Nothing here uses the rest of
+//! messages ([`fmt`]) and the memory of the process ([`memory`]), unequal tasks scheduled longest first ([`queue`]). Nothing here uses the rest of
 //! the crate.
 
 pub mod fmt;
 pub mod memory;
+pub mod queue;
 
 /// The larger of two numbers, NaN if either is: a verdict (largest residual, backward error)
 /// must not drop a NaN as `f64::max` does.
