@@ -1,6 +1,6 @@
 //! Helpers at the bottom of the crate, for every layer: the formatting of numbers for
-//! messages ([`fmt`]) and the memory of the process ([`memory`]), unequal tasks scheduled longest first ([`queue`]). Nothing here uses the rest of
-//! the crate.
+//! messages ([`fmt`]), the memory of the process ([`memory`]) and unequal tasks scheduled
+//! heaviest first ([`queue`]). Nothing here uses the rest of the crate.
 
 pub mod fmt;
 pub mod memory;
