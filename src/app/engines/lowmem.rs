@@ -25,7 +25,7 @@ use super::slepc::{self, SlepcOptions};
 use super::{Before, Engine};
 use crate::analysis::modal::{self, ModalOptions, ModalRun, ModalTarget, Timings};
 use crate::linalg::eigen::{self, EigenParams, EigenSolution, SturmCheck};
-use crate::mesh::{CellKind, Mesh};
+use crate::mesh::Mesh;
 use crate::model::Model;
 use crate::system::{System, memory_budget, peak_memory, resident_memory};
 use crate::util::fmt::fmt_bytes;
@@ -96,7 +96,7 @@ pub struct LowMemInfo {
     /// Rigid-body motions the script found and deflated.
     pub rigid: usize,
     /// The multigrid's coarse level: `p1` (the linear elements of the same mesh, from
-    /// parents.bin: tet10, hex20, wedge15) or `gamg` (GAMG on the whole operator); `None` for
+    /// parents.bin: tet10, hex20, hex27, wedge15) or `gamg` (GAMG on the whole operator); `None` for
     /// `ks-mumps`.
     pub coarse: Option<String>,
     /// Whether the Sturm count ran (completeness verified).
@@ -186,97 +186,101 @@ pub fn rigid_motions(model: &Model) -> Vec<f64> {
     r
 }
 
-/// Mid-edge node `4 + k` of a tet10 cell lies on the edge `TET10_EDGES[k]` (gmsh order, as the
-/// reference nodes of src/fe/shape.rs).
-const TET10_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [2, 3], [1, 3]];
-/// Mid-edge node `8 + k` of a hex20 cell lies on the edge `HEX20_EDGES[k]` (gmsh order).
-const HEX20_EDGES: [[usize; 2]; 12] = [
-    [0, 1],
-    [0, 3],
-    [0, 4],
-    [1, 2],
-    [1, 5],
-    [2, 3],
-    [2, 6],
-    [3, 7],
-    [4, 5],
-    [4, 7],
-    [5, 6],
-    [6, 7],
-];
-/// Mid-edge node `6 + k` of a wedge15 cell lies on the edge `WEDGE15_EDGES[k]` (gmsh order).
-const WEDGE15_EDGES: [[usize; 2]; 9] = [[0, 1], [0, 2], [0, 3], [1, 2], [1, 4], [2, 5], [3, 4], [3, 5], [4, 5]];
-
-/// The edge table of a quadratic solid kind whose nodes beyond its corners are all mid-edge
-/// nodes (tet10, hex20, wedge15): node `corners + k` lies halfway along `edges[k]`, whose ends
-/// are corner nodes. `None` for every other kind (linear kinds; hex27, whose face and centre
-/// nodes are not on an edge).
-pub fn mid_edges(kind: CellKind) -> Option<&'static [[usize; 2]]> {
-    match kind {
-        CellKind::Tet10 => Some(&TET10_EDGES),
-        CellKind::Hex20 => Some(&HEX20_EDGES),
-        CellKind::Wedge15 => Some(&WEDGE15_EDGES),
-        _ => None,
-    }
+/// The parents of every free equation on the linear space of the same mesh (the script's coarse
+/// level: parents.bin and parent_weights.bin, `width` int64 and f64 per equation): at a vertex
+/// DOF itself (weight 1, the other entries −1 and 0); at a DOF of a higher-order node the same
+/// component of the corners of its cell whose linear shape functions are not zero there, with
+/// those values as weights (½ and ½ at a mid-edge node of tet10, hex20 or wedge15; ¼ each at a
+/// hex27 face node, ⅛ each at its centre), −1 for a corner whose component is not free.
+pub struct Parents {
+    /// Entries per equation: the most parents of a node (2 without hex27, 8 with).
+    pub width: usize,
+    /// Parent equations, `width` per free equation.
+    pub eqs: Vec<i64>,
+    /// Their weights.
+    pub weights: Vec<f64>,
 }
 
-/// For a model of quadratic solids whose extra nodes are all mid-edge nodes (tet10, hex20,
-/// wedge15, mixed as long as the mesh is conforming): per free equation the two equations it is
-/// interpolated from on the linear space of the same mesh (`2n` entries): its own twice at a
-/// vertex DOF, the same component of the edge's two end nodes at a mid-edge DOF (−1 for an end
-/// that is not free). Half and half is exact linear interpolation along a straight edge with
-/// its node at the middle, so the space is the mesh's linear elements (tet4 in tet10, the
-/// trilinear hex8 in hex20, wedge6 in wedge15) and holds the rigid-body motions. The script's
-/// coarse level (parents.bin). `None` for any other model (shells, beams, linear or hex27
-/// solids), or a mesh where a node is a vertex of one cell and a mid-edge node of another, or
-/// the mid-edge node of two different edges (not conforming): then the script's multigrid is
-/// GAMG on the whole operator.
-pub fn vertex_parents(model: &Model) -> Option<Vec<i64>> {
-    if model.solids.is_empty()
-        || model.solids.iter().any(|s| mid_edges(s.kind).is_none())
-        || !model.shells.is_empty()
-        || !model.beams.is_empty()
-    {
+/// For a model of quadratic solids (tet10, hex20, hex27, wedge15, mixed as long as the mesh is
+/// conforming): the interpolation of every free equation from the corner DOFs ([`Parents`]).
+/// The linear shape functions at a higher-order node's reference position interpolate linear
+/// fields exactly on straight cells, so the space is the mesh's linear elements (tet4 in tet10,
+/// the trilinear hex8 in hex20 and hex27, wedge6 in wedge15) and holds the rigid-body motions.
+/// `None` for any other model (shells, beams, linear solids), or a mesh where a node is a corner
+/// of one cell and a higher-order node of another, or a higher-order node that two cells
+/// interpolate differently (not conforming): then the script's multigrid is GAMG on the whole
+/// operator.
+pub fn vertex_parents(model: &Model) -> Option<Parents> {
+    if model.solids.is_empty() || !model.shells.is_empty() || !model.beams.is_empty() {
         return None;
     }
     let nn = model.nodes.len();
-    let mut parent = vec![[u32::MAX; 2]; nn];
+    let mut parent: Vec<Option<Vec<(u32, f64)>>> = vec![None; nn];
     let mut vertex = vec![false; nn];
+    let mut buf = [0.0; 27];
     for set in &model.solids {
-        let edges = mid_edges(set.kind)?;
-        let corners = set.kind.linear().n_nodes();
-        for cell in set.conn.chunks_exact(set.kind.n_nodes()) {
+        let (kind, lin) = (set.kind, set.kind.linear());
+        if lin == kind {
+            return None;
+        }
+        let corners = lin.n_nodes();
+        let refs = crate::fe::shape::reference_nodes(kind);
+        // Each higher-order node's corners and weights in the reference cell, once per kind.
+        let local: Vec<Vec<(usize, f64)>> = (corners..kind.n_nodes())
+            .map(|j| {
+                crate::fe::shape::values(lin, refs[j], &mut buf[..corners]);
+                (0..corners)
+                    .filter(|&i| buf[i].abs() > 1e-12)
+                    .map(|i| (i, buf[i]))
+                    .collect()
+            })
+            .collect();
+        for cell in set.conn.chunks_exact(kind.n_nodes()) {
             for &v in &cell[..corners] {
                 vertex[v as usize] = true;
             }
-            for (k, [a, b]) in edges.iter().enumerate() {
-                let p = [cell[*a].min(cell[*b]), cell[*a].max(cell[*b])];
+            for (k, w) in local.iter().enumerate() {
+                let mut p: Vec<(u32, f64)> = w.iter().map(|&(i, wi)| (cell[i], wi)).collect();
+                p.sort_by_key(|e| e.0);
                 let m = &mut parent[cell[corners + k] as usize];
-                if m[0] == u32::MAX {
-                    *m = p;
-                } else if *m != p {
-                    return None;
+                match m {
+                    None => *m = Some(p),
+                    Some(q) => {
+                        let same = q.len() == p.len()
+                            && q.iter().zip(&p).all(|(a, b)| a.0 == b.0 && (a.1 - b.1).abs() < 1e-12);
+                        if !same {
+                            return None;
+                        }
+                    }
                 }
             }
         }
     }
-    if (0..nn).any(|a| vertex[a] && parent[a][0] != u32::MAX) {
+    if (0..nn).any(|a| vertex[a] && parent[a].is_some()) {
         return None;
     }
+    let width = parent.iter().flatten().map(Vec::len).max().unwrap_or(1).max(1);
     let dofs = &model.dofs;
-    let mut out = Vec::with_capacity(2 * dofs.n_free);
+    let (mut eqs, mut weights) = (
+        Vec::with_capacity(width * dofs.n_free),
+        Vec::with_capacity(width * dofs.n_free),
+    );
     for eq in 0..dofs.n_free {
         let (a, c) = dofs.node_comp_of(eq);
-        match parent.get(a) {
-            Some(p) if p[0] != u32::MAX => {
-                for &q in p {
-                    out.push(dofs.eq_of(q as usize, c).map_or(-1, |e| e as i64));
-                }
-            }
-            _ => out.extend([eq as i64, eq as i64]),
+        let row: Vec<(i64, f64)> = match parent.get(a) {
+            Some(Some(p)) => p
+                .iter()
+                .map(|&(q, w)| (dofs.eq_of(q as usize, c).map_or(-1, |e| e as i64), w))
+                .collect(),
+            _ => vec![(eq as i64, 1.0)],
+        };
+        for i in 0..width {
+            let (e, w) = row.get(i).copied().unwrap_or((-1, 0.0));
+            eqs.push(e);
+            weights.push(w);
         }
     }
-    Some(out)
+    Some(Parents { width, eqs, weights })
 }
 
 /// The nodes' block size for the multigrid: 3 (or 6) when every node with free DOFs has
@@ -487,9 +491,13 @@ fn write_folder(sys: &System, opts: &ModalOptions, dir: &Path, lm: &LowMemOption
     let path = dir.join("R.bin");
     let bytes: Vec<u8> = r.iter().flat_map(|v| v.to_le_bytes()).collect();
     std::fs::write(&path, bytes).map_err(|e| Error::io(&path, e))?;
-    if let Some(par) = vertex_parents(sys.model()) {
+    let parents = vertex_parents(sys.model());
+    if let Some(pa) = &parents {
         let path = dir.join("parents.bin");
-        let bytes: Vec<u8> = par.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let bytes: Vec<u8> = pa.eqs.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(&path, bytes).map_err(|e| Error::io(&path, e))?;
+        let path = dir.join("parent_weights.bin");
+        let bytes: Vec<u8> = pa.weights.iter().flat_map(|v| v.to_le_bytes()).collect();
         std::fs::write(&path, bytes).map_err(|e| Error::io(&path, e))?;
     }
     let pj = dir.join("params.json");
@@ -497,6 +505,7 @@ fn write_folder(sys: &System, opts: &ModalOptions, dir: &Path, lm: &LowMemOption
     let mut p: serde_json::Value = serde_json::from_str(&text).map_err(|e| Error::output(pj.display(), e))?;
     p["rigid"] = 6.into();
     p["block_size"] = block_size(sys.model()).into();
+    p["parents_width"] = parents.as_ref().map_or(0, |pa| pa.width).into();
     p["sturm_budget"] = (plan.sturm_budget as f64).into();
     if let Some(bm) = plan.block_max {
         p["lobpcg_block_max"] = bm.into();
@@ -893,37 +902,51 @@ pub fn table(run: &ModalRun, info: &LowMemInfo) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::CellKind;
     use crate::mesh::generate::box_mesh;
     use crate::model::ModelSpec;
 
-    /// Checks parents.bin of `model` and returns its vertex DOFs: a vertex DOF is its own parent
-    /// twice; a mid-edge DOF has two distinct parents of its own component, both vertex DOFs,
-    /// at nodes whose midpoint is its node (so the interpolation is exact for linear fields);
-    /// `edge` checks the two parent nodes' positions.
-    fn check_parents(model: &Model, edge: impl Fn([f64; 3], [f64; 3]) -> bool) -> usize {
-        let par = vertex_parents(model).expect("a coarse level");
-        let dofs = &model.dofs;
-        assert_eq!(par.len(), 2 * dofs.n_free);
-        let own = |e: usize| par[2 * e] == e as i64 && par[2 * e + 1] == e as i64;
-        let mut vertex = 0;
+    /// Checks the parents of `model` and returns its vertex DOFs and the parent counts seen: a
+    /// vertex DOF is its own only parent (weight 1); any other DOF has at least two parents, all
+    /// vertex DOFs of its own component, whose weights sum to 1 and whose weighted position is
+    /// its node's (so the interpolation is exact for linear fields on these straight cells).
+    fn check_parents(model: &Model) -> (usize, std::collections::BTreeSet<usize>) {
+        let pa = vertex_parents(model).expect("a coarse level");
+        let (w, dofs) = (pa.width, &model.dofs);
+        assert_eq!((pa.eqs.len(), pa.weights.len()), (w * dofs.n_free, w * dofs.n_free));
+        let own = |e: usize| pa.eqs[w * e] == e as i64;
+        let (mut vertex, mut counts) = (0, std::collections::BTreeSet::new());
         for eq in 0..dofs.n_free {
             let (a, c) = dofs.node_comp_of(eq);
+            let row: Vec<(usize, f64)> = (0..w)
+                .filter(|&i| pa.eqs[w * eq + i] >= 0)
+                .map(|i| (pa.eqs[w * eq + i] as usize, pa.weights[w * eq + i]))
+                .collect();
             if own(eq) {
+                assert_eq!(row, vec![(eq, 1.0)], "equation {eq}");
                 vertex += 1;
                 continue;
             }
-            let (p, q) = (par[2 * eq] as usize, par[2 * eq + 1] as usize);
-            assert!(p != q && own(p) && own(q), "equation {eq}: parents {p}, {q}");
-            let (pa, pc) = dofs.node_comp_of(p);
-            let (qa, qc) = dofs.node_comp_of(q);
-            assert_eq!((pc, qc), (c, c));
-            for d in 0..3 {
-                let mid = 0.5 * (model.nodes[pa][d] + model.nodes[qa][d]);
-                assert!((model.nodes[a][d] - mid).abs() < 1e-12, "equation {eq}");
+            assert!(row.len() >= 2, "equation {eq}: {row:?}");
+            counts.insert(row.len());
+            let mut at = [0.0; 3];
+            for &(p, wp) in &row {
+                assert!(own(p), "equation {eq}: parent {p} is not a vertex DOF");
+                let (pa_, pc) = dofs.node_comp_of(p);
+                assert_eq!(pc, c);
+                for d in 0..3 {
+                    at[d] += wp * model.nodes[pa_][d];
+                }
             }
-            assert!(edge(model.nodes[pa], model.nodes[qa]), "equation {eq}: not an edge");
+            assert!(
+                (row.iter().map(|r| r.1).sum::<f64>() - 1.0).abs() < 1e-12,
+                "equation {eq}"
+            );
+            for d in 0..3 {
+                assert!((model.nodes[a][d] - at[d]).abs() < 1e-12, "equation {eq}");
+            }
         }
-        vertex
+        (vertex, counts)
     }
 
     fn build(mesh: &Mesh) -> Model {
@@ -932,37 +955,37 @@ mod tests {
 
     /// The P1 interpolation from parents.bin reproduces a linear field at every DOF: a mid-edge
     /// node lies halfway between its two parents (same component), a vertex DOF is its own
-    /// parent, and the vertex DOFs are those of the tet4 mesh with the same divisions.
+    /// parent, and the vertex DOFs are those of the tet4 mesh with the same divisions. A linear
+    /// mesh has no coarse level.
     #[test]
     fn tet10_parents_interpolate_linear_fields() {
         let mesh = box_mesh(CellKind::Tet10, [0.3, 0.2, 0.1], [3, 2, 1]);
-        let vertex = check_parents(&build(&mesh), |_, _| true);
+        let (vertex, counts) = check_parents(&build(&mesh));
+        assert_eq!(counts, [2].into());
         let tet4 = box_mesh(CellKind::Tet4, [0.3, 0.2, 0.1], [3, 2, 1]);
         assert_eq!(vertex, 3 * tet4.n_nodes());
-        // Face and centre nodes are not on an edge: no coarse level from parents.
-        let hex27 = box_mesh(CellKind::Hex27, [0.3, 0.2, 0.1], [3, 2, 1]);
-        assert!(vertex_parents(&build(&hex27)).is_none());
         let hex8 = box_mesh(CellKind::Hex8, [0.3, 0.2, 0.1], [3, 2, 1]);
         assert!(vertex_parents(&build(&hex8)).is_none());
     }
 
-    /// Hex20 (serendipity) box: every mid-edge DOF points at the two corners of its edge (a
-    /// brick edge: the parents differ along one axis by one division), every corner DOF at
-    /// itself, and the corner DOFs are the hex8 mesh's: the trilinear coarse space.
+    /// Hex20 (serendipity) and wedge15 boxes: every mid-edge DOF points at the two corners of
+    /// its edge; hex27 adds face nodes (four corners, ¼ each) and centre nodes (eight, ⅛ each).
+    /// The corner DOFs are those of the linear mesh: the trilinear (or wedge6) coarse space.
     #[test]
-    fn hex20_parents_are_the_edge_ends() {
+    fn hex20_hex27_wedge15_parents_are_the_linear_interpolation() {
         let (size, n) = ([0.3, 0.2, 0.1], [3, 2, 1]);
-        let h: [f64; 3] = std::array::from_fn(|d| size[d] / n[d] as f64);
-        let mesh = box_mesh(CellKind::Hex20, size, n);
-        let brick_edge = |p: [f64; 3], q: [f64; 3]| {
-            let diff: Vec<f64> = (0..3).map(|d| (p[d] - q[d]).abs()).collect();
-            (0..3).any(|d| (diff[d] - h[d]).abs() < 1e-12 && (0..3).all(|e| e == d || diff[e] < 1e-12))
-        };
-        let vertex = check_parents(&build(&mesh), brick_edge);
-        assert_eq!(vertex, 3 * box_mesh(CellKind::Hex8, size, n).n_nodes());
-        let wedge = box_mesh(CellKind::Wedge15, size, n);
-        let vertex = check_parents(&build(&wedge), |_, _| true);
-        assert_eq!(vertex, 3 * box_mesh(CellKind::Wedge6, size, n).n_nodes());
+        let hex8 = 3 * box_mesh(CellKind::Hex8, size, n).n_nodes();
+        let (vertex, counts) = check_parents(&build(&box_mesh(CellKind::Hex20, size, n)));
+        assert_eq!((vertex, counts), (hex8, [2].into()));
+        let hex27 = vertex_parents(&build(&box_mesh(CellKind::Hex27, size, n))).expect("a coarse level");
+        assert_eq!(hex27.width, 8);
+        let (vertex, counts) = check_parents(&build(&box_mesh(CellKind::Hex27, size, n)));
+        assert_eq!((vertex, counts), (hex8, [2, 4, 8].into()));
+        let (vertex, counts) = check_parents(&build(&box_mesh(CellKind::Wedge15, size, n)));
+        assert_eq!(
+            (vertex, counts),
+            (3 * box_mesh(CellKind::Wedge6, size, n).n_nodes(), [2].into())
+        );
     }
 
     /// LOBPCG's block from the memory budget (the 1M plate's size: 1 005 282 DOFs, 83 121 714
@@ -1025,29 +1048,8 @@ mod tests {
         assert_eq!(plan(n, nnz, r, 18, km, None), Plan::default());
     }
 
-    /// The edge tables agree with the reference nodes of src/fe/shape.rs: node `corners + k` is
-    /// the midpoint of the corners of edge `k`, and every higher-order node is on an edge.
-    #[test]
-    fn edge_tables_match_the_reference_nodes() {
-        for kind in CellKind::SOLIDS {
-            let Some(edges) = mid_edges(kind) else {
-                assert!(kind.order() == 1 || kind == CellKind::Hex27, "{kind}");
-                continue;
-            };
-            let refs = crate::fe::shape::reference_nodes(kind);
-            let corners = kind.linear().n_nodes();
-            assert_eq!(corners + edges.len(), kind.n_nodes(), "{kind}");
-            for (k, &[a, b]) in edges.iter().enumerate() {
-                assert!(a < corners && b < corners);
-                let mid: [f64; 3] = std::array::from_fn(|d| 0.5 * (refs[a][d] + refs[b][d]));
-                assert_eq!(refs[corners + k], mid, "{kind} edge {k}");
-            }
-        }
-    }
-
     /// A conforming mix: one brick of hex20 beside one of two wedge15 (sharing a quad face)
-    /// has a coarse level; the same mix with a hex8 brick (its nodes are corners of a cell
-    /// kind without an edge table) has none.
+    /// has a coarse level; the same mix with a hex8 brick (a linear cell) has none.
     #[test]
     fn mixed_hex20_wedge15_parents() {
         let mut mesh = box_mesh(CellKind::Wedge15, [0.2, 0.1, 0.1], [2, 1, 1]);
@@ -1086,7 +1088,7 @@ mod tests {
         mesh.blocks.push(block);
         let model = build(&mesh);
         assert_eq!(model.solids.len(), 2);
-        check_parents(&model, |_, _| true);
+        check_parents(&model);
         let hex8 = crate::mesh::CellBlock {
             kind: CellKind::Hex8,
             conn: mesh.blocks.last().unwrap().conn[..8].to_vec(),

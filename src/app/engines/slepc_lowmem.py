@@ -317,31 +317,35 @@ def orthonormal(vs):
 
 
 def vertex_interpolation(pen: Pencil):
-    """The tet10 mesh's P1 space inside its P2 one: P (n × n_c) from the vertex DOFs, 1 at a vertex
-    DOF, 1/2 from each end of its edge at a mid-edge DOF (parents.bin: n rows of two int64, the
-    equations a DOF is interpolated from, both its own at a vertex, −1 for a fixed end). Exact
-    for fields linear along each edge, the rigid-body motions among them; so PᵀAP is the P1
-    stiffness of the same mesh (shifted), seven times smaller than A. None without parents.bin."""
+    """The quadratic mesh's linear space inside its own: P (n × n_c) from the vertex DOFs, 1 at a
+    vertex DOF, the linear shape functions' values at the others (1/2 from each end of an edge,
+    1/4 from each corner of a hex27 face, 1/8 at its centre). parents.bin and parent_weights.bin:
+    n rows of params' parents_width int64 and f64, the equations a DOF is interpolated from and
+    their weights (its own alone, weight 1, at a vertex DOF; −1 for a fixed corner or an unused
+    entry). Exact for linear fields on straight cells, the rigid-body motions among them; so PᵀAP
+    is the linear elements' stiffness of the same mesh (shifted), seven to eight times smaller
+    than A. None without parents.bin."""
     path = os.path.join(WD, "parents.bin")
     if not os.path.exists(path) or P.get("coarse", "p1") != "p1":
         return None
     n = pen.n
-    par = np.fromfile(path, dtype="<i8").reshape(n, 2)
-    own = np.arange(n)
-    vertex = (par[:, 0] == own) & (par[:, 1] == own)
+    width = int(P.get("parents_width", 2))
+    par = np.fromfile(path, dtype="<i8").reshape(n, width)
+    wts = np.fromfile(os.path.join(WD, "parent_weights.bin"), dtype="<f8").reshape(n, width)
+    vertex = par[:, 0] == np.arange(n)
     cmap = np.cumsum(vertex) - 1
     lo, hi = pen.K.getOwnershipRange()
-    pl = par[lo:hi]
-    bad = ~vertex[lo:hi] & (((pl[:, 0] >= 0) & ~vertex[np.maximum(pl[:, 0], 0)])
-                            | ((pl[:, 1] >= 0) & ~vertex[np.maximum(pl[:, 1], 0)]))
+    pl, wl, isv = par[lo:hi], wts[lo:hi], vertex[lo:hi]
+    # A vertex row: (its own coarse column, 1); any other: (each free parent's column, weight).
+    ref = (pl >= 0) & ~isv[:, None]
+    bad = (ref & ~vertex[np.maximum(pl, 0)]).any(axis=1)
     if bad.any():
         raise ValueError(f"parents.bin: equation {lo + int(np.argmax(bad))} is interpolated from a DOF that is not "
                          "a vertex DOF")
-    # A row: (its own coarse column, 1) at a vertex DOF; (each free end's column, 1/2) otherwise.
-    isv = vertex[lo:hi]
-    ends = np.where(pl >= 0, cmap[np.maximum(pl, 0)], -1)
-    cols = np.stack([np.where(isv, cmap[lo:hi], ends[:, 0]), np.where(isv, -1, ends[:, 1])], axis=1)
-    vals = np.stack([np.where(isv, 1.0, 0.5), np.full(hi - lo, 0.5)], axis=1)
+    cols = np.where(ref, cmap[np.maximum(pl, 0)], -1)
+    vals = np.where(ref, wl, 0.0)
+    cols[isv, 0] = cmap[lo:hi][isv]
+    vals[isv, 0] = 1.0
     keep = cols >= 0
     ptr = np.concatenate([[0], np.cumsum(keep.sum(axis=1))])
     nc_local = int(isv.sum())
@@ -355,7 +359,7 @@ def vertex_interpolation(pen: Pencil):
 
 def multigrid(pen: Pencil, R) -> None:
     """The preconditioner's pieces (params: gamg_threshold, near_null_space, coarse): GAMG on A
-    with R as near-null space; or, for a tet10 mesh (parents.bin), a two-level cycle whose fine
+    with R as near-null space; or, for a quadratic solid mesh (parents.bin), a two-level cycle whose fine
     level is Chebyshev/Jacobi on A and whose coarse level is GAMG on the P1 operator PᵀAP."""
     near = orthonormal(R) if R and P.get("near_null_space", True) else []
     vi = vertex_interpolation(pen)
