@@ -214,6 +214,27 @@ pub fn values(kind: CellKind, xi: [f64; 3], n: &mut [f64]) {
     eval(kind, xi, |i, v, _| n[i] = v);
 }
 
+/// The linear interpolation of `kind`'s higher-order nodes from its corners: for each node
+/// beyond the corners of `kind.linear()`, in order, the corners whose linear shape functions
+/// are not zero at its reference position, with those values (½ and ½ at a mid-edge node, ¼ at
+/// each corner of a hex27 face, ⅛ at its centre). Empty for a linear kind. Exact for linear
+/// fields on straight cells: the space of the mesh's linear elements inside its own.
+pub fn corner_weights(kind: CellKind) -> Vec<Vec<(usize, f64)>> {
+    let lin = kind.linear();
+    let corners = lin.n_nodes();
+    let refs = reference_nodes(kind);
+    let mut buf = vec![0.0; corners];
+    (corners..kind.n_nodes())
+        .map(|j| {
+            values(lin, refs[j], &mut buf);
+            (0..corners)
+                .filter(|&i| buf[i].abs() > 1e-12)
+                .map(|i| (i, buf[i]))
+                .collect()
+        })
+        .collect()
+}
+
 /// Reference gradients `dn[i] = ∂N_i/∂ξ (ξ)` of `kind` at `xi`.
 ///
 /// `dn.len()` must equal `kind.n_nodes()`. Components beyond the cell dimension are 0.

@@ -9,6 +9,7 @@ use super::Model;
 use crate::dof::NCOMP;
 use crate::fe::shape;
 use crate::linalg::coarse::Prolongation;
+use crate::mesh::CellKind;
 
 impl Model {
     /// The corner space of this model, or `None` when it would not be much smaller than the
@@ -45,28 +46,22 @@ impl Model {
         // Interpolation of each higher-order node from the first cell that has it: the
         // linear shape functions at the node's reference coordinates.
         let mut weights: Vec<Option<Vec<(u32, f64)>>> = vec![None; n_nodes];
-        let mut buf = [0.0; 27];
+        let mut local: std::collections::HashMap<CellKind, Vec<Vec<(usize, f64)>>> = Default::default();
         for set in &sets {
             for e in 0..set.len() {
                 let Some(kind) = set.cell_kind(e) else { continue };
-                let lin = kind.linear();
-                if lin == kind {
+                if kind.linear() == kind {
                     continue;
                 }
                 let nodes = set.nodes(e);
-                let n_lin = lin.n_nodes();
-                let refs = shape::reference_nodes(kind);
-                for (j, &a) in nodes.iter().enumerate().skip(n_lin) {
+                let n_lin = kind.linear().n_nodes();
+                let local = local.entry(kind).or_insert_with(|| shape::corner_weights(kind));
+                for (k, &a) in nodes.iter().enumerate().skip(n_lin) {
                     let a = a as usize;
                     if corner[a] || weights[a].is_some() {
                         continue;
                     }
-                    shape::values(lin, refs[j], &mut buf[..n_lin]);
-                    let w = (0..n_lin)
-                        .filter(|&i| buf[i].abs() > 1e-12)
-                        .map(|i| (nodes[i], buf[i]))
-                        .collect();
-                    weights[a] = Some(w);
+                    weights[a] = Some(local[k - n_lin].iter().map(|&(i, w)| (nodes[i], w)).collect());
                 }
             }
         }

@@ -217,24 +217,14 @@ pub fn vertex_parents(model: &Model) -> Option<Parents> {
     let nn = model.nodes.len();
     let mut parent: Vec<Option<Vec<(u32, f64)>>> = vec![None; nn];
     let mut vertex = vec![false; nn];
-    let mut buf = [0.0; 27];
     for set in &model.solids {
-        let (kind, lin) = (set.kind, set.kind.linear());
-        if lin == kind {
+        let kind = set.kind;
+        if kind.linear() == kind {
             return None;
         }
-        let corners = lin.n_nodes();
-        let refs = crate::fe::shape::reference_nodes(kind);
+        let corners = kind.linear().n_nodes();
         // Each higher-order node's corners and weights in the reference cell, once per kind.
-        let local: Vec<Vec<(usize, f64)>> = (corners..kind.n_nodes())
-            .map(|j| {
-                crate::fe::shape::values(lin, refs[j], &mut buf[..corners]);
-                (0..corners)
-                    .filter(|&i| buf[i].abs() > 1e-12)
-                    .map(|i| (i, buf[i]))
-                    .collect()
-            })
-            .collect();
+        let local = crate::fe::shape::corner_weights(kind);
         for cell in set.conn.chunks_exact(kind.n_nodes()) {
             for &v in &cell[..corners] {
                 vertex[v as usize] = true;
