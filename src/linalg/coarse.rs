@@ -216,11 +216,17 @@ pub struct CoarseModel {
 }
 
 impl CoarseModel {
-    /// The Galerkin model of (`k`, `m`) on `pr`, with its symbolic analysis (AMD: the coarse
-    /// model is small).
+    /// The Galerkin model of (`k`, `m`) on `pr`, with its symbolic analysis.
     pub fn new(pr: &Prolongation, k: &SymMatrix, m: &SymMatrix) -> crate::Result<CoarseModel> {
         let (kc, mc) = pr.galerkin(k, m);
-        let symbolic = Arc::new(SymbolicFactor::new(&kc.pattern, None)?);
+        // METIS on the corner nodes' graph: at 119k DOFs (17 022 coarse unknowns) 4.1 M entries
+        // in L and 1.8 GFLOP against AMD's 5.4 M and 3.2 GFLOP, the coarse estimate 0.30 →
+        // 0.25 s. AMD when METIS fails.
+        let symbolic = match crate::linalg::ordering::pattern_nested_dissection(&kc.pattern) {
+            Ok((fwd, inv)) => SymbolicFactor::new(&kc.pattern, Some((&fwd, &inv)))?,
+            Err(_) => SymbolicFactor::new(&kc.pattern, None)?,
+        };
+        let symbolic = Arc::new(symbolic);
         Ok(CoarseModel { k: kc, m: mc, symbolic })
     }
 }
