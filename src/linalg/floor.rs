@@ -71,9 +71,11 @@ pub fn dgemm_rate() -> (f64, f64) {
     })
 }
 
-/// Read bandwidth (GB/s) over `values` (a factor's): a parallel sum over up to 64 MiB of them,
-/// best of two passes, with the seconds it took. (More passes read more of it from a large
-/// last-level cache: best of four gave 28–44 GB/s at 119k DOFs where two gave ~26.)
+/// Read bandwidth (GB/s) over `values` (a factor's): parallel sums over up to four disjoint
+/// slices of 64 MiB (fewer when `values` is shorter), the best of them, with the seconds it took.
+/// Each slice is read once, so none comes from the last-level cache (a slice read twice gave
+/// 28–44 GB/s at 119k DOFs, more than the memory sustains), and a pass disturbed by another
+/// process leaves the others.
 pub fn read_rate(values: &[f64]) -> (f64, f64) {
     use rayon::prelude::*;
     let t0 = Instant::now();
@@ -81,10 +83,10 @@ pub fn read_rate(values: &[f64]) -> (f64, f64) {
     if len < 1 << 12 {
         return (0.0, 0.0);
     }
-    let v = &values[..len];
+    let passes = (values.len() / len).clamp(1, 4);
     let chunk = len.div_ceil(rayon::current_num_threads().max(1) * 4).max(1 << 12);
     let mut best = f64::INFINITY;
-    for _ in 0..2 {
+    for v in values.chunks_exact(len).take(passes) {
         let t = Instant::now();
         // Four independent sums per chunk, so the loop is bound by the loads.
         let s: f64 = v
