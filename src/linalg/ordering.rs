@@ -48,9 +48,6 @@ pub fn node_nested_dissection(graph: &NodeGraph, dofs: &DofMap) -> Result<Vec<us
                 adjncy.push(v as i32);
             }
         }
-        if adjncy.len() > i32::MAX as usize {
-            return Err(Error::InvalidInput("model too large for 32-bit METIS indices".into()));
-        }
         xadj.push(adjncy.len() as i32);
     }
     let node_perm = metis_node_nd(nv, xadj, adjncy)?;
@@ -61,6 +58,9 @@ pub fn node_nested_dissection(graph: &NodeGraph, dofs: &DofMap) -> Result<Vec<us
 /// METIS nested dissection of the graph (`xadj`, `adjncy`: CSR without self-loops) on `nv`
 /// vertices: `perm[new] = old vertex`.
 fn metis_node_nd(nv: usize, mut xadj: Vec<i32>, mut adjncy: Vec<i32>) -> Result<Vec<i32>> {
+    if adjncy.len() > i32::MAX as usize {
+        return Err(Error::InvalidInput("model too large for 32-bit METIS indices".into()));
+    }
     let mut node_perm: Vec<i32> = vec![0; nv];
     let mut node_iperm: Vec<i32> = vec![0; nv];
     if nv > 0 {
@@ -98,9 +98,15 @@ fn metis_node_nd(nv: usize, mut xadj: Vec<i32>, mut adjncy: Vec<i32>) -> Result<
 /// The DOF permutation (forward, inverse) of a node elimination order: each node's free DOFs
 /// stay consecutive.
 pub fn expand_node_order(order: &[usize], dofs: &DofMap) -> (Vec<usize>, Vec<usize>) {
-    let mut fwd = Vec::with_capacity(dofs.n_free);
-    for &a in order {
-        fwd.extend(dofs.first[a]..dofs.first[a + 1]);
+    expand_groups(order.iter().copied(), &dofs.first, dofs.n_free)
+}
+
+/// The permutation (forward, inverse) that takes the groups of equations
+/// `first[g]..first[g + 1]` in `order`, each group's equations consecutive; `n` of them.
+fn expand_groups(order: impl Iterator<Item = usize>, first: &[usize], n: usize) -> (Vec<usize>, Vec<usize>) {
+    let mut fwd = Vec::with_capacity(n);
+    for g in order {
+        fwd.extend(first[g]..first[g + 1]);
     }
     let mut inv = vec![0usize; fwd.len()];
     for (new, &old) in fwd.iter().enumerate() {
@@ -200,21 +206,10 @@ pub fn pattern_nested_dissection(p: &crate::linalg::sparse::Pattern) -> Result<(
                 last = h;
             }
         }
-        if adjncy.len() > i32::MAX as usize {
-            return Err(Error::InvalidInput("model too large for 32-bit METIS indices".into()));
-        }
         xadj.push(adjncy.len() as i32);
     }
     let perm = metis_node_nd(ng, xadj, adjncy)?;
-    let fwd: Vec<usize> = perm
-        .iter()
-        .flat_map(|&g| first[g as usize]..first[g as usize + 1])
-        .collect();
-    let mut inv = vec![0; n];
-    for (new, &old) in fwd.iter().enumerate() {
-        inv[old] = new;
-    }
-    Ok((fwd, inv))
+    Ok(expand_groups(perm.iter().map(|&g| g as usize), &first, n))
 }
 
 #[cfg(test)]
