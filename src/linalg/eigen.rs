@@ -739,6 +739,40 @@ fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f6
     (lambda, xs)
 }
 
+/// The first `r` pairs of a solution, known to lie in the null space at λ = 0 (the rigid-body
+/// motions of a free model), replaced by the M-orthonormal null vectors a deflating solve
+/// reports there ([`null_vectors`]: translations first, then rotations about the principal
+/// axes of inertia, least inertia first) at λ = 0. A solve that iterated for them (every
+/// wanted mode is rigid, or another engine found them) returns arbitrary combinations of the
+/// motions whose Rayleigh quotients are rounding (±1e-4 rad²/s² on a steel bar, printed as
+/// −0.003 Hz, and a residual relative to that |λ| of order 1); any M-orthonormal basis of the
+/// null space is as valid a set of eigenvectors, and this one is the same whichever path
+/// solved. Done only when the candidates give exactly `cluster` null vectors, `cluster` being
+/// the number of eigenvalues the caller knows to lie at 0 (a Sturm count between σ < 0 and a
+/// point below the first elastic mode, or the engine's own deflation), and `r` ≤ `cluster`;
+/// `true` when the pairs were replaced (the caller then verifies them again).
+pub fn canonical_null_pairs(
+    k: &SymMatrix,
+    m: &SymMatrix,
+    cand: &NullCandidates,
+    lambda: &mut [f64],
+    vectors: &mut Mat<f64>,
+    (r, cluster): (usize, usize),
+) -> bool {
+    if r == 0 || r > cluster || r > lambda.len() || vectors.ncols() != lambda.len() {
+        return false;
+    }
+    let Some((z, _)) = null_vectors(k, m, (*cand.0).as_ref()) else {
+        return false;
+    };
+    if z.ncols() != cluster || z.nrows() != vectors.nrows() {
+        return false;
+    }
+    vectors.get_mut(.., 0..r).copy_from(z.get(.., 0..r));
+    lambda[..r].fill(0.0);
+    true
+}
+
 /// What a solve counts as it goes.
 #[derive(Default)]
 struct Tally {

@@ -802,10 +802,14 @@ def refine(pen: Pencil, ksp, X, theta, want_el: int, rigid_vecs):
 def sturm_upper(pen: Pencil, lam_max: float, above) -> dict:
     """Step 5: the number of eigenvalues below a point just above the last mode, from MUMPS's
     inertia of K − sM out of core, within the memory budget (params' sturm_budget bytes)."""
-    step = 1e-4 * max(abs(lam_max), 1.0)
+    # The scale as the direct path's (eigen.rs, check_points): |σ| when every mode returned is
+    # at λ = 0, where a point 1e-4 rad²/s² above the rigid-body modes lay inside their
+    # rounding and counted 4 of 6 (a steel bar, σ = −2.07e5).
+    scale = max(abs(lam_max), abs(pen.sigma))
+    step = 1e-4 * scale
     if len(above):
         step = min(step, 0.5 * (above[0] - lam_max))
-    upper_pt = lam_max + max(step, 1e-9 * abs(lam_max))
+    upper_pt = lam_max + max(step, 1e-9 * scale)
     sturm: dict = {"lower": [pen.sigma, 0]}
     budget_mb = int(float(P.get("sturm_budget", 0)) / 2**20 / COMM.getSize())
     if budget_mb <= 0:
@@ -844,6 +848,23 @@ def sturm_upper(pen: Pencil, lam_max: float, above) -> dict:
         sturm["sturm_mb"] = [F.getMumpsInfog(26), F.getMumpsInfog(16)]
     pc.destroy()
     return sturm
+
+
+SAME_ROOT = 1e-8
+
+
+def with_multiplet(theta, want_el: int, sigma: float) -> int:
+    """`want_el` extended over the rest of a repeated root at the cut (Ritz values within SAME_ROOT
+    of the scale of the last wanted one): a Sturm point just above the last wanted mode would
+    count its partner, which was not returned (a square bar's double bending root: 8 counted, 7
+    returned). The partners are refined and returned with the wanted pairs; vibrofem reports
+    the modes asked for, checked against the count with all of them."""
+    if want_el == 0:
+        return 0
+    scale = max(abs(theta[want_el - 1] + sigma), abs(sigma))
+    while want_el < len(theta) and theta[want_el] - theta[want_el - 1] <= SAME_ROOT * scale:
+        want_el += 1
+    return want_el
 
 
 def gather(X):
@@ -899,6 +920,7 @@ def main() -> None:
              "mechanism (a zero-energy motion that is not a rigid-body motion) or its rigid-body motions were not "
              "given (R.bin); the multigrid's near-null space does not hold it. Solve with --solver direct, or "
              "constrain the mechanism")
+    want_el = with_multiplet(theta, want_el, sigma)
     t = time.perf_counter()
     X, theta, err, rinfo = refine(pen, ksp, X, theta, want_el, rigid_vecs)
     info.update(rinfo)
