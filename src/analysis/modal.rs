@@ -337,15 +337,10 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
     };
     let mut sol = eigen::solve_with_prepared(k_mat, m_mat, sym, &params, sys.coarse_space(), sys.take_coarse_model())
         .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?;
-    // Every mode returned below a Sturm point whose count (from σ < 0, where none lies) is the
-    // null space's: all are rigid-body motions at λ = 0, reported as a deflating solve reports
-    // them (a request for at most six modes of a free body iterates for them instead).
-    let st = sol.sturm.clone();
-    if st.complete && st.lower.1 == 0 && sol.lambda.iter().all(|&l| l < st.upper.0) {
-        if let Some(c) = &params.null_candidates {
-            let r = sol.lambda.len();
-            canonical_rigid(k_mat, m_mat, c, &mut sol, (r, st.upper.1));
-        }
+    // A request for at most the rigid-body modes of a free body iterates for them: reported as
+    // a deflating solve reports them.
+    if let Some(c) = &params.null_candidates {
+        canonical_rigid(k_mat, m_mat, c, &mut sol);
     }
     tm.factor = sol.time_factor;
     tm.solve = sol.time_iterate;
@@ -354,15 +349,14 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
 }
 
 /// [`eigen::canonical_null_pairs`] on `sol`, verified again when replaced: the rigid-body pairs
-/// `(r, cluster)` in the same form whichever path or engine found them.
+/// in the same form whichever path or engine found them.
 pub(crate) fn canonical_rigid(
     k: &crate::linalg::sparse::SymMatrix,
     m: &crate::linalg::sparse::SymMatrix,
     cand: &eigen::NullCandidates,
     sol: &mut eigen::EigenSolution,
-    rc: (usize, usize),
 ) {
-    if eigen::canonical_null_pairs(k, m, cand, &mut sol.lambda, &mut sol.vectors, rc) {
+    if eigen::canonical_null_pairs(k, m, cand, &mut sol.lambda, &mut sol.vectors) {
         let (res, orth, back) = eigen::verify_with_backward_errors(k, m, &sol.lambda, sol.vectors.as_ref(), sol.shift);
         sol.rel_residual = res;
         sol.m_orthonormality = orth;

@@ -739,37 +739,75 @@ fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f6
     (lambda, xs)
 }
 
-/// The first `r` pairs of a solution, known to lie in the null space at λ = 0 (the rigid-body
-/// motions of a free model), replaced by the M-orthonormal null vectors a deflating solve
-/// reports there ([`null_vectors`]: translations first, then rotations about the principal
-/// axes of inertia, least inertia first) at λ = 0. A solve that iterated for them (every
-/// wanted mode is rigid, or another engine found them) returns arbitrary combinations of the
-/// motions whose Rayleigh quotients are rounding (±1e-4 rad²/s² on a steel bar, printed as
-/// −0.003 Hz, and a residual relative to that |λ| of order 1); any M-orthonormal basis of the
-/// null space is as valid a set of eigenvectors, and this one is the same whichever path
-/// solved. Done only when the candidates give exactly `cluster` null vectors, `cluster` being
-/// the number of eigenvalues the caller knows to lie at 0 (a Sturm count between σ < 0 and a
-/// point below the first elastic mode, or the engine's own deflation), and `r` ≤ `cluster`;
-/// `true` when the pairs were replaced (the caller then verifies them again).
+/// The leading pairs of a solution that lie in K's null space (the rigid-body motions of a free
+/// model) replaced by the M-orthonormal null vectors a deflating solve reports there
+/// ([`null_vectors`]: translations first, then rotations about the principal axes of inertia,
+/// least inertia first) at λ = 0. A solve that iterated for them (every wanted mode is rigid,
+/// or another engine found them) returns arbitrary combinations of the motions whose Rayleigh
+/// quotients are rounding (±1e-4 rad²/s² on a steel bar, printed as −0.003 Hz, with a residual
+/// relative to that |λ| of order 1); any M-orthonormal basis of the null space is as valid a set
+/// of eigenvectors, and this one is the same whichever path solved. The pairs replaced are the
+/// leading M-orthonormal ones inside span(Z) (‖x − Z ZᵀMx‖²_M = 1 − ‖ZᵀMx‖² ≤ 1e-10), at most
+/// as many as Z has columns; the pairs after them are orthogonal to the null space already
+/// (eigenvectors of other eigenvalues). Nothing is done (and no product formed) when the first
+/// eigenvalue is exactly 0 (a deflating solve's) or above 1e-6 of the typical K_ii/M_ii (no
+/// null pair). `true` when pairs were replaced (the caller then verifies them again).
 pub fn canonical_null_pairs(
     k: &SymMatrix,
     m: &SymMatrix,
     cand: &NullCandidates,
     lambda: &mut [f64],
     vectors: &mut Mat<f64>,
-    (r, cluster): (usize, usize),
 ) -> bool {
-    if r == 0 || r > cluster || r > lambda.len() || vectors.ncols() != lambda.len() {
-        return false;
-    }
-    let Some((z, _)) = null_vectors(k, m, (*cand.0).as_ref()) else {
+    let Some(&l0) = lambda.first() else {
         return false;
     };
-    if z.ncols() != cluster || z.nrows() != vectors.nrows() {
+    if l0 == 0.0 || vectors.ncols() != lambda.len() || l0.abs() > 1e-6 * default_shift(k, m).abs() {
+        return false;
+    }
+    let Some((z, mz)) = null_vectors(k, m, (*cand.0).as_ref()) else {
+        return false;
+    };
+    if z.nrows() != vectors.nrows() {
+        return false;
+    }
+    let c = z.ncols();
+    let a = tall::gram((*mz).as_ref(), vectors.get(.., 0..c.min(lambda.len())));
+    let r = (0..a.ncols())
+        .take_while(|&j| {
+            let s: f64 = (0..c).map(|i| a[(i, j)] * a[(i, j)]).sum();
+            (1.0 - s).abs() <= 1e-10
+        })
+        .count();
+    if r == 0 {
         return false;
     }
     vectors.get_mut(.., 0..r).copy_from(z.get(.., 0..r));
     lambda[..r].fill(0.0);
+    // The pairs after them carry the null space to the iteration's accuracy only (1.3e-8 on a
+    // free shell of h/a = 1e-4, against the M-orthonormality bar of 1e-8): its components taken
+    // out, as a deflating solve takes them out, and the pairs M-normalised again.
+    let nc = lambda.len();
+    if r < nc {
+        let mut rest = vectors.get_mut(.., r..nc);
+        let coef = tall::gram((*mz).as_ref(), rest.as_ref());
+        tall::mul(rest.as_mut(), Accum::Add, (*z).as_ref(), coef.as_ref(), -1.0);
+        let mut mr = Mat::zeros(rest.nrows(), nc - r);
+        m.mul_block(rest.as_ref(), mr.as_mut());
+        for j in 0..nc - r {
+            let s: f64 = rest
+                .as_ref()
+                .col(j)
+                .iter()
+                .zip(mr.col(j).iter())
+                .map(|(a, b)| a * b)
+                .sum();
+            if s > 0.0 {
+                let f = s.sqrt().recip();
+                rest.as_mut().col_mut(j).iter_mut().for_each(|v| *v *= f);
+            }
+        }
+    }
     true
 }
 

@@ -770,8 +770,7 @@ fn load(sys: &System, dir: &Path, nev: usize) -> Result<Loaded> {
     // The script's rigid-body pairs (the lowest: K ⪰ 0) are Ritz pairs of the motions whose
     // Rayleigh quotients are rounding: reported as the direct path reports them, at λ = 0.
     let cand = crate::analysis::modal::rigid_candidates(sys.model());
-    let r = info.rigid.min(lambda.len());
-    eigen::canonical_null_pairs(k, m, &cand, &mut lambda, &mut vectors, (r, info.rigid));
+    eigen::canonical_null_pairs(k, m, &cand, &mut lambda, &mut vectors);
     let (mut rel_residual, m_orth, mut backward_error) =
         eigen::verify_with_backward_errors(k, m, &lambda, vectors.as_ref(), info.sigma);
     let (sturm, not_verified, mut notes) = sturm_of(&info, &lambda, nev);

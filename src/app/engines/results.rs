@@ -445,7 +445,10 @@ pub(super) fn load(
     let tv = Instant::now();
     let idx = select(&lam_all, &info, job, want);
     let (k, m) = (sys.k(), sys.m()?);
-    let (lambda, x) = normalised(m, &lam_all, &x_all, n, &idx);
+    let (mut lambda, mut x) = normalised(m, &lam_all, &x_all, n, &idx);
+    // SLEPc's rigid-body pairs (not deflated) reported as the direct path reports them, at λ = 0.
+    let cand = crate::analysis::modal::rigid_candidates(sys.model());
+    eigen::canonical_null_pairs(k, m, &cand, &mut lambda, &mut x);
     let (rel_residual, m_orth, backward_error) =
         eigen::verify_with_backward_errors(k, m, &lambda, x.as_ref(), job.sigma);
     let (sturm, more) = sturm_check(sys, (&lam_all, &x_all), &info, (job, want), &lambda)?;
