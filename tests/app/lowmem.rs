@@ -176,6 +176,17 @@ fn rigid_only_requests_and_a_double_root_at_the_cut_are_complete() {
         same_modes(&d, &i, n);
         same_modes(&d, &e, n);
     }
+    // A hex8 box, square in section: asked for 2 modes, SLEPc's Sturm point fell between two
+    // of its rigid modes' rounding values (0 counted, 3 found); asked for 8, the 8th and 9th
+    // are a double root (9 counted, 8 found). Both exited 2; now the direct path's answer.
+    let cube = "box:0.2,0.1,0.1:4,2,2:hex8";
+    for n in ["2", "8"] {
+        let (code, d, err) = modes_json(&[cube, "--modes", n], "direct");
+        assert_eq!(code, 0, "direct: {err}");
+        let (code, out, err) = run(&["modes", cube, "--modes", n, "--engine", "slepc", "--json"]);
+        assert_eq!(code, 0, "--engine slepc, {n} modes: {err}");
+        same_modes(&d, &serde_json::from_str(&out).unwrap(), n);
+    }
 }
 
 /// [`rigid_only_requests_and_a_double_root_at_the_cut_are_complete`]'s checks of one report `i`

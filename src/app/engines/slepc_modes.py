@@ -200,7 +200,11 @@ else:
     lam_max = lam[-1] if len(lam) else sigma
     scale = max(abs(lam_max), abs(sigma))
     step = 1e-4 * scale
-    above = lam_sorted[lam_sorted > lam_max + 1e-9 * scale]
+    # Below the spectrum (σ < 0), values within 1e-6 |σ| of 0 are the rigid-body modes'
+    # rounding (±1e-4 rad²/s² on a steel bar, σ = −2e5): one root, never split by the point (a
+    # point between two of them counted 0 of 3 on a free box asked for 2 modes).
+    zero = 1e-6 * abs(sigma) if sigma < 0 else 0.0
+    above = lam_sorted[(lam_sorted > lam_max + 1e-9 * scale) & (lam_sorted > zero)]
     if len(above):
         step = min(step, 0.5 * (above[0] - lam_max))
     upper_pt = lam_max + max(step, 1e-9 * scale)
