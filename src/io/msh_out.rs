@@ -44,11 +44,14 @@ pub struct NodeView<'a> {
 ///
 /// # Errors
 /// [`Error::InvalidInput`] if a view has not 1, 3 or 9 components, [`Error::param`] if it has
-/// not `n_comp` finite values per node or the mesh has no cells; [`Error::Io`] if the file cannot be written.
+/// not `n_comp` finite values per node or the mesh has no cells; [`Error::Io`] if the file cannot be
+/// created, [`Error::Output`] if it cannot be written (a full disk).
 pub fn write_msh_views(path: &Path, mesh: &Mesh, views: &[NodeView]) -> Result<()> {
     let text = msh_string(mesh, views)?;
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    f.write_all(text.as_bytes()).map_err(|e| Error::io(path, e))
+    // Created but not written (a full disk): a result lost, exit 4, not an input error.
+    f.write_all(text.as_bytes())
+        .map_err(|e| Error::output(path.display(), e))
 }
 
 /// The MSH 4.1 document as a string (see [`write_msh_views`]).

@@ -127,11 +127,14 @@ pub fn gmsh_to_vtk(kind: CellKind) -> (u8, Option<&'static [usize]>) {
 ///
 /// # Errors
 /// [`Error::InvalidInput`] if a field does not have `n_comp` finite values per node,
-/// [`Error::param`] if the mesh has no cells, [`Error::Io`] if the file cannot be written.
+/// [`Error::param`] if the mesh has no cells, [`Error::Io`] if the file cannot be created,
+/// [`Error::Output`] if it cannot be written (a full disk).
 pub fn write_vtu(path: &Path, mesh: &Mesh, point_data: &[PointField]) -> Result<()> {
     let text = vtu_string(mesh, point_data)?;
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    f.write_all(text.as_bytes()).map_err(|e| Error::io(path, e))
+    // Created but not written (a full disk): a result lost, exit 4, not an input error.
+    f.write_all(text.as_bytes())
+        .map_err(|e| Error::output(path.display(), e))
 }
 
 /// The `.vtu` document as a string (see [`write_vtu`]).

@@ -43,6 +43,20 @@ fn full_stdout_exits_4() {
     }
 }
 
+/// The same for a result file on a full disk (`--vtu`, `--msh-out`): created, not written,
+/// exit 4 as the README's table says, where it was 1 (an input error).
+#[test]
+fn full_disk_for_a_result_file_exits_4() {
+    if !std::path::Path::new("/dev/full").exists() {
+        return;
+    }
+    for opt in ["--vtu", "--msh-out"] {
+        let (code, _, err) = run(&["modes", BAR, "--fix", "xmin", "--modes", "2", opt, "/dev/full"]);
+        assert_eq!(code, 4, "{opt}: {err}");
+        assert!(err.contains("/dev/full") && !err.contains("panicked"), "{opt}: {err}");
+    }
+}
+
 /// Item 12: an output path that cannot be written is refused before the run, naming it; a
 /// missing folder is created.
 #[test]
