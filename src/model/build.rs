@@ -642,7 +642,7 @@ pub(crate) fn fixes(
             return Err(Error::group(g.as_str(), format!("group '{g}' has no nodes to fix")));
         }
         let mut count = 0;
-        for a in gn {
+        for &a in &gn {
             let m = *mask & active[a as usize];
             if m != 0 {
                 count += 1;
@@ -651,10 +651,22 @@ pub(crate) fn fixes(
             cons.fixed[a as usize] |= m;
         }
         if count == 0 {
-            return Err(Error::group(
-                g.as_str(),
-                format!("group '{g}' shares no node with the volume elements: nothing to fix"),
-            ));
+            // Nodes of elements, but none with the components asked (rotations of solid nodes):
+            // said so, rather than that the group touches no element.
+            let msg = if gn.iter().any(|&a| active[a as usize] != 0) {
+                format!(
+                    "group '{g}': none of its nodes has the components to fix ({}): solid nodes have no \
+                     rotations (shell and beam nodes have; fix the solid nodes' translations)",
+                    (0..6)
+                        .filter(|&c| *mask & (1 << c) != 0)
+                        .map(|c| COMPONENT_NAMES[c])
+                        .collect::<Vec<_>>()
+                        .join(",")
+                )
+            } else {
+                format!("group '{g}' shares no node with the volume elements: nothing to fix")
+            };
+            return Err(Error::group(g.as_str(), msg));
         }
     }
     Ok(fixed_by)

@@ -308,3 +308,16 @@ fn rigid_only_requests_report_the_motions_as_the_deflating_solve_does() {
         assert!(modes[0]["cumulative_ratio"][0].as_f64().unwrap() > 1.0 - 1e-12);
     }
 }
+
+/// Fixing only rotations on a solid face used to say the group "shares no node with the volume
+/// elements", which it does: the message now names the components and why they are missing.
+#[test]
+fn fixing_rotations_of_solid_nodes_says_why() {
+    let (code, _, err) = run(&["modes", "box:0.2,0.1,0.1:4,2,2:hex8", "--fix", "xmin:rx"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("'xmin'") && err.contains("(rx)") && err.contains("no rotations"),
+        "{err}"
+    );
+    assert!(!err.contains("shares no node"), "{err}");
+}
