@@ -321,3 +321,36 @@ fn fixing_rotations_of_solid_nodes_says_why() {
     );
     assert!(!err.contains("shares no node"), "{err}");
 }
+
+/// An MSH 2.2 element line with a node tag too many or too few was read across lines and
+/// reported at the next line ("expected $EndElements, found '12'"), without the element: now
+/// its own line and tag.
+#[test]
+fn an_element_line_with_the_wrong_node_count_names_the_element() {
+    let head = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n12\n1 0 0 0\n2 0.1 0 0\n3 0.1 0.1 0\n\
+                4 0 0.1 0\n5 0 0 0.1\n6 0.1 0 0.1\n7 0.1 0.1 0.1\n8 0 0.1 0.1\n9 0.2 0 0\n10 0.2 0.1 0\n\
+                11 0.2 0 0.1\n12 0.2 0.1 0.1\n$EndNodes\n$Elements\n2\n";
+    let good = "1 5 2 1 1 1 2 3 4 5 6 7 8\n";
+    for (name, second, want) in [
+        ("extra.msh", "2 5 2 1 1 2 9 10 3 6 11 12 7 4\n", "more node tags"),
+        (
+            "missing.msh",
+            "2 5 2 1 1 2 9 10 3 6 11 12\n",
+            "after 7 of the 8 node tags",
+        ),
+    ] {
+        let p = tmp(name, &format!("{head}{good}{second}$EndElements\n"));
+        let (code, _, err) = run(&["mesh-info", p.to_str().unwrap()]);
+        assert_eq!(code, 1, "{err}");
+        assert!(
+            err.contains("line 22") && err.contains("element 2") && err.contains(want),
+            "{err}"
+        );
+    }
+    let p = tmp(
+        "fine.msh",
+        &format!("{head}{good}2 5 2 1 1 2 9 10 3 6 11 12 7\r\n$EndElements\n"),
+    );
+    let (code, out, err) = run(&["mesh-info", p.to_str().unwrap()]);
+    assert_eq!(code, 0, "{out}{err}");
+}

@@ -191,6 +191,24 @@ fn counts_and_parts_name_their_key() {
     );
 }
 
+/// Three values that got past the checks and failed late, without the key: a coil pitch below
+/// the wire (the helix builder refused it after the first FE parts had run), a leaf of 1e-9 m
+/// (the start-up integrator stopped after millions of steps) and a table of 1e9 m (its
+/// generator blamed the element size).
+#[test]
+fn coil_pitch_leaf_length_and_table_size_name_their_key() {
+    refused("pitch.toml", "version = 1\n[coil]\npitch = 0.001\n", "coil.pitch", 3);
+    let m = refused("leaflen.toml", "version = 1\n[leaf]\nlength = 1e-9\n", "leaf.length", 3);
+    assert!(m.contains("leaf.thickness"), "{m}");
+    let m = refused(
+        "tablelen.toml",
+        "version = 1\n[table]\nlength = 1e9\n",
+        "table.length",
+        3,
+    );
+    assert!(m.contains("table.element_size"), "{m}");
+}
+
 #[test]
 fn search_lists_are_counted_before_they_are_expanded() {
     // Issue 28 item 8: lists of 300 × 300 × 300 values were expanded into designs (a clone and a

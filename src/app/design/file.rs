@@ -59,6 +59,10 @@ pub struct Design {
 /// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
 pub type TableDesign = SandwichParams;
 
+/// Elements of `table.element_size` along one side of the table at most (2 000 at the
+/// smallest element size, 2 mm, is a 4 m table).
+const MAX_TABLE_DIVISIONS: f64 = 2000.0;
+
 /// Masses of the two-mass system.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -520,6 +524,44 @@ impl Design {
                 "table.element_size",
                 format!("must be at least 0.002 m, got {}", self.table.elem_size),
             ));
+        }
+        // The parts' builders refuse these too, but late (after FE work) and without the key.
+        if !(self.coil.pitch > self.coil.wire) {
+            return Err(bad(
+                "coil.pitch",
+                format!(
+                    "must exceed the wire diameter 'coil.wire' = {} m (the coils would touch), got {}",
+                    self.coil.wire, self.coil.pitch
+                ),
+            ));
+        }
+        if !(self.leaf.length > self.leaf.thickness) {
+            return Err(bad(
+                "leaf.length",
+                format!(
+                    "must exceed the leaf's thickness 'leaf.thickness' = {} m (a leaf spring is a slender plate), got {}",
+                    self.leaf.thickness, self.leaf.length
+                ),
+            ));
+        }
+        let t = &self.table;
+        for (key, v) in [
+            ("table.length", t.length),
+            ("table.top_width", t.top_width),
+            ("table.bottom_width", t.bottom_width),
+            ("table.web_height", t.web_height),
+        ] {
+            if v / t.elem_size > MAX_TABLE_DIVISIONS {
+                return Err(bad(
+                    key,
+                    format!(
+                        "= {v} m is {:.3e} elements of 'table.element_size' = {} m, more than {MAX_TABLE_DIVISIONS} \
+                         along one side (a table of metres, or a coarser element size)",
+                        v / t.elem_size,
+                        t.elem_size
+                    ),
+                ));
+            }
         }
         if self.coil.elements_per_turn < 3 || self.coil.elements_per_turn > 1000 {
             return Err(bad(

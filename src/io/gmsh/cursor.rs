@@ -122,6 +122,18 @@ impl<'a> Cursor<'a> {
         }
     }
 
+    /// Whether the current line has no token left (blanks skipped, the newline not consumed):
+    /// for records that must fit one line.
+    pub fn line_ends(&mut self) -> bool {
+        while let Some(&b) = self.data.get(self.pos) {
+            match b {
+                b' ' | b'\t' | b'\r' | b'\x0c' => self.pos += 1,
+                _ => return b == b'\n',
+            }
+        }
+        true
+    }
+
     /// The next whitespace-separated ASCII token, or `None` at the end of the file.
     ///
     /// At the end of the file, the line of errors stays that of the last token read, i.e. the

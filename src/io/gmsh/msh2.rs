@@ -100,7 +100,17 @@ fn read_elements(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<(
             let gmsh_type = cur.tok_i32("element type")?;
             let n_tags = cur.tok_count("element tags", 2)?;
             read_tags(cur, &mut st, n_tags)?;
-            record(cur, b, &mut st, tag, gmsh_type)?;
+            record(cur, b, &mut st, tag, gmsh_type, true)?;
+            // One element a line: a node too many is named here rather than read as the next
+            // element's tag (which reported the line after, "expected $EndElements").
+            if !cur.line_ends() {
+                let extra = cur.token("node tag")?;
+                return Err(cur.err(format!(
+                    "element {tag}: more node tags on its line than its type (gmsh type {gmsh_type}) has, \
+                     starting at '{}'",
+                    String::from_utf8_lossy(extra)
+                )));
+            }
         }
     } else {
         let mut read = 0usize;
@@ -121,7 +131,7 @@ fn read_elements(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<(
             for _ in 0..in_block {
                 let tag = cur.int_tag("element tag")?;
                 read_tags(cur, &mut st, n_tags)?;
-                record(cur, b, &mut st, tag, gmsh_type)?;
+                record(cur, b, &mut st, tag, gmsh_type, false)?;
             }
             read += in_block;
         }
@@ -141,7 +151,15 @@ fn read_tags(cur: &mut Cursor, st: &mut Elements, n_tags: usize) -> Result<()> {
 
 /// The nodes of one element record (its tags already in `st.tags`): add the cell, or merge it
 /// into the previous one if it repeats it for another physical group.
-fn record(cur: &mut Cursor, b: &mut Builder, st: &mut Elements, tag: u64, gmsh_type: i32) -> Result<()> {
+/// In ASCII (`one_line`) the record must end on its line.
+fn record(
+    cur: &mut Cursor,
+    b: &mut Builder,
+    st: &mut Elements,
+    tag: u64,
+    gmsh_type: i32,
+    one_line: bool,
+) -> Result<()> {
     let phys = st.tags.first().copied().unwrap_or(0);
     let entity = st.tags.get(1).copied().unwrap_or(0);
     let Some(kind) = CellKind::from_gmsh_type(gmsh_type) else {
@@ -156,7 +174,14 @@ fn record(cur: &mut Cursor, b: &mut Builder, st: &mut Elements, tag: u64, gmsh_t
         return Err(b.unsupported(cur.path(), gmsh_type, group));
     };
     st.nodes.clear();
-    for _ in 0..kind.n_nodes() {
+    for k in 0..kind.n_nodes() {
+        if one_line && cur.line_ends() {
+            return Err(cur.err(format!(
+                "element {tag}: its line ends after {k} of the {} node tags of a {} (gmsh type {gmsh_type})",
+                kind.n_nodes(),
+                kind.name()
+            )));
+        }
         let node = cur.int_tag("node tag")?;
         st.nodes.push(b.node(cur, tag, node)?);
     }
