@@ -721,8 +721,7 @@ fn null_count(null: Option<&Null>) -> usize {
 /// ([`with_null`]): the refinement of the pairs an iteration that deflates them returned.
 fn ritz_deflated(k: &SymMatrix, m: &SymMatrix, null: Option<&Null>, mut y: Mat<f64>) -> Result<(Vec<f64>, Mat<f64>)> {
     if let Some((z, mz)) = null {
-        let c = tall::gram((**mz).as_ref(), y.as_ref());
-        tall::mul(y.as_mut(), Accum::Add, (**z).as_ref(), c.as_ref(), -1.0);
+        project_out(z, mz, y.as_mut());
     }
     let (l, x) = rayleigh_ritz(k, m, y)?;
     Ok(with_null(null, l, x))
@@ -790,18 +789,10 @@ pub fn canonical_null_pairs(
     let nc = lambda.len();
     if r < nc {
         let mut rest = vectors.get_mut(.., r..nc);
-        let coef = tall::gram((*mz).as_ref(), rest.as_ref());
-        tall::mul(rest.as_mut(), Accum::Add, (*z).as_ref(), coef.as_ref(), -1.0);
+        project_out(&z, &mz, rest.as_mut());
         let mut mr = Mat::zeros(rest.nrows(), nc - r);
         m.mul_block(rest.as_ref(), mr.as_mut());
-        for j in 0..nc - r {
-            let s: f64 = rest
-                .as_ref()
-                .col(j)
-                .iter()
-                .zip(mr.col(j).iter())
-                .map(|(a, b)| a * b)
-                .sum();
+        for (j, s) in tall::col_dots(rest.as_ref(), mr.as_ref()).into_iter().enumerate() {
             if s > 0.0 {
                 let f = s.sqrt().recip();
                 rest.as_mut().col_mut(j).iter_mut().for_each(|v| *v *= f);
@@ -809,6 +800,12 @@ pub fn canonical_null_pairs(
         }
     }
     true
+}
+
+/// Y − Z(MZ)ᵀY: Y's components along the M-orthonormal null vectors Z taken out.
+fn project_out(z: &Mat<f64>, mz: &Mat<f64>, mut y: MatMut<'_, f64>) {
+    let c = tall::gram(mz.as_ref(), y.as_ref());
+    tall::mul(y.as_mut(), Accum::Add, z.as_ref(), c.as_ref(), -1.0);
 }
 
 /// What a solve counts as it goes.

@@ -501,14 +501,41 @@ impl Design {
                 return Err(bad(key, "must be at least 1, got 0".into()));
             }
         }
-        if self.coil.mean_diameter <= self.coil.wire {
-            return Err(bad(
+        // One length that must exceed another (the parts' builders refuse these too, but late,
+        // after FE work, and without the key).
+        let (c, l) = (&self.coil, &self.leaf);
+        for (key, v, what, other, o, why) in [
+            (
                 "coil.mean_diameter",
-                format!(
-                    "must exceed the wire diameter 'coil.wire' = {} m (spring index D/d > 1), got {}",
-                    self.coil.wire, self.coil.mean_diameter
-                ),
-            ));
+                c.mean_diameter,
+                "the wire diameter",
+                "coil.wire",
+                c.wire,
+                "spring index D/d > 1",
+            ),
+            (
+                "coil.pitch",
+                c.pitch,
+                "the wire diameter",
+                "coil.wire",
+                c.wire,
+                "the coils would touch",
+            ),
+            (
+                "leaf.length",
+                l.length,
+                "the leaf's thickness",
+                "leaf.thickness",
+                l.thickness,
+                "a leaf spring is a slender plate",
+            ),
+        ] {
+            if !(v > o) {
+                return Err(bad(
+                    key,
+                    format!("must exceed {what} '{other}' = {o} m ({why}), got {v}"),
+                ));
+            }
         }
         if self.leaf.divisions.contains(&0) || self.leaf.divisions.iter().product::<usize>() > 200_000 {
             return Err(bad(
@@ -523,25 +550,6 @@ impl Design {
             return Err(bad(
                 "table.element_size",
                 format!("must be at least 0.002 m, got {}", self.table.elem_size),
-            ));
-        }
-        // The parts' builders refuse these too, but late (after FE work) and without the key.
-        if !(self.coil.pitch > self.coil.wire) {
-            return Err(bad(
-                "coil.pitch",
-                format!(
-                    "must exceed the wire diameter 'coil.wire' = {} m (the coils would touch), got {}",
-                    self.coil.wire, self.coil.pitch
-                ),
-            ));
-        }
-        if !(self.leaf.length > self.leaf.thickness) {
-            return Err(bad(
-                "leaf.length",
-                format!(
-                    "must exceed the leaf's thickness 'leaf.thickness' = {} m (a leaf spring is a slender plate), got {}",
-                    self.leaf.thickness, self.leaf.length
-                ),
             ));
         }
         let t = &self.table;
