@@ -245,6 +245,8 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
         .try_for_each(|(r, (kv, mv))| -> Result<()> {
             let cols = bounds[r]..bounds[r + 1];
             let (mut ke, mut me) = (Vec::<f64>::new(), Vec::<f64>::new());
+            // Magnitudes of the terms added through constraints, by position in `kv`.
+            let mut added = Cancellation::default();
             for (set, order) in sets.iter().zip(&orders) {
                 let ndpn = set.dofs_per_node();
                 for &e in order {
@@ -267,9 +269,9 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
                     me.resize(if want_mass { nd * nd } else { 0 }, 0.0);
                     set.matrices(e, &mut ke, &mut me, want_mass)?;
                     if special {
-                        scatter_general(&pattern, dofs, nodes, ndpn, &ke, cols.clone(), kv);
+                        scatter_general(&pattern, dofs, nodes, ndpn, &ke, cols.clone(), kv, Some(&mut added));
                         if want_mass {
-                            scatter_general(&pattern, dofs, nodes, ndpn, &me, cols.clone(), mv);
+                            scatter_general(&pattern, dofs, nodes, ndpn, &me, cols.clone(), mv, None);
                         }
                     } else if want_mass {
                         scatter(
@@ -286,6 +288,7 @@ pub fn assemble(pattern: Arc<Pattern>, dofs: &DofMap, sets: &[&dyn ElementSet], 
                     }
                 }
             }
+            added.clean(kv);
             Ok(())
         })?;
     // M keeps only its nonzeros, on a pattern of its own within K's (a third of the values of a
@@ -307,9 +310,36 @@ fn split_by_columns<'a>(values: &'a mut [f64], pattern: &Pattern, bounds: &[usiz
     out
 }
 
+/// Relative size below which a stiffness entry formed through constraints is cancellation
+/// noise: its terms' magnitudes summed, times this, exceed what is left of it. The terms of a
+/// rigid motion's stiffness cancel exactly in exact arithmetic (a whole free body coupled to one
+/// reference node has K̂ = TᵀKT = 0); in floating point they leave ~1e-16 of the terms per
+/// addition, which without this would be a spurious stiffness of random sign (eigenvalues of
+/// ±1e-6 rad²/s² that no scale tells from real ones). An entry really that small relative to
+/// its terms carries no more than their rounding.
+const CANCELLED: f64 = 1e-12;
+
+/// Σ|terms| of the entries [`scatter_general`] added to (position within a column range's
+/// values), for [`Cancellation::clean`].
+#[derive(Default)]
+struct Cancellation(std::collections::HashMap<usize, f64>);
+
+impl Cancellation {
+    /// Entries whose value is cancellation noise ([`CANCELLED`]) set to zero.
+    fn clean(&self, vals: &mut [f64]) {
+        for (&p, &a) in &self.0 {
+            if vals[p].abs() <= CANCELLED * a {
+                vals[p] = 0.0;
+            }
+        }
+    }
+}
+
 /// Add one element matrix through the constraint transformation: K̂ += Tₑᵀ Kₑ Tₑ, where row i
 /// of Tₑ expands local DOF i into equations (slaves into their masters).
-/// Only the columns in `cols` are written; `vals` holds their values (from the first of them).
+/// Only the columns in `cols` are written; `vals` holds their values (from the first of them);
+/// `added`, when given, the magnitudes of the terms added.
+#[allow(clippy::too_many_arguments)]
 fn scatter_general(
     pattern: &Pattern,
     dofs: &DofMap,
@@ -318,6 +348,7 @@ fn scatter_general(
     me: &[f64],
     cols: std::ops::Range<usize>,
     vals: &mut [f64],
+    mut added: Option<&mut Cancellation>,
 ) {
     let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
@@ -334,7 +365,11 @@ fn scatter_general(
                 }
                 for &(ei, ci) in &exps[i].terms {
                     if let Some(pos) = pattern.position(ei, ej) {
-                        vals[pos - off] += ci * cj * v;
+                        let t = ci * cj * v;
+                        vals[pos - off] += t;
+                        if let Some(a) = added.as_deref_mut() {
+                            *a.0.entry(pos - off).or_insert(0.0) += t.abs();
+                        }
                     } else {
                         debug_assert!(false, "pattern misses ({ei}, {ej})");
                     }
@@ -367,7 +402,7 @@ fn scatter<const T: usize>(
 ) {
     if nodes.len() > SCATTER_MAX_NODES {
         for (me, v) in mats.into_iter().zip(vals) {
-            scatter_general(pattern, dofs, nodes, ndpn, me, cols.clone(), v);
+            scatter_general(pattern, dofs, nodes, ndpn, me, cols.clone(), v, None);
         }
         return;
     }

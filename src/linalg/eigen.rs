@@ -750,7 +750,8 @@ fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f6
 /// as many as Z has columns; the pairs after them are orthogonal to the null space already
 /// (eigenvectors of other eigenvalues). Nothing is done (and no product formed) when the first
 /// eigenvalue is exactly 0 (a deflating solve's) or above 1e-6 of the typical K_ii/M_ii (no
-/// null pair). `true` when pairs were replaced (the caller then verifies them again).
+/// null pair); every eigenvalue exactly 0 (K = 0) is replaced. `true` when pairs were
+/// replaced (the caller then verifies them again).
 pub fn canonical_null_pairs(
     k: &SymMatrix,
     m: &SymMatrix,
@@ -761,7 +762,10 @@ pub fn canonical_null_pairs(
     let Some(&l0) = lambda.first() else {
         return false;
     };
-    if l0 == 0.0 || vectors.ncols() != lambda.len() || l0.abs() > 1e-6 * default_shift(k, m).abs() {
+    // Every λ exactly 0 is a K = 0 model's (a whole free body coupled to one reference node):
+    // any engine returns its null space in an arbitrary basis, made canonical too.
+    let deflated = l0 == 0.0 && lambda.iter().any(|&l| l != 0.0);
+    if deflated || vectors.ncols() != lambda.len() || l0.abs() > 1e-6 * default_shift(k, m).abs() {
         return false;
     }
     let Some((z, mz)) = null_vectors(k, m, (*cand.0).as_ref()) else {

@@ -385,7 +385,7 @@ fn free_motions(
         let ea = a.symmetric_eigen();
         let mut count = 0;
         for (i, &mu) in ea.eigenvalues.iter().enumerate() {
-            if mu < tol {
+            if mu <= tol {
                 let y = &w * ea.eigenvectors.column(i);
                 basis.push((c, nalgebra::Vector6::from_fn(|k, _| y[k])));
                 count += 1;
@@ -395,7 +395,7 @@ fn free_motions(
             continue;
         }
         let motions = (0..6)
-            .filter(|&d| gms[(d, d)] > 1e-10 * emax && gks[(d, d)] / gms[(d, d)] < tol)
+            .filter(|&d| gms[(d, d)] > 1e-10 * emax && gks[(d, d)] / gms[(d, d)] <= tol)
             .map(|d| NAMES[d])
             .collect();
         let node_list = (0..n_nodes.min(dofs.n_nodes()))

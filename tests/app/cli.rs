@@ -309,6 +309,45 @@ fn rigid_only_requests_report_the_motions_as_the_deflating_solve_does() {
     }
 }
 
+/// A whole free body coupled to one reference node has K̂ = TᵀKT = 0 exactly: its six
+/// degrees of freedom are the rigid-body motions. The reduction's cancellation used to leave
+/// rounding of random sign (±1e-6 rad²/s²) that no scale tells from stiffness: the modes came
+/// out at −0.0002 Hz with residuals of 0.5, "accuracy not guaranteed", exit 2, and a static
+/// load was refused without naming the motions. Reference: the same bar free (no coupling; its
+/// section not square, so that the principal axes, and the rotation modes, are unique),
+/// whose deflating solve reports the six motions — the coupled body has them with the same
+/// mass and inertia, so each mode's six participation factors agree (O(1) values; to 1e-9,
+/// the coupled ones are formed through the constraint transformation, rounding ~1e-15).
+#[test]
+fn a_whole_body_coupled_to_one_node_has_its_six_rigid_modes() {
+    let bar = "box:0.3,0.03,0.02:15,3,2:hex20";
+    let free = modes_report(&[bar, "--modes", "7"]);
+    for n in [4usize, 9] {
+        let r = modes_report(&[bar, "--couple", "volume", "--modes", &n.to_string()]);
+        assert_eq!(r["complete"], true, "{}", r["notes"]);
+        assert_eq!(r["accurate"], true);
+        let modes = r["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), n.min(6), "the model has six degrees of freedom");
+        for (j, m) in modes.iter().enumerate() {
+            assert_eq!(m["kind"], "rigid", "mode {}", j + 1);
+            assert_eq!(m["frequency_hz"].as_f64(), Some(0.0), "mode {}", j + 1);
+            let (p, q) = (&m["participation"], &free["modes"][j]["participation"]);
+            for c in 0..6 {
+                let (a, b) = (p[c].as_f64().unwrap(), q[c].as_f64().unwrap());
+                assert!((a - b).abs() <= 1e-9, "mode {} component {c}: {a} against {b}", j + 1);
+            }
+        }
+    }
+    let (code, _, err) = run(&["static", bar, "--couple", "volume", "--force", "volume=0,0,-100"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("under-constrained")
+            && err.contains("rotation about z")
+            && err.contains("reference node of 'volume'"),
+        "{err}"
+    );
+}
+
 /// Fixing only rotations on a solid face used to say the group "shares no node with the volume
 /// elements", which it does: the message now names the components and why they are missing.
 #[test]

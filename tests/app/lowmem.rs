@@ -189,6 +189,31 @@ fn rigid_only_requests_and_a_double_root_at_the_cut_are_complete() {
     }
 }
 
+/// A whole free body coupled to one reference node (K = 0, its six DOFs the rigid-body
+/// motions): the path deflated all six and then iterated on the empty rest, whose rounding it
+/// took for a mechanism (exit 1); `--engine slepc` returned the motions in an arbitrary basis.
+/// Both now report the direct path's modes (same checks, `same_modes`).
+#[test]
+fn a_whole_body_coupled_to_one_node_is_its_rigid_modes() {
+    if !slepc_ready() {
+        return;
+    }
+    let args = ["box:0.3,0.03,0.02:15,3,2:hex20", "--couple", "volume", "--modes", "4"];
+    let (code, d, err) = modes_json(&args, "direct");
+    assert_eq!(code, 0, "direct: {err}");
+    let mut a = args.to_vec();
+    a.extend(["--ranks", "1"]);
+    let (code, i, err) = modes_json(&a, "iterative");
+    assert_eq!(code, 0, "iterative: {err}");
+    same_modes(&d, &i, "4");
+    let mut a = vec!["modes"];
+    a.extend(args);
+    a.extend(["--engine", "slepc", "--json"]);
+    let (code, out, err) = run(&a);
+    assert_eq!(code, 0, "--engine slepc: {err}");
+    same_modes(&d, &serde_json::from_str(&out).unwrap(), "4");
+}
+
 /// [`rigid_only_requests_and_a_double_root_at_the_cut_are_complete`]'s checks of one report `i`
 /// against the direct path's `d`.
 fn same_modes(d: &serde_json::Value, i: &serde_json::Value, n: &str) {

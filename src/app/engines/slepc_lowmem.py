@@ -882,25 +882,11 @@ def gather(X):
     return out
 
 
-def main() -> None:
-    t = time.perf_counter()
-    pen = Pencil()
-    mark("load", t)
-    t = time.perf_counter()
-    R, rigid_lam, rigid_vecs = rigid_pairs(pen)
-    mark("rigid", t)
-    sigma = float(P["sigma"])
-    if not sigma < 0.0:
-        fail(f"params.json: sigma = {sigma} is not negative; the iterative solver needs a shift below the spectrum")
-    t = time.perf_counter()
-    pen.shift(sigma)
-    multigrid(pen, R)
-    for r in R:  # the rigid-body pairs (rigid_vecs) are kept; R itself is no longer needed
-        r.destroy()
-    pen.compact()
-    mark("shift", t)
-    nr, nev = len(rigid_lam), int(P["nev"])
-    want_el = max(0, nev - nr)
+def elastic_pairs(pen: Pencil, rigid_vecs, want_el: int, nr: int):
+    """Steps 3–4: the elastic pairs (values λ − σ, ascending; the wanted ones and a repeated
+    root's partners refined), their backward errors, what the solve reports and the number
+    refined."""
+    sigma = pen.sigma
     t = time.perf_counter()
     try:
         X, theta, ksp, info, eps = eigensolve(pen, rigid_vecs, want_el)
@@ -928,6 +914,40 @@ def main() -> None:
         eps.destroy()
     ksp.destroy()
     mark("refine", t)
+    return X, theta, err, info, want_el
+
+
+def main() -> None:
+    t = time.perf_counter()
+    pen = Pencil()
+    mark("load", t)
+    t = time.perf_counter()
+    R, rigid_lam, rigid_vecs = rigid_pairs(pen)
+    mark("rigid", t)
+    sigma = float(P["sigma"])
+    if not sigma < 0.0:
+        fail(f"params.json: sigma = {sigma} is not negative; the iterative solver needs a shift below the spectrum")
+    t = time.perf_counter()
+    pen.shift(sigma)
+    multigrid(pen, R)
+    for r in R:  # the rigid-body pairs (rigid_vecs) are kept; R itself is no longer needed
+        r.destroy()
+    pen.compact()
+    mark("shift", t)
+    nr, nev = len(rigid_lam), int(P["nev"])
+    want_el = max(0, nev - nr)
+    t = time.perf_counter()
+    if pen.n <= nr:
+        # Every degree of freedom is a rigid-body motion (a whole free body coupled to one
+        # reference node, K = 0): the rigid-body pairs are the whole spectrum, nothing is left to
+        # iterate for (the iteration on the empty complement returns rounding, once taken for a
+        # mechanism).
+        X, theta, err = [], np.zeros(0), []
+        info = {"converged": 0, "iterations": 0, "refinements": 0}
+        mark("solve", t)
+        info["solve_counts"] = counts()
+    else:
+        X, theta, err, info, want_el = elastic_pairs(pen, rigid_vecs, want_el, nr)
     lam = np.concatenate([np.array(rigid_lam), theta[:want_el] + sigma])
     back = [pen.backward(x, lr) for x, lr in zip(rigid_vecs, rigid_lam)] + list(err)
     t = time.perf_counter()
