@@ -428,10 +428,10 @@ fn model_difference(d: &Design, two: &LumpedValues, mach: &Machine) -> Result<Op
         .filter(|(_, a, b)| (a - b).abs() > 0.05 * b.abs())
         .map(|(n, a, b)| {
             format!(
-                "{n} {:.4} mm against {:.4} mm ({:+.1} %)",
+                "{n} {:.4} mm against {:.4} mm ({} %)",
                 a * 1e3,
                 b * 1e3,
-                100.0 * (a / b - 1.0)
+                signed_pct(a / b - 1.0)
             )
         })
         .collect();
@@ -447,15 +447,15 @@ fn model_difference(d: &Design, two: &LumpedValues, mach: &Machine) -> Result<Op
         let dev = (rr.mean / two.x1 - 1.0).abs();
         if dev <= 0.05 {
             format!(
-                "table flexibility: the same machine with a rigid table gives {:.4} mm ({:+.1} % from the two-mass model)",
+                "table flexibility: the same machine with a rigid table gives {:.4} mm ({} % from the two-mass model)",
                 rr.mean * 1e3,
-                100.0 * (rr.mean / two.x1 - 1.0)
+                signed_pct(rr.mean / two.x1 - 1.0)
             )
         } else {
             format!(
-                "layout asymmetry as well as the table: with a rigid table the machine still gives {:.4} mm ({:+.1} %)",
+                "layout asymmetry as well as the table: with a rigid table the machine still gives {:.4} mm ({} %)",
                 rr.mean * 1e3,
-                100.0 * (rr.mean / two.x1 - 1.0)
+                signed_pct(rr.mean / two.x1 - 1.0)
             )
         }
     };
@@ -630,4 +630,21 @@ fn notes(d: &Design, v: &ChainValues) -> Vec<String> {
         mach.dofs, mach.response_modes.0, mach.response_modes.1
     ));
     notes
+}
+
+/// A relative difference in per cent with its sign and one decimal; one that rounds to zero is
+/// "+0.0" (never "-0.0", a rounding's sign).
+fn signed_pct(rel: f64) -> String {
+    let r = (1000.0 * rel).round() / 10.0;
+    format!("{:+.1}", if r == 0.0 { 0.0 } else { r })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_difference_that_rounds_to_zero_has_no_minus_sign() {
+        assert_eq!(super::signed_pct(-1e-5), "+0.0");
+        assert_eq!(super::signed_pct(0.409), "+40.9");
+        assert_eq!(super::signed_pct(-0.0012), "-0.1");
+    }
 }
