@@ -489,7 +489,25 @@ impl Default for SandwichParams {
     }
 }
 
+/// Elements along one side of a sandwich table at most ([`SandwichParams::oversized_side`]):
+/// 2 000 at 2 mm is a 4 m table. More is a unit slip (millimetres read as metres) or an element
+/// size far too small, refused with the side's name before any mesh is built.
+pub const MAX_TABLE_DIVISIONS: f64 = 2000.0;
+
 impl SandwichParams {
+    /// The first side (its parameter's name and length) with more than
+    /// [`MAX_TABLE_DIVISIONS`] elements of size `h`.
+    pub fn oversized_side(&self, h: f64) -> Option<(&'static str, f64)> {
+        [
+            ("length", self.length),
+            ("top_width", self.top_width),
+            ("bottom_width", self.bottom_width),
+            ("web_height", self.web_height),
+        ]
+        .into_iter()
+        .find(|(_, v)| !(v / h <= MAX_TABLE_DIVISIONS))
+    }
+
     /// The S7 reconstruction (docs/spec/scenes.md): 1200 × 600 × 25 mm top plate, 1200 × 400 × 8 mm
     /// bottom plate, three longitudinal webs 100 mm high (clear) and 4.5 mm thick at
     /// `y = −150, 0, 150` mm, no transverse webs; 25 mm `Quad4` shells.

@@ -140,6 +140,52 @@ fn study_errors_name_their_place() {
     assert!(converge::builtin("s9").unwrap_err().at().is_some());
 }
 
+/// A study file's values are checked when it is read, each error at its line and key. Before,
+/// a reversed [sweep] range was reported as a `--set` option never given, ν = 0.5 was refused
+/// per case without file or key, a table of 1e6 m blamed the element size, a million webs were
+/// "not an integer", and a [check] solid size of 1 µm failed after the whole sweep had run.
+#[test]
+fn study_file_values_are_refused_at_their_key_when_read() {
+    let at = |name: &str, extra: &str| {
+        let e = Study::load(&study_file(name, &format!("{BASE}{extra}"))).unwrap_err();
+        let line = match e.at() {
+            Some(At::Key { line, .. }) => line,
+            other => panic!("{name}: {other:?} ({e})"),
+        };
+        (line, e.to_string())
+    };
+    // BASE is five lines: [study] (3), [table] and elem_size.
+    let (line, e) = at("range", "[sweep]\n\"table.top_thickness\" = \"0.03:0.01:0.001\"\n");
+    assert_eq!(line, Some(7), "{e}");
+    assert!(
+        e.contains("[sweep] 'table.top_thickness'") && e.contains("b ≥ a") && !e.contains("--set"),
+        "{e}"
+    );
+    let (line, e) = at(
+        "poisson",
+        "[material]\nyoung = 2.1e11\npoisson = 0.5\ndensity = 7850.0\n",
+    );
+    assert_eq!(line, Some(8), "{e}");
+    assert!(e.contains("'material.poisson'") && e.contains("(-1, 0.5)"), "{e}");
+    let text = BASE.replace("[table]\n", "[table]\nlength = 1e6\n");
+    let e = Study::load(&study_file("length", &text)).unwrap_err().to_string();
+    assert!(
+        e.contains("line 5, key 'table.length'") && e.contains("more than 2000"),
+        "{e}"
+    );
+    let (line, e) = at("webs", "[sweep]\n\"table.n_long_webs\" = [3, 1000000]\n");
+    assert_eq!(line, Some(7), "{e}");
+    assert!(
+        e.contains("'table.n_long_webs'") && e.contains("at most 2000 webs"),
+        "{e}"
+    );
+    let (line, e) = at("check", "[check]\ndesigns = 1\nsolid_size = 1e-6\n");
+    assert_eq!(line, Some(8), "{e}");
+    assert!(e.contains("'check.solid_size'") && e.contains("more than 2000"), "{e}");
+    // Without designs to check, the [check] size is not used and not refused.
+    assert!(Study::load(&study_file("unused", &format!("{BASE}[check]\nsolid_size = 1e-6\n"))).is_ok());
+}
+
 /// Refinement levels are built from the source grammar's types: `box:` divisions doubled (a
 /// single hex8 layer stays one), `helix:` elements per turn doubled, `sandwich:` size halved.
 #[test]

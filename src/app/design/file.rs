@@ -9,7 +9,7 @@
 
 use crate::material::Material;
 use crate::mesh::CellKind;
-use crate::mesh::parametric::SandwichParams;
+use crate::mesh::parametric::{MAX_TABLE_DIVISIONS, SandwichParams};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -58,10 +58,6 @@ pub struct Design {
 
 /// The sandwich work table (shell model): the generator's own parameters, read from `[table]`.
 pub type TableDesign = SandwichParams;
-
-/// Elements of `table.element_size` along one side of the table at most (2 000 at the
-/// smallest element size, 2 mm, is a 4 m table).
-const MAX_TABLE_DIVISIONS: f64 = 2000.0;
 
 /// Masses of the two-mass system.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -553,23 +549,16 @@ impl Design {
             ));
         }
         let t = &self.table;
-        for (key, v) in [
-            ("table.length", t.length),
-            ("table.top_width", t.top_width),
-            ("table.bottom_width", t.bottom_width),
-            ("table.web_height", t.web_height),
-        ] {
-            if v / t.elem_size > MAX_TABLE_DIVISIONS {
-                return Err(bad(
-                    key,
-                    format!(
-                        "= {v} m is {:.3e} elements of 'table.element_size' = {} m, more than {MAX_TABLE_DIVISIONS} \
-                         along one side (a table of metres, or a coarser element size)",
-                        v / t.elem_size,
-                        t.elem_size
-                    ),
-                ));
-            }
+        if let Some((side, v)) = t.oversized_side(t.elem_size) {
+            return Err(bad(
+                &format!("table.{side}"),
+                format!(
+                    "= {v} m is {:.3e} elements of 'table.element_size' = {} m, more than {MAX_TABLE_DIVISIONS} \
+                     along one side (a table of metres, or a coarser element size)",
+                    v / t.elem_size,
+                    t.elem_size
+                ),
+            ));
         }
         if self.coil.elements_per_turn < 3 || self.coil.elements_per_turn > 1000 {
             return Err(bad(

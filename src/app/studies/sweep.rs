@@ -36,7 +36,7 @@ use crate::app::toml_file;
 use crate::input::source::SandwichSpec;
 use crate::material::Material;
 use crate::mesh::CellKind;
-use crate::mesh::parametric::{SandwichParams, sandwich_table, sandwich_table_solid};
+use crate::mesh::parametric::{MAX_TABLE_DIVISIONS, SandwichParams, sandwich_table, sandwich_table_solid};
 use crate::model::{ModelSpec, ShellPart};
 use crate::section::ShellSection;
 use crate::{Error, Result};
@@ -105,6 +105,9 @@ impl Default for TableSpec {
     }
 }
 
+/// Webs of one direction at most (a web per element of a 4 m table at 2 mm is 2 000).
+const MAX_WEBS: f64 = 2000.0;
+
 /// The keys a sweep may set (`table.<key>`); `web_thickness` sets both web thicknesses.
 pub const KEYS: &[&str] = &[
     "length",
@@ -129,13 +132,15 @@ impl TableSpec {
     pub fn set(&mut self, key: &str, v: f64) -> Result<()> {
         let k = key.strip_prefix("table.").unwrap_or(key);
         let count = |v: f64| -> Result<usize> {
-            if v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < 1e4 {
-                Ok(v as usize)
-            } else {
+            if !(v.is_finite() && v >= 0.0 && v.fract() == 0.0) {
                 Err(bad_key(
                     key,
                     format!("{key} = {v}: a web count must be a non-negative integer"),
                 ))
+            } else if v > MAX_WEBS {
+                Err(bad_key(key, format!("{key} = {v}: at most {MAX_WEBS} webs")))
+            } else {
+                Ok(v as usize)
             }
         };
         match k {
@@ -199,43 +204,57 @@ impl TableSpec {
             ));
         }
         p.validate()?;
+        if let Some((side, v)) = p.oversized_side(self.elem_size) {
+            return Err(bad_key(
+                &format!("table.{side}"),
+                format!(
+                    "table.{side} = {v} m is {:.3e} elements of table.elem_size = {} m, more than \
+                     {MAX_TABLE_DIVISIONS} along one side (a table of metres, or a coarser element size)",
+                    v / self.elem_size,
+                    self.elem_size
+                ),
+            ));
+        }
         Ok(p)
     }
 }
 
-/// Parse a range: `a:b:step` (inclusive of `b` within 1e-9 of a step), `v1,v2,…` or one value.
+/// The form a swept value takes, for errors.
+const RANGE_FORMS: &str = "expected a:b:step, v1,v2,… or a value";
+
+/// Parse a range given on the command line (`--set KEY=RANGE`): [`values_of`].
 pub fn parse_values(key: &str, s: &str) -> Result<Vec<f64>> {
-    let bad = |why: &str| {
-        Error::option(
-            "--set",
-            format!("--set {key}={s}: {why}; expected a:b:step, v1,v2,… or a value"),
-        )
-    };
+    values_of(s).map_err(|why| Error::option("--set", format!("--set {key}={s}: {why}; {RANGE_FORMS}")))
+}
+
+/// Parse a range: `a:b:step` (inclusive of `b` within 1e-9 of a step), `v1,v2,…` or one value;
+/// what is wrong otherwise.
+fn values_of(s: &str) -> std::result::Result<Vec<f64>, &'static str> {
     let num = |t: &str| t.trim().parse::<f64>().ok().filter(|x| x.is_finite());
     if s.contains(':') {
         let p: Vec<&str> = s.split(':').collect();
         if p.len() != 3 {
-            return Err(bad("a range has three parts"));
+            return Err("a range has three parts");
         }
         let (a, b, st) = match (num(p[0]), num(p[1]), num(p[2])) {
             (Some(a), Some(b), Some(c)) => (a, b, c),
-            _ => return Err(bad("not a number")),
+            _ => return Err("not a number"),
         };
         if st <= 0.0 || b < a {
-            return Err(bad("the step must be positive and b ≥ a"));
+            return Err("the step must be positive and b ≥ a");
         }
-        let n = ((b - a) / st + 1e-9).floor() as usize;
-        if n > 10_000 {
-            return Err(bad("more than 10 000 values"));
+        let n = ((b - a) / st + 1e-9).floor();
+        if !(n <= 10_000.0) {
+            return Err("more than 10 000 values");
         }
         // Round to 12 significant digits so that 0.015 + 2 × 0.0025 prints as 0.02.
         let r = |x: f64| format!("{x:.12e}").parse::<f64>().unwrap_or(x);
-        return Ok((0..=n).map(|i| r(a + st * i as f64)).collect());
+        return Ok((0..=n as usize).map(|i| r(a + st * i as f64)).collect());
     }
     let v: Option<Vec<f64>> = s.split(',').map(num).collect();
     match v {
         Some(v) if !v.is_empty() => Ok(v),
-        _ => Err(bad("not a number")),
+        _ => Err("not a number"),
     }
 }
 
@@ -426,7 +445,9 @@ impl Study {
                 toml_file::file_error(path.display().to_string(), line, msg)
             };
             let vals = match v {
-                toml::Value::String(s) => parse_values(k, s)?,
+                toml::Value::String(s) => {
+                    values_of(s).map_err(|why| at(format!("[sweep] '{k}' = \"{s}\": {why}; {RANGE_FORMS}")))?
+                }
                 toml::Value::Array(a) => a
                     .iter()
                     .map(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
@@ -443,7 +464,7 @@ impl Study {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        Ok(Study {
+        let study = Study {
             name: raw.study.name.unwrap_or(stem),
             formulation: raw.study.formulation.unwrap_or(SweepFormulation::Shell),
             solid_size: raw.study.solid_size.unwrap_or(0.025),
@@ -452,7 +473,91 @@ impl Study {
             sweep,
             constraints: raw.constraints,
             check: raw.check,
-        })
+        };
+        study.check_file(path, text)?;
+        Ok(study)
+    }
+
+    /// The file's values checked as it is read, each error at its line and key: the material,
+    /// the base `[table]`, each `[sweep]` value on it and the solid element sizes. (Found later,
+    /// in a case or after the sweep, they named neither file nor key.)
+    fn check_file(&self, path: &Path, text: &str) -> Result<()> {
+        let m = &self.material;
+        if let Err(e) = m.validate("[material]") {
+            let key = if !(m.young.is_finite() && m.young > 0.0) {
+                "material.young"
+            } else if !(m.poisson > -1.0 && m.poisson < 0.5) {
+                "material.poisson"
+            } else {
+                "material.density"
+            };
+            let msg = match e {
+                Error::InvalidMaterial { msg, .. } => msg,
+                e => strip(e),
+            };
+            return Err(toml_file::key_error(path, text, key, msg));
+        }
+        let located = |e: Error, section: &str| match e {
+            Error::Invalid {
+                at: crate::At::Param { name },
+                msg,
+            } => {
+                // A [sweep] entry is named as written there ("table.n_long_webs"), at its line.
+                let key = format!("table.{}", name.trim_start_matches("table."));
+                let line = match section {
+                    "sweep" => self
+                        .sweep
+                        .iter()
+                        .find(|(k, _)| k.trim_start_matches("table.") == name.trim_start_matches("table."))
+                        .and_then(|(k, _)| toml_file::line_of_table_key(text, "sweep", 0, k).key),
+                    _ => toml_file::line_of_key(text, &key),
+                };
+                Error::key(path.display().to_string(), line, key, msg)
+            }
+            e => toml_file::locate(path, text, e),
+        };
+        self.table.params().map_err(|e| located(e, "table"))?;
+        self.check_values().map_err(|e| located(e, "sweep"))?;
+        self.check_sizes().map_err(|e| toml_file::locate(path, text, e))
+    }
+
+    /// The solid element sizes in use (the solid formulation's `study.solid_size`; `[check]
+    /// solid_size` when designs are checked): positive, and at most [`MAX_TABLE_DIVISIONS`]
+    /// elements along a side of the base table or of any swept value on it.
+    fn check_sizes(&self) -> Result<()> {
+        let mut sizes = Vec::new();
+        if self.formulation == SweepFormulation::Solid {
+            sizes.push(("study.solid_size", self.solid_size));
+        }
+        if self.check.designs > 0 {
+            sizes.push(("check.solid_size", self.check.solid_size));
+        }
+        for (key, h) in sizes {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(toml_file::bad_value(key, format!("{key} = {h} must be positive")));
+            }
+            let mut tables = vec![self.table.clone()];
+            for (k, vals) in &self.sweep {
+                for &v in vals {
+                    let mut t = self.table.clone();
+                    t.set(k, v)?;
+                    tables.push(t);
+                }
+            }
+            for t in &tables {
+                if let Some((side, v)) = t.params()?.oversized_side(h) {
+                    return Err(toml_file::bad_value(
+                        key,
+                        format!(
+                            "{key} = {h} m is {:.3e} elements along table.{side} = {v} m, more than \
+                             {MAX_TABLE_DIVISIONS} (a coarser solid element size)",
+                            v / h
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Replace or add swept keys (command-line `--set` wins over the file's `[sweep]`).
@@ -729,11 +834,7 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     // Values, then the count, then the size: all before any design is built or meshed.
     study.check_values()?;
     let total = study.count()?;
-    if let Some(h) = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size)
-        && (h.is_nan() || h <= 0.0)
-    {
-        return Err(Error::param("solid_size", format!("solid_size = {h} must be positive")));
-    }
+    study.check_sizes()?;
     let solid = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size);
     if total > LARGE_SWEEP && !opts.yes {
         // The size of one design's model, from its mesh (no analysis).
