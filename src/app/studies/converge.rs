@@ -420,6 +420,15 @@ impl Refinable {
 /// `helix:` elements per turn doubled, `sandwich:paper,SIZE` size halved ([`Refinable`]). One
 /// formulation (the scene's); the reference is its own finest levels.
 pub fn from_scene(path: &Path, levels: usize) -> Result<Case> {
+    if levels < 2 {
+        return Err(Error::option(
+            "--levels",
+            format!(
+                "converge: --levels {levels}: at least 2 (the finest level is the reference; with one level there is \
+                 nothing to measure against it)"
+            ),
+        ));
+    }
     if levels > MAX_LEVELS {
         return Err(Error::option(
             "--levels",
@@ -455,7 +464,7 @@ pub fn from_scene(path: &Path, levels: usize) -> Result<Case> {
         .first()
         .map(|(_, f)| format!("{f:?}").to_lowercase())
         .unwrap_or_else(|| "model".into());
-    let levels = (0..levels.max(1) as u32)
+    let levels = (0..levels as u32)
         .map(|k| {
             let spec = refinable.level(k);
             let mut s = scene.clone();
