@@ -77,7 +77,7 @@ pub fn check_writable_file(path: &std::path::Path) -> crate::Result<()> {
         ));
     }
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+        crate::io::create_dir(dir)?;
     }
     let existed = path.exists();
     std::fs::OpenOptions::new()
@@ -91,10 +91,34 @@ pub fn check_writable_file(path: &std::path::Path) -> crate::Result<()> {
     Ok(())
 }
 
+/// Create the folder `dir` and its parents (as `std::fs::create_dir_all`); where a path
+/// component is a file, the error says which ("File exists" named neither the file nor why).
+pub fn create_dir(dir: &std::path::Path) -> crate::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        match dir
+            .ancestors()
+            .find(|a| !a.as_os_str().is_empty() && a.exists() && !a.is_dir())
+        {
+            Some(file) => crate::Error::io(
+                dir,
+                std::io::Error::new(
+                    e.kind(),
+                    if file == dir {
+                        "is a file, not a folder: a folder for the outputs was expected".to_string()
+                    } else {
+                        format!("'{}' in the path is a file, not a folder", file.display())
+                    },
+                ),
+            ),
+            None => crate::Error::io(dir, e),
+        }
+    })
+}
+
 /// Check, before a run, that `dir` can take output files: created if missing, and a probe
 /// file written and removed in it. The error names the folder ([`Error::Io`], exit 1).
 pub fn check_writable_dir(dir: &std::path::Path) -> crate::Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+    crate::io::create_dir(dir)?;
     let probe = dir.join(format!(".vibrofem-write-check-{}", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| crate::Error::io(dir, e))?;
     let _ = std::fs::remove_file(&probe);

@@ -43,6 +43,24 @@ fn full_stdout_exits_4() {
     }
 }
 
+/// An output folder (or a folder on a result file's path) that is an existing file: the
+/// message was the system's bare "File exists (os error 17)"; now it says which path is a file.
+#[test]
+fn an_output_folder_that_is_a_file_is_named() {
+    let f = tmp("folder_is_file").join("results");
+    std::fs::write(&f, "").unwrap();
+    let fs = f.to_str().unwrap();
+    expect_error(
+        &["sweep", "scenes/studies/study_s7_table.toml", "-o", fs],
+        &["is a file, not a folder"],
+    );
+    let inner = format!("{fs}/sub/modes.vtu");
+    expect_error(
+        &["modes", BAR, "--fix", "xmin", "--modes", "2", "--vtu", &inner],
+        &[&format!("'{fs}' in the path is a file")],
+    );
+}
+
 /// The same for a result file on a full disk (`--vtu`, `--msh-out`): created, not written,
 /// exit 4 as the README's table says, where it was 1 (an input error).
 #[test]

@@ -47,7 +47,7 @@ pub fn design_cmd(a: &DesignArgs) -> Result<i32> {
         &a.file.iter().map(|f| ("design file", f.as_path())).collect::<Vec<_>>(),
     )?;
     let t0 = std::time::Instant::now();
-    std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
+    crate::io::create_dir(&a.out)?;
     let job = with_progress(t0, |p| design::job::run(&d, &a.out, p))?;
     if a.json {
         outln!("{}", render::json(&job.report)?);

@@ -108,7 +108,7 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
     let vdir = out.join("passing-variant");
     let nominal_fails = r.checks.iter().any(|c| !c.ok);
     let (st, early_search) = if d.search.enabled && nominal_fails {
-        std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
+        crate::io::create_dir(&vdir)?;
         let (st, o) = beside(
             || studies(d, &r, progress),
             |st: &Studies| st.env.as_ref().map(envelope::patterns_of),
@@ -145,7 +145,7 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
         let o = match early_search {
             Some(o) => o?,
             None => {
-                std::fs::create_dir_all(&vdir).map_err(|e| Error::io(&vdir, e))?;
+                crate::io::create_dir(&vdir)?;
                 let patterns = st.env.as_ref().map(envelope::patterns_of);
                 search_with(d, Some(&vdir), patterns.as_deref(), progress)?
             }

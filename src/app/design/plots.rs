@@ -40,7 +40,7 @@ pub fn write_all(
     table_mesh: &Mesh,
     mach: &MachineResult,
 ) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_dir(dir)?;
     write_frequency_response_svg(
         dir.join("amplitude_frequency.svg"),
         model,

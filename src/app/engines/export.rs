@@ -69,7 +69,7 @@ pub struct ExportSummary {
 /// Write K and M (in `formats`), `dofs.csv` and `model.json` into `dir` (created). Returns
 /// the summary (also written as `model.json`) and the paths written.
 pub fn export(sys: &System, dir: &Path, formats: Formats) -> Result<(ExportSummary, Vec<PathBuf>)> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_dir(dir)?;
     let model = sys.model();
     let k = sys.k();
     // M on K's pattern, explicit zeros included: one structure for both files, as other solvers

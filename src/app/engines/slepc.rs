@@ -168,7 +168,7 @@ pub(super) fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
             )
         }
     };
-    std::fs::create_dir_all(&path).map_err(|e| Error::io(&path, e))?;
+    crate::io::create_dir(&path)?;
     Ok(WorkDir { path, remove })
 }
 

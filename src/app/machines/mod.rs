@@ -97,7 +97,7 @@ pub fn run_command(command: &str, a: &CommandArgs) -> Result<i32> {
     let m = machine(command).ok_or_else(|| Error::option(command, format!("no machine '{command}'")))?;
     let inputs: Vec<(&str, &Path)> = a.file.iter().map(|f| ("case file", *f)).collect();
     check_outputs(&[], Some(("--out", a.out)), &inputs)?;
-    std::fs::create_dir_all(a.out).map_err(|e| Error::io(a.out, e))?;
+    crate::io::create_dir(a.out)?;
     let o = (m.run)(a.file, Some(a.out))?;
     render::write_all(&o.report, a.out)?;
     if a.json {

@@ -404,7 +404,7 @@ pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
     if let Some((i, n)) = opts.shard {
         files = shard(&files, i, n);
     }
-    std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
+    crate::io::create_dir(&opts.out)?;
     // More workers than cases, or far more than cores, only cost threads and memory.
     let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
     let cap = (4 * cores).min(files.len()).max(1);

@@ -751,7 +751,7 @@ pub fn cheapest_within(c: &Convergence, tol: f64) -> Option<&LevelResult> {
 /// Write `converge.md`, `converge.json` and `converge.svg` (|error| against time, log–log, one
 /// line per formulation) to `dir` (created).
 pub fn write_outputs(c: &Convergence, dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_dir(dir)?;
     let p = dir.join("converge.md");
     std::fs::write(&p, table_markdown(c)).map_err(|e| Error::io(&p, e))?;
     let p = dir.join("converge.json");
@@ -1109,7 +1109,7 @@ fn mesh_levels(levels: &UserLevels, progress: &dyn Fn(&str)) -> Result<(Vec<Pend
             work,
         } => (geo, sizes, orders, gmsh, timeout, work),
     };
-    std::fs::create_dir_all(work).map_err(|e| Error::io(work, e))?;
+    crate::io::create_dir(work)?;
     let stem = geo
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -1562,7 +1562,7 @@ fn row_text(c: &UserConvergence, i: Option<usize>, q: usize) -> String {
 /// Write `converge.md`, `converge.json` and the plots of |error| against analysis time
 /// (`converge.svg` for the first quantity, `converge_2.svg`, … for the others) to `dir`.
 pub fn write_user_outputs(c: &UserConvergence, dir: &Path) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_dir(dir)?;
     let mut written = Vec::new();
     let p = dir.join("converge.md");
     std::fs::write(&p, user_markdown(c)).map_err(|e| Error::io(&p, e))?;

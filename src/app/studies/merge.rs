@@ -71,7 +71,7 @@ pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
     }
     let summary = BatchSummary::new(merged.into_iter().map(|(r, _)| r).collect(), jobs);
     if let Some(out) = out {
-        std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+        crate::io::create_dir(out)?;
         write_summary(&summary, out)?;
     }
     Ok(summary)

@@ -1032,7 +1032,7 @@ pub fn sweep_csv(o: &SweepOutcome) -> String {
 
 /// Write `sweep.csv`, `sweep.json` and `pareto.svg` to `dir` (created).
 pub fn write_outputs(o: &SweepOutcome, dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_dir(dir)?;
     let p = dir.join("sweep.csv");
     std::fs::write(&p, sweep_csv(o)).map_err(|e| Error::io(&p, e))?;
     let p = dir.join("sweep.json");
