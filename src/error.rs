@@ -61,7 +61,10 @@ pub enum Error {
         available: String,
     },
     /// An element whose Jacobian determinant is zero or negative at an integration point.
-    #[error("element {element} ({kind}) has a non-positive Jacobian determinant {det:.3e}: inverted or degenerate")]
+    #[error(
+        "element {element} ({kind}) has a non-positive Jacobian determinant {det:.3e}: {}",
+        if det.is_finite() { "inverted or degenerate" } else { "its coordinates are beyond double precision (check their units)" }
+    )]
     InvertedElement {
         /// gmsh element tag.
         element: u64,

@@ -24,6 +24,11 @@ pub struct Material {
     pub density: f64,
 }
 
+/// The range of a Young's modulus or a density [`Material::validate`] accepts (Pa, kg/m³, or
+/// any consistent unit system): 30 orders of magnitude either side of 1, where K, M and their
+/// products stay far inside double precision.
+pub const MATERIAL_RANGE: (f64, f64) = (1e-30, 1e30);
+
 impl Material {
     /// Structural steel: `E = 2.1e11` Pa, `ν = 0.3`, `ρ = 7850` kg/m³.
     pub const fn steel() -> Material {
@@ -34,7 +39,7 @@ impl Material {
         }
     }
 
-    /// Checks the constants: `E` positive and finite, `ν ∈ (−1, 0.5)`, `ρ` positive and finite.
+    /// Checks the constants: `E` and `ρ` positive, within [`MATERIAL_RANGE`], `ν ∈ (−1, 0.5)`.
     ///
     /// `name` (the material key or the group it is assigned to) is put into the error, which
     /// is an [`Error::InvalidMaterial`] naming the offending value and its allowed range.
@@ -58,6 +63,15 @@ impl Material {
                 self.young
             ));
         }
+        // Beyond any material in any consistent unit system (steel is 2.1e11 Pa, or 2.1e5 in
+        // N/mm²): a slip whose products overflow double precision in K or its residuals.
+        let (lo, hi) = MATERIAL_RANGE;
+        if !(lo..=hi).contains(&self.young) {
+            return fail(format!(
+                "Young's modulus E = {:e} Pa: outside {lo:e}…{hi:e}, a unit slip (steel is 2.1e11 Pa)",
+                self.young
+            ));
+        }
         if !(self.poisson > -1.0 && self.poisson < 0.5) {
             return fail(format!(
                 "Poisson's ratio nu = {}: must lie in the open interval (-1, 0.5)",
@@ -67,6 +81,12 @@ impl Material {
         if !(self.density.is_finite() && self.density > 0.0) {
             return fail(format!(
                 "density rho = {} kg/m^3: must be positive and finite",
+                self.density
+            ));
+        }
+        if !(lo..=hi).contains(&self.density) {
+            return fail(format!(
+                "density rho = {:e} kg/m^3: outside {lo:e}…{hi:e}, a unit slip (steel is 7850 kg/m^3)",
                 self.density
             ));
         }

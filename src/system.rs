@@ -192,6 +192,7 @@ impl System {
         drop(sets);
         drop(graph);
         let (km, coarse) = km?;
+        check_finite(source, &model, &km)?;
         let symbolic = order_result?;
         log::debug!(
             "{source}: graph and estimates {t_graph:.3} s, pattern {pat_s:.3} s; alongside: ordering {ordering_time:.3} s and symbolic analysis {symbolic_time:.3} s, K and M {km_s:.3} s"
@@ -246,6 +247,7 @@ impl System {
         let pattern = Arc::new(dof_pattern(&graph, &model.dofs)?);
         drop(graph);
         let km = assemble(pattern.clone(), &model.dofs, &sets, true)?;
+        check_finite(source, &model, &km)?;
         drop(sets);
         if model.dofs.n_free == 0 {
             return Err(Error::InvalidInput(format!(
@@ -375,6 +377,24 @@ impl System {
     pub fn describe_equation(&self, eq: usize) -> String {
         describe_equation(&self.model, eq)
     }
+}
+
+/// K and M finite: an entry that overflowed (a Young's modulus of 1e308, coordinates of
+/// 1e300 m) is refused with its equation, where it surfaced as a zero pivot or a NaN Jacobian.
+fn check_finite(source: &str, model: &Model, km: &crate::assembly::Assembled) -> Result<()> {
+    use rayon::prelude::*;
+    for (name, mat, what) in [("K", &km.k, "stiffness"), ("M", &km.m, "mass")] {
+        if let Some(p) = mat.values.par_iter().position_first(|v| !v.is_finite()) {
+            let col = mat.pattern.col_ptr.partition_point(|&c| c <= p).saturating_sub(1);
+            return Err(Error::InvalidInput(format!(
+                "{source}: the {what} matrix {name} has a non-finite entry ({}) at {}: the material constants or the \
+                 coordinates are beyond double precision (check their units)",
+                mat.values[p],
+                describe_equation(model, col)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The corner space of `model` and the Galerkin model of the assembled K and M on it; `None`

@@ -690,7 +690,19 @@ fn first_shift(k: &SymMatrix, m: &SymMatrix, p: &EigenParams) -> Result<(f64, Op
             });
             (s, Some((lo, hi)))
         }
-        Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
+        Target::Nearest(_) => {
+            let s = p.shift.unwrap_or_else(|| default_shift(k, m));
+            if !s.is_finite() {
+                // Finite K and M whose typical ratio K_ii/M_ii overflows (a density of 1e-300):
+                // refused here, where it would surface as a zero pivot.
+                return Err(Error::InvalidInput(format!(
+                    "the stiffness-to-mass ratio K_ii/M_ii of the model overflows double precision (shift {s}): check \
+                     the units of the material constants (a density or a Young's modulus hundreds of orders of \
+                     magnitude off)"
+                )));
+            }
+            (s, None)
+        }
     })
 }
 

@@ -348,6 +348,37 @@ fn a_whole_body_coupled_to_one_node_has_its_six_rigid_modes() {
     );
 }
 
+/// Inputs whose products overflow double precision: a Young's modulus of 1e308 ended in a zero
+/// pivot, one of 1e200 in NaN residuals, a density of 1e-300 in a zero pivot, a box of 1e300 m
+/// in "non-positive Jacobian NaN: inverted or degenerate". Now each is named as the input it
+/// is. A consistent mm–t–s material (E = 2.1e5, ρ = 7.85e-9) stays inside the range and solves.
+#[test]
+fn inputs_beyond_double_precision_are_named() {
+    let b = "box:0.2,0.1,0.1:4,2,2:hex8";
+    expect_error(
+        &["modes", b, "--material", "1e308,0.3,7850"],
+        1,
+        &["Young's modulus E = 1e308 Pa", "unit slip"],
+    );
+    expect_error(
+        &["modes", b, "--material", "1e200,0.3,7850"],
+        1,
+        &["outside 1e-30…1e30"],
+    );
+    expect_error(
+        &["modes", b, "--material", "2.1e11,0.3,1e-300"],
+        1,
+        &["density rho = 1e-300"],
+    );
+    expect_error(
+        &["modes", "box:1e300,1e300,1e300:2,2,2:hex8"],
+        1,
+        &["element 1", "beyond double precision"],
+    );
+    let (code, _, err) = run(&["modes", b, "--material", "2.1e5,0.3,7.85e-9", "--modes", "7"]);
+    assert_eq!(code, 0, "{err}");
+}
+
 /// Fixing only rotations on a solid face used to say the group "shares no node with the volume
 /// elements", which it does: the message now names the components and why they are missing.
 #[test]
