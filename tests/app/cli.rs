@@ -379,6 +379,33 @@ fn inputs_beyond_double_precision_are_named() {
     assert_eq!(code, 0, "{err}");
 }
 
+/// A refined scene's convergence study measures against its finest level, which is then not a
+/// candidate for "cheapest within": when no coarser level is within a tolerance, the line says
+/// so instead of "none of the runs" (read as: every run failed the tolerance, the finest too).
+#[test]
+fn converge_says_the_finest_level_is_the_reference() {
+    let scene = tmp(
+        "converge_scene.toml",
+        "[scene]\nversion = 1\nname = \"bar\"\n[mesh]\ngenerator = \"box:0.2,0.1,0.1:2,1,1:hex8\"\n\
+         [[part]]\ngroup = \"volume\"\nformulation = \"solid\"\n[[fix]]\ngroup = \"xmin\"\n[modal]\nmodes = 3\n",
+    );
+    let out_dir = scene.with_file_name("converge_out");
+    let (code, out, err) = run(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--levels",
+        "2",
+        "-o",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("reference") && out.contains("finest solid level"), "{out}");
+    assert!(
+        out.contains("cheapest within 0.01 %: none of the coarser levels (the finest is the reference"),
+        "{out}"
+    );
+}
+
 /// Fixing only rotations on a solid face used to say the group "shares no node with the volume
 /// elements", which it does: the message now names the components and why they are missing.
 #[test]

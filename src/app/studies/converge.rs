@@ -734,6 +734,12 @@ pub fn table_markdown(c: &Convergence) -> String {
                     r.dofs
                 ));
             }
+            // The finest level, when it is the reference itself, is not a candidate.
+            None if c.reference_kind.starts_with("finest") => s.push_str(&format!(
+                "- cheapest within {}: none of the coarser levels (the finest is the reference; refine further to \
+                 find one)\n",
+                pct(*tol)
+            )),
             None => s.push_str(&format!("- cheapest within {}: none of the runs\n", pct(*tol))),
         }
     }
