@@ -319,10 +319,29 @@ fn split_by_columns<'a>(values: &'a mut [f64], pattern: &Pattern, bounds: &[usiz
 /// its terms carries no more than their rounding.
 const CANCELLED: f64 = 1e-12;
 
-/// Σ|terms| of the entries [`scatter_general`] added to (position within a column range's
-/// values), for [`Cancellation::clean`].
+/// Σ|terms| of the slave–slave terms [`scatter_general`] added (by position within a column
+/// range's values), for [`Cancellation::clean`].
 #[derive(Default)]
-struct Cancellation(std::collections::HashMap<usize, f64>);
+struct Cancellation(std::collections::HashMap<usize, f64, std::hash::BuildHasherDefault<PositionHasher>>);
+
+/// A multiplicative hash of a position (SipHash, the default, doubled the assembly time of a
+/// coupled model).
+#[derive(Default)]
+struct PositionHasher(u64);
+
+impl std::hash::Hasher for PositionHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0.rotate_left(8) ^ u64::from(b)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+    }
+    fn write_usize(&mut self, n: usize) {
+        self.0 = (n as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
 
 impl Cancellation {
     /// Entries whose value is cancellation noise ([`CANCELLED`]) set to zero.
@@ -353,6 +372,11 @@ fn scatter_general(
     let off = pattern.col_ptr[cols.start];
     let nd = ndpn * nodes.len();
     let exps = dofs.local_expansions(nodes, ndpn);
+    // Only a slave–slave term can cancel (a rigid motion's energy, summed into the masters'
+    // entries): their magnitudes are kept, the other terms' are not needed.
+    let slave: Vec<bool> = (0..nd)
+        .map(|i| dofs.slave[nodes[i / ndpn] as usize] & (1 << (i % ndpn)) != 0)
+        .collect();
     for j in 0..nd {
         for &(ej, cj) in &exps[j].terms {
             if !cols.contains(&ej) {
@@ -363,11 +387,12 @@ fn scatter_general(
                 if v == 0.0 {
                     continue;
                 }
+                let track = slave[i] && slave[j];
                 for &(ei, ci) in &exps[i].terms {
                     if let Some(pos) = pattern.position(ei, ej) {
                         let t = ci * cj * v;
                         vals[pos - off] += t;
-                        if let Some(a) = added.as_deref_mut() {
+                        if let Some(a) = added.as_deref_mut().filter(|_| track) {
                             *a.0.entry(pos - off).or_insert(0.0) += t.abs();
                         }
                     } else {
