@@ -252,7 +252,9 @@ impl<'a> Superposition<'a> {
                 s
             })
             .collect();
-        let residual = if residual {
+        // Modes spanning every degree of freedom leave no residual (a whole body coupled to one
+        // node: its six rigid-body modes, and no elastic one to place a shift by).
+        let residual = if residual && k < n {
             let sigma = residual_shift(modes)?;
             let mut r = solve_real_shifted(sys, sigma, load)?;
             for j in 0..k {

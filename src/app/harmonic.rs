@@ -671,8 +671,10 @@ fn modal_modes(
         )));
     }
     let fmax = req.freqs_hz.iter().copied().fold(0.0, f64::max);
+    // (Modes spanning every degree of freedom are exact at any frequency.)
     if let Some(&top) = modes.lambda.last()
         && crate::post::modal::hz(top) < 1.5 * fmax
+        && modes.lambda.len() < sys.n_free()
     {
         notes.push(format!(
             "the highest mode superposed ({} Hz) is below 1.5 × the highest frequency ({} Hz): the static \

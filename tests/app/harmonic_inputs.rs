@@ -74,6 +74,41 @@ fn harmonic_free_body_at_low_frequency_moves_as_f_over_m_omega_squared() {
     }
 }
 
+/// A whole free body coupled to one reference node: six DOFs, all rigid. The modal path asked
+/// for an elastic mode to place the static correction's shift by ("ask for more modes", which
+/// the model does not have) and exited 1; six modes spanning every DOF need no correction.
+/// Reference: Newton's second law, |u| = F/(mω²) (the same as the free block above; 1e-9: the
+/// six modes are the whole space, exact but for rounding), on every method, with no note on
+/// the static correction.
+#[test]
+fn harmonic_of_a_whole_body_coupled_to_one_node_is_f_over_m_omega_squared() {
+    let m = mass_kg(BLOCK, &[]);
+    for method in ["modal", "direct", "both"] {
+        let (code, out, err) = run(&[
+            "harmonic",
+            BLOCK,
+            "--couple",
+            "volume",
+            "--force",
+            "volume=0,0,10",
+            "--freq",
+            "50",
+            "--damping",
+            "0.02",
+            "--method",
+            method,
+            "--json",
+        ]);
+        assert_eq!(code, 0, "{method}: {err}");
+        let r = json(&out);
+        let w = TAU * 50.0;
+        let a = mean_amplitudes(&r);
+        assert!((a[2] / (10.0 / (m * w * w)) - 1.0).abs() < 1e-9, "{method}: {a:?}");
+        let notes = r["notes"].to_string();
+        assert!(!notes.contains("static correction"), "{method}: {notes}");
+    }
+}
+
 #[test]
 fn harmonic_free_body_at_0_hz_is_refused() {
     // Issue 28, item 1: `--freq 0` on a free body gave 5.4e8 mm (exit 0).
