@@ -518,23 +518,36 @@ impl Study {
         };
         self.table.params().map_err(|e| located(e, "table"))?;
         self.check_values().map_err(|e| located(e, "sweep"))?;
-        self.check_sizes().map_err(|e| toml_file::locate(path, text, e))
+        self.check_sizes().map_err(|e| match e {
+            Error::Invalid {
+                at: crate::At::Param { name },
+                msg,
+            } => {
+                let key = if name == "solid_size" {
+                    "study.solid_size".to_string()
+                } else {
+                    name
+                };
+                toml_file::key_error(path, text, &key, msg)
+            }
+            e => e,
+        })
     }
 
-    /// The solid element sizes in use (the solid formulation's `study.solid_size`; `[check]
+    /// The solid element sizes in use (the solid formulation's `solid_size`; `[check]
     /// solid_size` when designs are checked): positive, and at most [`MAX_TABLE_DIVISIONS`]
     /// elements along a side of the base table or of any swept value on it.
     fn check_sizes(&self) -> Result<()> {
         let mut sizes = Vec::new();
         if self.formulation == SweepFormulation::Solid {
-            sizes.push(("study.solid_size", self.solid_size));
+            sizes.push(("solid_size", self.solid_size));
         }
         if self.check.designs > 0 {
             sizes.push(("check.solid_size", self.check.solid_size));
         }
         for (key, h) in sizes {
             if !(h.is_finite() && h > 0.0) {
-                return Err(toml_file::bad_value(key, format!("{key} = {h} must be positive")));
+                return Err(Error::param(key, format!("{key} = {h} must be positive")));
             }
             let mut tables = vec![self.table.clone()];
             for (k, vals) in &self.sweep {
@@ -546,7 +559,7 @@ impl Study {
             }
             for t in &tables {
                 if let Some((side, v)) = t.params()?.oversized_side(h) {
-                    return Err(toml_file::bad_value(
+                    return Err(Error::param(
                         key,
                         format!(
                             "{key} = {h} m is {:.3e} elements along table.{side} = {v} m, more than \
