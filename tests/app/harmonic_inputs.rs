@@ -84,21 +84,10 @@ fn harmonic_free_body_at_low_frequency_moves_as_f_over_m_omega_squared() {
 fn harmonic_of_a_whole_body_coupled_to_one_node_is_f_over_m_omega_squared() {
     let m = mass_kg(BLOCK, &[]);
     for method in ["modal", "direct", "both"] {
-        let (code, out, err) = run(&[
-            "harmonic",
-            BLOCK,
-            "--couple",
-            "volume",
-            "--force",
-            "volume=0,0,10",
-            "--freq",
-            "50",
-            "--damping",
-            "0.02",
-            "--method",
-            method,
-            "--json",
-        ]);
+        let cmd = format!(
+            "harmonic {BLOCK} --couple volume --force volume=0,0,10 --freq 50 --damping 0.02 --method {method} --json"
+        );
+        let (code, out, err) = run(&cmd.split_whitespace().collect::<Vec<_>>());
         assert_eq!(code, 0, "{method}: {err}");
         let r = json(&out);
         let w = TAU * 50.0;
