@@ -496,7 +496,8 @@ pub const MAX_TABLE_DIVISIONS: f64 = 2000.0;
 
 impl SandwichParams {
     /// The first side (its parameter's name and length) with more than
-    /// [`MAX_TABLE_DIVISIONS`] elements of size `h`.
+    /// [`MAX_TABLE_DIVISIONS`] elements of size `h` (a side that is not a number is left to
+    /// [`SandwichParams::validate`], which names it).
     pub fn oversized_side(&self, h: f64) -> Option<(&'static str, f64)> {
         [
             ("length", self.length),
@@ -505,7 +506,7 @@ impl SandwichParams {
             ("web_height", self.web_height),
         ]
         .into_iter()
-        .find(|(_, v)| !(v / h <= MAX_TABLE_DIVISIONS))
+        .find(|(_, v)| v / h > MAX_TABLE_DIVISIONS)
     }
 
     /// The S7 reconstruction (docs/spec/scenes.md): 1200 × 600 × 25 mm top plate, 1200 × 400 × 8 mm
