@@ -194,8 +194,22 @@ fn design_files_are_strict() {
     let e = Design::from_toml(&write("narrow.toml", "version = 1\n[table]\ntop_width = 0.1\n")).unwrap_err();
     assert!(
         e.to_string().contains("narrow.toml")
-            && e.to_string().contains("key 'table'")
+            && e.to_string().contains("key 'table.long_webs'")
             && e.to_string().contains("top_width"),
+        "{e}"
+    );
+    // A table parameter the generator refuses is named by its own key and line (it was the
+    // whole 'table', without a line).
+    let e = Design::from_toml(&write(
+        "thin.toml",
+        "version = 1
+[table]
+top_thickness = -1.0
+",
+    ))
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("thin.toml, line 3, key 'table.top_thickness'"),
         "{e}"
     );
     let e = Design::from_toml(&write("nu.toml", "version = 1\nsteel = [2.1e11, 0.6, 7850.0]\n")).unwrap_err();

@@ -653,9 +653,22 @@ impl Design {
             .validate(&format!("'{key}'"))
             .map_err(|e| crate::app::toml_file::bad_value(key, e))?;
         }
-        self.sandwich()
-            .validate()
-            .map_err(|e| crate::app::toml_file::bad_value("table", e))
+        // The generator names its parameter ("length"): the file's key is table.<it> (its size
+        // is written `element_size` there).
+        self.sandwich().validate().map_err(|e| match e {
+            Error::Invalid {
+                at: crate::At::Param { name },
+                msg,
+            } => {
+                let name = if name == "elem_size" {
+                    "element_size".to_string()
+                } else {
+                    name
+                };
+                crate::app::toml_file::bad_value(&format!("table.{name}"), msg)
+            }
+            e => crate::app::toml_file::bad_value("table", e),
+        })
     }
 
     /// The mains frequency, Hz: given, or half the excitation.
