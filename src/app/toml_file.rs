@@ -160,6 +160,18 @@ pub fn locate(path: &Path, text: &str, e: Error) -> Error {
     }
 }
 
+/// A parameter error ([`Error::param`], as the generators and builders report them) as its
+/// file key `key_of(name)` and its message; any other error back as it is.
+pub fn param_as_key(e: Error, key_of: impl FnOnce(String) -> String) -> std::result::Result<(String, String), Error> {
+    match e {
+        Error::Invalid {
+            at: crate::At::Param { name },
+            msg,
+        } => Ok((key_of(name), msg)),
+        e => Err(e),
+    }
+}
+
 /// A validation error for `key` (located later by [`locate`]).
 pub fn bad_value(key: &str, msg: impl std::fmt::Display) -> Error {
     Error::key(String::new(), None, key, msg.to_string())

@@ -655,19 +655,15 @@ impl Design {
         }
         // The generator names its parameter ("length"): the file's key is table.<it> (its size
         // is written `element_size` there).
-        self.sandwich().validate().map_err(|e| match e {
-            Error::Invalid {
-                at: crate::At::Param { name },
-                msg,
-            } => {
-                let name = if name == "elem_size" {
-                    "element_size".to_string()
-                } else {
-                    name
-                };
-                crate::app::toml_file::bad_value(&format!("table.{name}"), msg)
+        self.sandwich().validate().map_err(|e| {
+            let key_of = |name: String| match name.as_str() {
+                "elem_size" => "table.element_size".to_string(),
+                _ => format!("table.{name}"),
+            };
+            match crate::app::toml_file::param_as_key(e, key_of) {
+                Ok((key, msg)) => crate::app::toml_file::bad_value(&key, msg),
+                Err(e) => crate::app::toml_file::bad_value("table", e),
             }
-            e => crate::app::toml_file::bad_value("table", e),
         })
     }
 

@@ -497,40 +497,37 @@ impl Study {
             };
             return Err(toml_file::key_error(path, text, key, msg));
         }
-        let located = |e: Error, section: &str| match e {
-            Error::Invalid {
-                at: crate::At::Param { name },
-                msg,
-            } => {
-                // A [sweep] entry is named as written there ("table.n_long_webs"), at its line.
-                let key = format!("table.{}", name.trim_start_matches("table."));
+        // A [sweep] entry is named as written there ("table.n_long_webs"), at its line.
+        let located = |e: Error, section: &str| match toml_file::param_as_key(e, |n| {
+            format!("table.{}", n.trim_start_matches("table."))
+        }) {
+            Ok((key, msg)) => {
                 let line = match section {
                     "sweep" => self
                         .sweep
                         .iter()
-                        .find(|(k, _)| k.trim_start_matches("table.") == name.trim_start_matches("table."))
+                        .find(|(k, _)| format!("table.{}", k.trim_start_matches("table.")) == key)
                         .and_then(|(k, _)| toml_file::line_of_table_key(text, "sweep", 0, k).key),
                     _ => toml_file::line_of_key(text, &key),
                 };
                 Error::key(path.display().to_string(), line, key, msg)
             }
-            e => toml_file::locate(path, text, e),
+            Err(e) => toml_file::locate(path, text, e),
         };
         self.table.params().map_err(|e| located(e, "table"))?;
         self.check_values().map_err(|e| located(e, "sweep"))?;
-        self.check_sizes().map_err(|e| match e {
-            Error::Invalid {
-                at: crate::At::Param { name },
-                msg,
-            } => {
-                let key = if name == "solid_size" {
+        self.check_sizes().map_err(|e| {
+            let key_of = |n: String| {
+                if n == "solid_size" {
                     "study.solid_size".to_string()
                 } else {
-                    name
-                };
-                toml_file::key_error(path, text, &key, msg)
+                    n
+                }
+            };
+            match toml_file::param_as_key(e, key_of) {
+                Ok((key, msg)) => toml_file::key_error(path, text, &key, msg),
+                Err(e) => e,
             }
-            e => e,
         })
     }
 
