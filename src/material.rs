@@ -51,46 +51,61 @@ impl Material {
     /// assert!(msg.contains("rubber") && msg.contains("0.5"));
     /// ```
     pub fn validate(&self, name: &str) -> Result<()> {
-        let fail = |msg: String| {
-            Err(Error::InvalidMaterial {
+        match self.invalid() {
+            Some((_, msg)) => Err(Error::InvalidMaterial {
                 name: name.to_string(),
                 msg,
-            })
-        };
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The first constant [`Material::validate`] refuses (`"young"`, `"poisson"` or
+    /// `"density"`) and why; `None` when all three are valid. For a file, the key to name.
+    pub fn invalid(&self) -> Option<(&'static str, String)> {
         if !(self.young.is_finite() && self.young > 0.0) {
-            return fail(format!(
-                "Young's modulus E = {} Pa: must be positive and finite",
-                self.young
+            return Some((
+                "young",
+                format!("Young's modulus E = {} Pa: must be positive and finite", self.young),
             ));
         }
         // Beyond any material in any consistent unit system (steel is 2.1e11 Pa, or 2.1e5 in
         // N/mm²): a slip whose products overflow double precision in K or its residuals.
         let (lo, hi) = MATERIAL_RANGE;
         if !(lo..=hi).contains(&self.young) {
-            return fail(format!(
-                "Young's modulus E = {:e} Pa: outside {lo:e}…{hi:e}, a unit slip (steel is 2.1e11 Pa)",
-                self.young
+            return Some((
+                "young",
+                format!(
+                    "Young's modulus E = {:e} Pa: outside {lo:e}…{hi:e}, a unit slip (steel is 2.1e11 Pa)",
+                    self.young
+                ),
             ));
         }
         if !(self.poisson > -1.0 && self.poisson < 0.5) {
-            return fail(format!(
-                "Poisson's ratio nu = {}: must lie in the open interval (-1, 0.5)",
-                self.poisson
+            return Some((
+                "poisson",
+                format!(
+                    "Poisson's ratio nu = {}: must lie in the open interval (-1, 0.5)",
+                    self.poisson
+                ),
             ));
         }
         if !(self.density.is_finite() && self.density > 0.0) {
-            return fail(format!(
-                "density rho = {} kg/m^3: must be positive and finite",
-                self.density
+            return Some((
+                "density",
+                format!("density rho = {} kg/m^3: must be positive and finite", self.density),
             ));
         }
         if !(lo..=hi).contains(&self.density) {
-            return fail(format!(
-                "density rho = {:e} kg/m^3: outside {lo:e}…{hi:e}, a unit slip (steel is 7850 kg/m^3)",
-                self.density
+            return Some((
+                "density",
+                format!(
+                    "density rho = {:e} kg/m^3: outside {lo:e}…{hi:e}, a unit slip (steel is 7850 kg/m^3)",
+                    self.density
+                ),
             ));
         }
-        Ok(())
+        None
     }
 
     /// Parses `"steel"` (any case) or `"E,NU,RHO"`, e.g. `"2.1e11,0.3,7850"` (spaces around

@@ -677,7 +677,7 @@ fn adjusted_params(k: &SymMatrix, p: &EigenParams) -> (EigenParams, Vec<String>)
 /// The first shift σ, and the band asked for: the user's shift, or for a band just below its
 /// lower end (the factor's inertia is then the lower Sturm count), or the default shift.
 fn first_shift(k: &SymMatrix, m: &SymMatrix, p: &EigenParams) -> Result<(f64, Option<(f64, f64)>)> {
-    Ok(match p.target {
+    let (s, band) = match p.target {
         Target::Band(lo, hi) => {
             if !(lo < hi) || !lo.is_finite() || !hi.is_finite() {
                 return Err(Error::param("band", format!("empty band [{lo}, {hi}]")));
@@ -690,20 +690,17 @@ fn first_shift(k: &SymMatrix, m: &SymMatrix, p: &EigenParams) -> Result<(f64, Op
             });
             (s, Some((lo, hi)))
         }
-        Target::Nearest(_) => {
-            let s = p.shift.unwrap_or_else(|| default_shift(k, m));
-            if !s.is_finite() {
-                // Finite K and M whose typical ratio K_ii/M_ii overflows (a density of 1e-300):
-                // refused here, where it would surface as a zero pivot.
-                return Err(Error::InvalidInput(format!(
-                    "the stiffness-to-mass ratio K_ii/M_ii of the model overflows double precision (shift {s}): check \
-                     the units of the material constants (a density or a Young's modulus hundreds of orders of \
-                     magnitude off)"
-                )));
-            }
-            (s, None)
-        }
-    })
+        Target::Nearest(_) => (p.shift.unwrap_or_else(|| default_shift(k, m)), None),
+    };
+    if !s.is_finite() {
+        // Finite K and M whose typical ratio K_ii/M_ii overflows: refused here, where it would
+        // surface as a zero pivot.
+        return Err(Error::InvalidInput(format!(
+            "the stiffness-to-mass ratio K_ii/M_ii of the model overflows double precision (shift {s}): check the \
+             units of the material constants and the coordinates"
+        )));
+    }
+    Ok((s, band))
 }
 
 /// The matrices and the (fitted) parameters of a solve: what every step reads.

@@ -482,20 +482,8 @@ impl Study {
     /// the base `[table]`, each `[sweep]` value on it and the solid element sizes. (Found later,
     /// in a case or after the sweep, they named neither file nor key.)
     fn check_file(&self, path: &Path, text: &str) -> Result<()> {
-        let m = &self.material;
-        if let Err(e) = m.validate("[material]") {
-            let key = if !(m.young.is_finite() && m.young > 0.0) {
-                "material.young"
-            } else if !(m.poisson > -1.0 && m.poisson < 0.5) {
-                "material.poisson"
-            } else {
-                "material.density"
-            };
-            let msg = match e {
-                Error::InvalidMaterial { msg, .. } => msg,
-                e => strip(e),
-            };
-            return Err(toml_file::key_error(path, text, key, msg));
+        if let Some((field, msg)) = self.material.invalid() {
+            return Err(toml_file::key_error(path, text, &format!("material.{field}"), msg));
         }
         // A [sweep] entry is named as written there ("table.n_long_webs"), at its line.
         let located = |e: Error, section: &str| match toml_file::param_as_key(e, |n| {
@@ -542,19 +530,13 @@ impl Study {
         if self.check.designs > 0 {
             sizes.push(("check.solid_size", self.check.solid_size));
         }
-        for (key, h) in sizes {
+        for &(key, h) in &sizes {
             if !(h.is_finite() && h > 0.0) {
                 return Err(Error::param(key, format!("{key} = {h} must be positive")));
             }
-            let mut tables = vec![self.table.clone()];
-            for (k, vals) in &self.sweep {
-                for &v in vals {
-                    let mut t = self.table.clone();
-                    t.set(k, v)?;
-                    tables.push(t);
-                }
-            }
-            for t in &tables {
+        }
+        let oversized = |t: &TableSpec| -> Result<()> {
+            for &(key, h) in &sizes {
                 if let Some((side, v)) = t.params()?.oversized_side(h) {
                     return Err(Error::param(
                         key,
@@ -566,8 +548,13 @@ impl Study {
                     ));
                 }
             }
+            Ok(())
+        };
+        if sizes.is_empty() {
+            return Ok(());
         }
-        Ok(())
+        oversized(&self.table)?;
+        self.each_swept_value(|_, _, t| oversized(t))
     }
 
     /// Replace or add swept keys (command-line `--set` wins over the file's `[sweep]`).
@@ -582,11 +569,19 @@ impl Study {
 
     /// Each swept value alone on the base table, so that a message names the one bad key.
     pub fn check_values(&self) -> Result<()> {
+        self.each_swept_value(|k, v, t| {
+            t.params().map_err(|e| bad_key(k, format!("{k} = {v}: {}", strip(e))))?;
+            Ok(())
+        })
+    }
+
+    /// `f(key, value, table)` for each swept value alone on the base table.
+    fn each_swept_value(&self, mut f: impl FnMut(&str, f64, &TableSpec) -> Result<()>) -> Result<()> {
         for (k, vals) in &self.sweep {
             for &v in vals {
                 let mut t = self.table.clone();
                 t.set(k, v)?;
-                t.params().map_err(|e| bad_key(k, format!("{k} = {v}: {}", strip(e))))?;
+                f(k, v, &t)?;
             }
         }
         Ok(())
