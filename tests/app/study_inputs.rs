@@ -172,6 +172,10 @@ fn study_file_values_are_refused_at_their_key_when_read() {
     );
     assert_eq!(line, Some(8), "{e}");
     assert!(e.contains("'material.poisson'") && e.contains("(-1, 0.5)"), "{e}");
+    // A modulus out of range is the modulus's key (it was blamed on the density).
+    let (line, e) = at("young", "[material]\nyoung = 1e40\npoisson = 0.3\ndensity = 7850.0\n");
+    assert_eq!(line, Some(7), "{e}");
+    assert!(e.contains("'material.young'") && e.contains("unit slip"), "{e}");
     let text = BASE.replace("[table]\n", "[table]\nlength = 1e6\n");
     let e = Study::load(&study_file("length", &text)).unwrap_err().to_string();
     assert!(
