@@ -374,9 +374,12 @@ fn scatter_general(
     let exps = dofs.local_expansions(nodes, ndpn);
     // Only a slave–slave term can cancel (a rigid motion's energy, summed into the masters'
     // entries): their magnitudes are kept, the other terms' are not needed.
-    let slave: Vec<bool> = (0..nd)
-        .map(|i| dofs.slave[nodes[i / ndpn] as usize] & (1 << (i % ndpn)) != 0)
-        .collect();
+    let slave: Vec<bool> = match added {
+        Some(_) => (0..nd)
+            .map(|i| dofs.slave[nodes[i / ndpn] as usize] & (1 << (i % ndpn)) != 0)
+            .collect(),
+        None => Vec::new(),
+    };
     for j in 0..nd {
         for &(ej, cj) in &exps[j].terms {
             if !cols.contains(&ej) {
@@ -387,7 +390,7 @@ fn scatter_general(
                 if v == 0.0 {
                     continue;
                 }
-                let track = slave[i] && slave[j];
+                let track = !slave.is_empty() && slave[i] && slave[j];
                 for &(ei, ci) in &exps[i].terms {
                     if let Some(pos) = pattern.position(ei, ej) {
                         let t = ci * cj * v;
