@@ -671,6 +671,21 @@ pub fn run_plan(
 /// counts as none.
 const MARGIN_NOISE: f64 = 1e-7;
 
+/// The forward difference (v − v0)/step of a check's value, 0 when the change is within
+/// [`MARGIN_NOISE`] of the value itself: rounding, not a direction. A reduced run resolves a
+/// value only to its backward errors (up to `reduced_tol`, 1e-7 by default), so a quotient of
+/// ~1e-8 printed beside real ones (the mode clearance against the damping, which it does not
+/// depend on) would be noise read as a sensitivity. No nominal value: NaN.
+fn value_quotient(v: f64, v0: Option<f64>, step: f64) -> f64 {
+    let Some(v0) = v0 else { return f64::NAN };
+    let d = v - v0;
+    if d.abs() <= MARGIN_NOISE * v.abs().max(v0.abs()) {
+        0.0
+    } else {
+        d / step
+    }
+}
+
 /// One forward difference per band at the nominal point: (∂value/∂p, ∂margin/∂p) per check id,
 /// and the runs.
 #[allow(clippy::type_complexity)]
@@ -700,12 +715,7 @@ fn sensitivities(
         let dv = run
             .values
             .iter()
-            .map(|(k, v)| {
-                (
-                    k.clone(),
-                    (v - nominal.values.get(k).copied().unwrap_or(f64::NAN)) / step,
-                )
-            })
+            .map(|(k, v)| (k.clone(), value_quotient(*v, nominal.values.get(k).copied(), step)))
             .collect();
         let dm = margins(&run.checks)
             .into_iter()
@@ -1101,6 +1111,17 @@ mod tests {
             }],
             working_detuning: f64::NAN,
         }
+    }
+
+    /// A value's change at the rounding level of the value is no sensitivity; 1e-6 of it is.
+    #[test]
+    fn a_value_changed_by_rounding_has_no_sensitivity() {
+        let v0 = 16.68;
+        assert_eq!(value_quotient(v0 * (1.0 + 1e-11), Some(v0), 0.03), 0.0);
+        assert_eq!(value_quotient(0.0, Some(0.0), 0.03), 0.0);
+        let g = value_quotient(v0 * (1.0 + 1e-6), Some(v0), 0.03);
+        assert!((g - v0 * 1e-6 / 0.03).abs() <= 1e-9 * g, "{g}");
+        assert!(value_quotient(v0, None, 0.03).is_nan());
     }
 
     /// Two corners whose margins differ by rounding are one tie: the first keeps "worst at";
