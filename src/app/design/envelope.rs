@@ -678,12 +678,12 @@ const MARGIN_NOISE: f64 = 1e-7;
 /// depend on) would be noise read as a sensitivity. No nominal value: NaN.
 fn value_quotient(v: f64, v0: Option<f64>, step: f64) -> f64 {
     let Some(v0) = v0 else { return f64::NAN };
-    let d = v - v0;
-    if d.abs() <= MARGIN_NOISE * v.abs().max(v0.abs()) {
-        0.0
-    } else {
-        d / step
-    }
+    forward_difference(v - v0, MARGIN_NOISE * v.abs().max(v0.abs()), step)
+}
+
+/// d/step, or 0 when the change d is within `noise` (no direction).
+fn forward_difference(d: f64, noise: f64, step: f64) -> f64 {
+    if d.abs() <= noise { 0.0 } else { d / step }
 }
 
 /// One forward difference per band at the nominal point: (∂value/∂p, ∂margin/∂p) per check id,
@@ -724,7 +724,7 @@ fn sensitivities(
                 // A margin change below MARGIN_NOISE is no direction: a reduced run carries
                 // rounding of that order (backward errors up to `reduced_tol`), where the full run
                 // of an insensitive check gives exactly 0.
-                let g = if dm.abs() <= MARGIN_NOISE { 0.0 } else { dm / step };
+                let g = forward_difference(dm, MARGIN_NOISE, step);
                 (k, if g.is_finite() { g } else { 0.0 })
             })
             .collect();
