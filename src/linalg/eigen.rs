@@ -523,6 +523,9 @@ fn solve_inner(
     }
     let t0 = Instant::now();
     let (mut pl, mut notes) = adjusted_params(k, p);
+    if let Target::Nearest(nm) = pl.target {
+        iteration_fits(n, nm.min(n), &pl, false)?;
+    }
     // The one-factorisation solve (with a coarse model, for the lowest modes, to be proved);
     // its factor's pages made resident during the set-up and the coarse estimate ([`Prefault`]).
     let lowest = lowest_by_lanczos(n, &pl);
@@ -628,6 +631,39 @@ fn lowest_by_lanczos(n: usize, p: &EigenParams) -> Option<usize> {
     match (p.target, p.shift) {
         (Target::Nearest(nm), None) if n > p.dense_below && nm < n && !big_request(n, nm) => Some(nm),
         _ => None,
+    }
+}
+
+/// Refuse, before any work, a request for `want` modes of an `n`-equation model whose dense
+/// matrices or Lanczos basis (three vectors of the model's size per mode, and their M-images)
+/// would not fit in the memory this process can use: the allocation would abort the run.
+/// `band`: the modes are a band's (the advice differs).
+fn iteration_fits(n: usize, want: usize, p: &EigenParams, band: bool) -> Result<()> {
+    let (n64, b) = (n as u64, p.block.max(1).min(n) as u64);
+    let (bytes, what) = if n <= p.dense_below || big_request(n, want) {
+        // The dense solve holds about ten n × n matrices (K, M, their factors and reductions,
+        // the eigenvectors).
+        (10 * n64 * n64 * 8, "the dense solve's matrices")
+    } else {
+        let m = ((want as u64 * BASIS_PER_WANTED as u64 + 4 * b).max(want as u64 + 6 * b)).min(n64) + b;
+        (
+            (2 * n64 * m + m * m) * 8,
+            "the Lanczos basis (three vectors of the model's size per mode, and their M-images)",
+        )
+    };
+    match crate::util::memory::available_memory() {
+        Some(avail) if bytes > avail => Err(Error::InvalidInput(format!(
+            "{want} modes{} of this model of {n} degrees of freedom: {what} would take {}, more than the {} this process can use; {}",
+            if band { " in the band" } else { "" },
+            crate::util::fmt::fmt_bytes(bytes),
+            crate::util::fmt::fmt_bytes(avail),
+            if band {
+                "ask for a narrower band, or split it into several (--band F_LO F_HI)"
+            } else {
+                "ask for fewer modes, or for the range in several frequency bands (--band F_LO F_HI)"
+            }
+        ))),
+        _ => Ok(()),
     }
 }
 
@@ -989,7 +1025,9 @@ impl Rounds<'_> {
                 self.backward = self.backward.max(fh.probe_residual);
                 self.time_verify += tv.elapsed().as_secs_f64();
                 self.upper_known = Some((hi, s_hi, fh.negative_pivots));
-                fh.negative_pivots.saturating_sub(self.lower_count_at_shift)
+                let want = fh.negative_pivots.saturating_sub(self.lower_count_at_shift);
+                iteration_fits(k.n(), want, p, true)?;
+                want
             }
         })
     }
@@ -2893,6 +2931,25 @@ mod tests {
                 exact(j + 1)
             );
         }
+    }
+
+    #[test]
+    fn a_request_whose_basis_cannot_fit_is_refused_before_any_work() {
+        // 100 000 modes of a million equations: a basis of 300 000 vectors of 8 MB and their
+        // M-images, ~4.8 TB, more than any machine this runs on; 18 modes need ~1.3 GB.
+        let p = EigenParams::default();
+        let e = iteration_fits(1_000_000, 100_000, &p, false).unwrap_err().to_string();
+        assert!(
+            e.contains("100000 modes") && e.contains("1000000 degrees of freedom") && e.contains("--band"),
+            "{e}"
+        );
+        assert!(
+            !Error::InvalidInput(e).is_memory_refusal(),
+            "not a refusal the low-memory path answers"
+        );
+        let e = iteration_fits(1_000_000, 100_000, &p, true).unwrap_err().to_string();
+        assert!(e.contains("in the band") && e.contains("narrower band"), "{e}");
+        assert!(iteration_fits(20_000, 18, &p, false).is_ok());
     }
 
     #[test]
