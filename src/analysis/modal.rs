@@ -299,34 +299,11 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
     let k_mat = sys.k();
     let m_mat = sys.m()?;
     let sym = sys.symbolic()?;
+    check_params(opts)?;
     let target = match opts.target {
         ModalTarget::Modes(n) => Target::Nearest(n),
-        ModalTarget::Band(lo, hi) => {
-            if !(lo < hi) {
-                return Err(Error::option(
-                    "--band",
-                    format!("--band: lower frequency {lo} must be below the upper {hi}"),
-                ));
-            }
-            Target::Band(lambda_of_hz(lo), lambda_of_hz(hi))
-        }
+        ModalTarget::Band(lo, hi) => Target::Band(lambda_of_hz(lo), lambda_of_hz(hi)),
     };
-    if let Some(f) = opts.shift_hz {
-        if !lambda_of_hz(f).is_finite() {
-            return Err(Error::option(
-                "--shift",
-                format!("--shift: {f} Hz is not a usable frequency (finite, with (2πf)² representable)"),
-            ));
-        }
-    }
-    if let ModalTarget::Band(lo, hi) = opts.target {
-        if !lambda_of_hz(lo).is_finite() || !lambda_of_hz(hi).is_finite() {
-            return Err(Error::option(
-                "--band",
-                format!("--band: [{lo}, {hi}] Hz is not a usable band (finite, with (2πf)² representable)"),
-            ));
-        }
-    }
     let params = EigenParams {
         target,
         shift: opts.shift_hz.map(lambda_of_hz),
@@ -374,6 +351,52 @@ pub(crate) fn rigid_candidates(model: &crate::model::Model) -> eigen::NullCandid
         &model.nodes,
         c,
     )))
+}
+
+/// Check the numbers of a modal request before any work: a shift and a band whose eigenvalues
+/// (2πf)² are finite, a band from low to high, at least one mode. Errors name the option.
+pub fn check_params(params: &ModalParams) -> Result<()> {
+    let usable = |f: f64| f.is_finite() && lambda_of_hz(f).is_finite();
+    // As typed for ordinary values; 1e300 as 1e300, not as 301 digits.
+    let show = |f: f64| {
+        if f.abs() >= 1e9 {
+            format!("{f:e}")
+        } else {
+            format!("{f}")
+        }
+    };
+    if let Some(f) = params.shift_hz {
+        if !usable(f) {
+            return Err(Error::option(
+                "--shift",
+                format!(
+                    "--shift: {} Hz is not a usable frequency (finite, with (2πf)² representable)",
+                    show(f)
+                ),
+            ));
+        }
+    }
+    match params.target {
+        ModalTarget::Modes(0) => Err(Error::option("--modes", "--modes must be at least 1")),
+        ModalTarget::Modes(_) => Ok(()),
+        ModalTarget::Band(lo, hi) if !usable(lo) || !usable(hi) => Err(Error::option(
+            "--band",
+            format!(
+                "--band: [{}, {}] Hz is not a usable band (finite, with (2πf)² representable)",
+                show(lo),
+                show(hi)
+            ),
+        )),
+        ModalTarget::Band(lo, hi) if !(lo < hi) => Err(Error::option(
+            "--band",
+            format!(
+                "--band: lower frequency {} must be below the upper {}",
+                show(lo),
+                show(hi)
+            ),
+        )),
+        ModalTarget::Band(..) => Ok(()),
+    }
 }
 
 /// The report of a verified eigen solution of `sys` (from [`eigen::solve`], or from another

@@ -47,7 +47,7 @@ pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
                 shift_hz: a.shift,
                 ..Default::default()
             };
-            slepc::check_params(&params)?;
+            crate::analysis::modal::check_params(&params)?;
             Ok(params)
         })
         .transpose()?;

@@ -172,37 +172,10 @@ pub(super) fn workdir(o: &SlepcOptions) -> Result<WorkDir> {
     Ok(WorkDir { path, remove })
 }
 
-/// Check the numbers of a modal request before any work: a shift and a band whose eigenvalues
-/// (2πf)² are finite, a band from low to high, at least one mode. Errors name the option.
-pub fn check_params(params: &ModalParams) -> Result<()> {
-    let usable = |f: f64| f.is_finite() && lambda_of_hz(f).is_finite();
-    if let Some(f) = params.shift_hz {
-        if !usable(f) {
-            return Err(Error::option(
-                "--shift",
-                format!("--shift: {f} Hz is not a usable frequency (finite, with (2πf)² representable)"),
-            ));
-        }
-    }
-    match params.target {
-        ModalTarget::Modes(0) => Err(Error::option("--modes", "--modes must be at least 1")),
-        ModalTarget::Modes(_) => Ok(()),
-        ModalTarget::Band(lo, hi) if !usable(lo) || !usable(hi) => Err(Error::option(
-            "--band",
-            format!("--band: [{lo}, {hi}] Hz is not a usable band (finite, with (2πf)² representable)"),
-        )),
-        ModalTarget::Band(lo, hi) if !(lo < hi) => Err(Error::option(
-            "--band",
-            format!("--band: lower frequency {lo} must be below the upper {hi}"),
-        )),
-        ModalTarget::Band(..) => Ok(()),
-    }
-}
-
 /// The SLEPc job of a request on `sys`: σ and the target follow the native solver's
 /// conventions (the default shift below the spectrum; a band's lower end).
 pub(super) fn job_of(sys: &System, params: &ModalParams) -> Result<Job> {
-    check_params(params)?;
+    crate::analysis::modal::check_params(params)?;
     let k = sys.k();
     let m = sys.m()?;
     let sigma = match (params.shift_hz, params.target) {
