@@ -2830,6 +2830,21 @@ mod tests {
     use super::*;
 
     /// K and M (on K's pattern) of a fixed–free chain of `n` unit masses and unit springs.
+    /// Eigenvalue `j` (from 1) of [`fixed_free_chain`]: λ_j = 4 sin²((2j − 1)π/(4n + 2)).
+    fn chain_eigenvalue(n: usize, j: usize) -> f64 {
+        let s = ((2 * j - 1) as f64 * std::f64::consts::PI / (4 * n + 2) as f64).sin();
+        4.0 * s * s
+    }
+
+    /// [`fixed_free_chain`] with K − σM factorised at σ = −λ₁/2.
+    fn factored_chain(n: usize) -> (SymMatrix, SymMatrix, Factor, f64) {
+        let (k, m) = fixed_free_chain(n);
+        let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
+        let sigma = -0.5 * chain_eigenvalue(n, 1);
+        let fa = factor_at(&k, &m, &sym, sigma, &mut 0).unwrap().0;
+        (k, m, fa, sigma)
+    }
+
     fn fixed_free_chain(n: usize) -> (SymMatrix, SymMatrix) {
         let mut kt = Vec::new();
         let mut mt = Vec::new();
@@ -2960,14 +2975,8 @@ mod tests {
         // have done as much work. The pairs must be those of the closed form all the same.
         let n = 2000;
         let want = 220;
-        let (k, m) = fixed_free_chain(n);
-        let exact = |j: usize| {
-            let s = ((2 * j - 1) as f64 * std::f64::consts::PI / (4 * n + 2) as f64).sin();
-            4.0 * s * s
-        };
-        let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
-        let sigma = -0.5 * exact(1);
-        let fa = factor_at(&k, &m, &sym, sigma, &mut 0).unwrap().0;
+        let (_, m, fa, sigma) = factored_chain(n);
+        let exact = |j: usize| chain_eigenvalue(n, j);
         let p = EigenParams {
             target: Target::Nearest(want),
             ..Default::default()
@@ -2997,14 +3006,8 @@ mod tests {
     fn released_lanczos_runs_again_for_more_modes() {
         // A fixed–free chain of 200 unit masses and springs: λ_j = 4 sin²((2j − 1)π/(4n + 2)).
         let n = 200;
-        let (k, m) = fixed_free_chain(n);
-        let exact = |j: usize| {
-            let s = ((2 * j - 1) as f64 * std::f64::consts::PI / (4 * n + 2) as f64).sin();
-            4.0 * s * s
-        };
-        let sym = Arc::new(SymbolicFactor::new(&k.pattern, None).unwrap());
-        let sigma = -0.5 * exact(1);
-        let fa = factor_at(&k, &m, &sym, sigma, &mut 0).unwrap().0;
+        let (k, m, fa, sigma) = factored_chain(n);
+        let exact = |j: usize| chain_eigenvalue(n, j);
         let p = EigenParams {
             target: Target::Nearest(4),
             block: 2,
