@@ -605,10 +605,16 @@ impl Iteration<'_> {
                     eta[j] <= TOL || (eta[j] <= VERIFY_TOL && still)
                 })
                 .collect();
+            let worst = (0..pos.min(want).min(cand))
+                .filter(|&j| !converged[j])
+                .max_by(|&a, &b| eta[a].total_cmp(&eta[b]));
             log::debug!(
-                "buckling: basis {c}, μ {:?}, backward errors {:?}",
+                "buckling: basis {c}, μ {:?}, backward errors {:?}; {} of {} unconverged, worst {:?}",
                 &vals[..cand.min(4)],
-                &eta[..cand.min(4)]
+                &eta[..cand.min(4)],
+                (0..pos.min(want).min(cand)).filter(|&j| !converged[j]).count(),
+                pos.min(want),
+                worst.map(|j| (j, vals[j], eta[j]))
             );
             let prev_before = std::mem::replace(&mut self.prev, vals.clone());
             let all_wanted = (0..pos.min(want)).all(|j| converged[j]);
