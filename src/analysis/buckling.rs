@@ -333,17 +333,13 @@ impl Basis<'_> {
     fn ritz(&self) -> Result<(Vec<f64>, Mat<f64>)> {
         let c = self.cols;
         let t = tall::gram(self.v.as_ref().subcols(0, c), self.gv.as_ref().subcols(0, c));
-        let scale = (0..c)
-            .map(|i| t[(i, i)].abs())
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
-        let ts = Mat::from_fn(c, c, |i, j| 0.5 * (t[(i, j)] + t[(j, i)]) / scale);
-        let e = ts
-            .self_adjoint_eigen(faer::Side::Lower)
-            .map_err(|e| Error::Factorization(format!("buckling: dense eigen solve: {e:?}")))?;
+        let ts = Mat::from_fn(c, c, |i, j| 0.5 * (t[(i, j)] + t[(j, i)]));
+        let (mu, u) = crate::linalg::dense::scaled_self_adjoint_eigen(&ts).map_err(|e| match e {
+            Error::Factorization(m) => Error::Factorization(format!("buckling: {m}")),
+            other => other,
+        })?;
         // Descending.
-        let vals: Vec<f64> = (0..c).rev().map(|i| e.S()[i] * scale).collect();
-        let u = e.U();
+        let vals: Vec<f64> = mu.into_iter().rev().collect();
         let s = Mat::from_fn(c, c, |i, j| u[(i, c - 1 - j)]);
         Ok((vals, s))
     }
@@ -605,14 +601,13 @@ impl Iteration<'_> {
                     eta[j] <= TOL || (eta[j] <= VERIFY_TOL && still)
                 })
                 .collect();
-            let worst = (0..pos.min(want).min(cand))
-                .filter(|&j| !converged[j])
-                .max_by(|&a, &b| eta[a].total_cmp(&eta[b]));
+            let open: Vec<usize> = (0..pos.min(want).min(cand)).filter(|&j| !converged[j]).collect();
+            let worst = open.iter().copied().max_by(|&a, &b| eta[a].total_cmp(&eta[b]));
             log::debug!(
                 "buckling: basis {c}, μ {:?}, backward errors {:?}; {} of {} unconverged, worst {:?}",
                 &vals[..cand.min(4)],
                 &eta[..cand.min(4)],
-                (0..pos.min(want).min(cand)).filter(|&j| !converged[j]).count(),
+                open.len(),
                 pos.min(want),
                 worst.map(|j| (j, vals[j], eta[j]))
             );

@@ -599,7 +599,7 @@ fn solve_inner(
         return Ok(rounds.nothing_wanted());
     }
     let ti = Instant::now();
-    let dense = n <= p.dense_below || big_request(n, want);
+    let dense = solved_densely(n, want, p);
     if dense && n > p.dense_below {
         notes.push(format!(
             "{want} modes of {n} degrees of freedom: solved densely (all eigenpairs) rather than by Lanczos"
@@ -639,13 +639,14 @@ fn lowest_by_lanczos(n: usize, p: &EigenParams) -> Option<usize> {
 /// would not fit in the memory this process can use: the allocation would abort the run.
 /// `band`: the modes are a band's (the advice differs).
 fn iteration_fits(n: usize, want: usize, p: &EigenParams, band: bool) -> Result<()> {
-    let (n64, b) = (n as u64, p.block.max(1).min(n) as u64);
-    let (bytes, what) = if n <= p.dense_below || big_request(n, want) {
+    let n64 = n as u64;
+    let (bytes, what) = if solved_densely(n, want, p) {
         // The dense solve holds about ten n × n matrices (K, M, their factors and reductions,
         // the eigenvectors).
         (10 * n64 * n64 * 8, "the dense solve's matrices")
     } else {
-        let m = ((want as u64 * BASIS_PER_WANTED as u64 + 4 * b).max(want as u64 + 6 * b)).min(n64) + b;
+        let b = p.block.max(1).min(n);
+        let m = (basis_columns(n, want, b) + b) as u64;
         (
             (2 * n64 * m + m * m) * 8,
             "the Lanczos basis (three vectors of the model's size per mode, and their M-images)",
@@ -665,6 +666,12 @@ fn iteration_fits(n: usize, want: usize, p: &EigenParams, band: bool) -> Result<
         ))),
         _ => Ok(()),
     }
+}
+
+/// Whether `want` modes of an `n`-equation model are solved densely (a tiny model, or a large
+/// share of the spectrum) rather than by Lanczos.
+fn solved_densely(n: usize, want: usize, p: &EigenParams) -> bool {
+    n <= p.dense_below || big_request(n, want)
 }
 
 /// Requests for a large share of the spectrum are solved densely when that is affordable
@@ -2112,6 +2119,12 @@ fn verify_of(lambda: &[f64], x: MatRef<'_, f64>, kx: &Mat<f64>, mx: &Mat<f64>, s
 /// basis is freed before the Sturm factorisation, so it does not raise the memory peak.
 const BASIS_PER_WANTED: usize = 3;
 
+/// Basis columns before a thick restart for `want` pairs in blocks of `b` on `n` equations
+/// (at least one block).
+fn basis_columns(n: usize, want: usize, b: usize) -> usize {
+    (want * BASIS_PER_WANTED + 4 * b).max(want + 6 * b).min(n).max(b.min(n))
+}
+
 /// Projections from this size on are diagonalised by faer's blocked solver (scaled), smaller
 /// ones by nalgebra's.
 const RITZ_BLOCKED_FROM: usize = 200;
@@ -2203,8 +2216,7 @@ struct Lanczos {
 impl Lanczos {
     fn new(n: usize, want: usize, p: &EigenParams, side: Side) -> Self {
         let b = p.block.max(1).min(n);
-        let m_max = (want * BASIS_PER_WANTED + 4 * b).max(want + 6 * b).min(n);
-        let m_max = m_max.max(b.min(n));
+        let m_max = basis_columns(n, want, b);
         // The basis is the largest allocation of the iteration (83 MB at 119k DOFs).
         Lanczos {
             n,
@@ -2500,11 +2512,7 @@ impl Lanczos {
         let b = self.b;
         // The basis must also hold the current columns plus the next block (a resumed run may
         // end with a full basis).
-        let m_max = (self.want * BASIS_PER_WANTED + 4 * b)
-            .max(self.want + 6 * b)
-            .max(self.cur + b)
-            .min(self.n)
-            .max(b.min(self.n));
+        let m_max = basis_columns(self.n, self.want, b).max(self.cur + b).min(self.n);
         if m_max > self.m_max {
             let cols = m_max + b;
             let mut v = Mat::zeros(self.n, cols);
