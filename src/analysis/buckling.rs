@@ -255,13 +255,16 @@ impl Rng {
     }
 }
 
-/// A K-orthonormal basis with its images K·V and G·V.
+/// A K-orthonormal basis with its images K·V and G·V, and the projected matrix `T = VᵀGV`
+/// kept up to date (each append adds its columns' rows and columns, a restart rotates it), so
+/// that a Rayleigh–Ritz step does not recompute all of it.
 struct Basis<'a> {
     k: &'a SymMatrix,
     g: &'a SymMatrix,
     v: Mat<f64>,
     kv: Mat<f64>,
     gv: Mat<f64>,
+    t: Mat<f64>,
     cols: usize,
 }
 
@@ -325,6 +328,19 @@ impl Basis<'_> {
         self.v.as_mut().subcols_mut(c, k).copy_from(&x);
         self.kv.as_mut().subcols_mut(c, k).copy_from(&kx);
         self.gv.as_mut().subcols_mut(c, k).copy_from(&gx);
+        // The new rows and columns of T: Vᵀ(G X), the new diagonal block symmetrised.
+        let tn = tall::gram(self.v.as_ref().subcols(0, c + k), gx.as_ref());
+        for j in 0..k {
+            for i in 0..c + k {
+                let t = if i >= c {
+                    0.5 * (tn[(i, j)] + tn[(c + j, i - c)])
+                } else {
+                    tn[(i, j)]
+                };
+                self.t[(i, c + j)] = t;
+                self.t[(c + j, i)] = t;
+            }
+        }
         self.cols += k;
         k
     }
@@ -332,8 +348,7 @@ impl Basis<'_> {
     /// Ritz pairs of the basis, μ descending: values and the coefficient matrix.
     fn ritz(&self) -> Result<(Vec<f64>, Mat<f64>)> {
         let c = self.cols;
-        let t = tall::gram(self.v.as_ref().subcols(0, c), self.gv.as_ref().subcols(0, c));
-        let ts = Mat::from_fn(c, c, |i, j| 0.5 * (t[(i, j)] + t[(j, i)]));
+        let ts = self.t.as_ref().submatrix(0, 0, c, c).to_owned();
         let (mu, u) = crate::linalg::dense::scaled_self_adjoint_eigen(&ts).map_err(|e| match e {
             Error::Factorization(m) => Error::Factorization(format!("buckling: {m}")),
             other => other,
@@ -350,6 +365,14 @@ impl Basis<'_> {
         let y = s.subrows(0, c).subcols(0, keep);
         for m in [&mut self.v, &mut self.kv, &mut self.gv] {
             tall::combine_columns_in_place(m.as_mut().subcols_mut(0, c), y);
+        }
+        // T rotated: YᵀTY (diagonal up to rounding), symmetrised.
+        let ty = self.t.as_ref().submatrix(0, 0, c, c) * y;
+        let r = y.transpose() * &ty;
+        for j in 0..keep {
+            for i in 0..keep {
+                self.t[(i, j)] = 0.5 * (r[(i, j)] + r[(j, i)]);
+            }
         }
         self.cols = keep;
     }
@@ -451,32 +474,36 @@ fn combine(v: &Mat<f64>, s: &Mat<f64>, c: usize, cols: usize) -> Mat<f64> {
 /// models. The products with |G| and |K| (a pass over both matrices) are made only for the
 /// pairs that `settled` admits (values that have nearly stopped moving) and that the bound
 /// `‖Gy − μKy‖ / (‖Gy‖ + |μ|‖Ky‖)` (never below the backward error) does not already pass;
-/// the others get that bound.
+/// the others get that bound. `y` makes the Ritz vectors of the given pairs (only those
+/// products need them).
 fn ritz_backward_errors(
     k: &SymMatrix,
     g: &SymMatrix,
     vals: &[f64],
-    y: &Mat<f64>,
+    y: impl Fn(&[usize]) -> Mat<f64>,
     ky: &Mat<f64>,
     gy: &Mat<f64>,
     settled: impl Fn(usize) -> bool,
 ) -> Vec<f64> {
     let norm = |m: &Mat<f64>, j: usize| m.col(j).iter().map(|v| v * v).sum::<f64>().sqrt();
-    let r: Vec<f64> = (0..y.ncols())
+    let m = ky.ncols();
+    let r: Vec<f64> = (0..m)
         .map(|j| {
             let mu = vals[j];
-            (0..y.nrows())
-                .map(|i| (gy[(i, j)] - mu * ky[(i, j)]).powi(2))
+            let (g, k) = (gy.col(j), ky.col(j));
+            g.iter()
+                .zip(k.iter())
+                .map(|(g, k)| (g - mu * k).powi(2))
                 .sum::<f64>()
                 .sqrt()
         })
         .collect();
-    let mut eta: Vec<f64> = (0..y.ncols())
+    let mut eta: Vec<f64> = (0..m)
         .map(|j| r[j] / (norm(gy, j) + vals[j].abs() * norm(ky, j)).max(f64::MIN_POSITIVE))
         .collect();
-    let exact: Vec<usize> = (0..y.ncols()).filter(|&j| eta[j] > TOL && settled(j)).collect();
+    let exact: Vec<usize> = (0..m).filter(|&j| eta[j] > TOL && settled(j)).collect();
     if !exact.is_empty() {
-        let ys = Mat::from_fn(y.nrows(), exact.len(), |i, t| y[(i, exact[t])]);
+        let ys = y(&exact);
         let ag = g.abs_mul_norms(ys.as_ref());
         let ak = k.abs_mul_norms(ys.as_ref());
         for (t, &j) in exact.iter().enumerate() {
@@ -566,6 +593,7 @@ impl Iteration<'_> {
             for m in [&mut self.basis.v, &mut self.basis.kv, &mut self.basis.gv] {
                 m.resize_with(n, nb, |_, _| 0.0);
             }
+            self.basis.t.resize_with(nb, nb, |_, _| 0.0);
         }
     }
 
@@ -585,11 +613,14 @@ impl Iteration<'_> {
             let n_test = want.min(c);
             let pos = vals.iter().take(n_test).filter(|&&m| m > ZERO_MU * top).count();
             let cand = (pos.max(1) + b).min(c);
-            let y = combine(&self.basis.v, &s, c, cand);
             let ky = combine(&self.basis.kv, &s, c, cand);
             let gy = combine(&self.basis.gv, &s, c, cand);
             let prev = &self.prev;
-            let eta = ritz_backward_errors(k, g, &vals, &y, &ky, &gy, |j| {
+            let y = |cols: &[usize]| {
+                let sc = Mat::from_fn(c, cols.len(), |i, t| s[(i, cols[t])]);
+                combine(&self.basis.v, &sc, c, cols.len())
+            };
+            let eta = ritz_backward_errors(k, g, &vals, y, &ky, &gy, |j| {
                 prev.get(j).is_some_and(|&p| (p - vals[j]).abs() <= EXACT_GATE * top)
             });
             let converged: Vec<bool> = (0..cand)
@@ -640,9 +671,17 @@ impl Iteration<'_> {
                     pos.min(want)
                 )));
             }
-            // Expand with the operator applied to the best unconverged Ritz vectors.
+            // Expand with the operator applied to the residuals of the best unconverged Ritz
+            // pairs, `(K − σG)⁻¹(Gy − μKy)`: with y in the basis the same space as
+            // `(K − σG)⁻¹Gy` (which is `(1 − μσ)⁻¹((K − σG)⁻¹r + μy)`), but without the
+            // cancellation: once y is nearly an eigenvector, `(K − σG)⁻¹Gy` is y to all but a
+            // fraction of its norm, and that fraction, below what the orthogonalisation keeps,
+            // was dropped, so that the iteration went on with random directions.
             let pick: Vec<usize> = (0..cand).filter(|&j| !converged[j]).take(b).collect();
-            let mut next = Mat::from_fn(n, pick.len(), |i, j| gy[(i, pick[j])]);
+            let mut next = Mat::from_fn(n, pick.len(), |i, j| {
+                let p = pick[j];
+                gy[(i, p)] - vals[p] * ky[(i, p)]
+            });
             f.solve_in_place(next.as_mut());
             self.applications += pick.len();
             if self.basis.cols + next.ncols() > nb {
@@ -713,7 +752,7 @@ pub fn solve_pencil_from(
         return Ok(empty(0, factor_err, [t_factor_k, 0.0, 0.0]));
     }
     let want = nev + 1; // one more, to place the shift between factors
-    let b = want.clamp(3, 6).min(n);
+    let b = want.clamp(3, 6).max(want / 4).min(32).min(n);
     let mut it = Iteration {
         basis: Basis {
             k,
@@ -721,6 +760,7 @@ pub fn solve_pencil_from(
             v: Mat::zeros(n, 0),
             kv: Mat::zeros(n, 0),
             gv: Mat::zeros(n, 0),
+            t: Mat::zeros(0, 0),
             cols: 0,
         },
         rng: Rng(0x5eed_b0c1_1e00_0001),
