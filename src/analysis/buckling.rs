@@ -53,8 +53,11 @@
 //! modal run. Products with K and G are made by blocks, and the backward errors' passes over
 //! `|K|` and `|G|` only for pairs whose values have settled.
 //!
-//! A load whose `K_σ` has no compressive part has no positive factor: the run says so ("no
-//! buckling under this load") with an empty list, not an error. A model that is not supported
+//! A load without a positive factor (a tensile one) gets an empty list, not an error, and the
+//! note "no buckling under this load". The proof is a Sturm count of zero at 1e6 times the
+//! smallest |λ| (there `K − σG` is positive definite). When the unshifted estimates find no
+//! positive value, that count is taken, and if it is not zero the factors below that point are
+//! found with it as the shift. A model that is not supported
 //! (K singular) is an error from the static solve, which names the free motions.
 
 use crate::analysis::prestress::{InitialStress, StressExtreme};
@@ -160,7 +163,7 @@ pub struct BucklingReport {
     pub load_factors: Vec<f64>,
     /// Per-mode rows.
     pub modes: Vec<BucklingRow>,
-    /// `K_σ` has no compressive part: no positive load factor.
+    /// No positive load factor (proved by the Sturm count at `sturm.point`, see the module doc).
     pub no_buckling: bool,
     /// The Sturm count.
     pub sturm: BucklingSturm,
@@ -240,6 +243,9 @@ const VERIFY_TOL: f64 = 1e-10;
 const EXACT_GATE: f64 = 1e-8;
 /// Estimates for the shift: Ritz values that moved by less than this (relative) in a step.
 const ESTIMATE_TOL: f64 = 1e-3;
+/// Without a positive estimate, the Sturm count is taken at 1/(this · max|μ|): a point this far
+/// out keeps `K − σG` within ~1e6 of K's conditioning.
+const NO_FACTOR_BELOW: f64 = 1e-6;
 /// Estimates closer than this ratio form a cluster the shift is not placed in.
 const CLUSTER: f64 = 1.02;
 
@@ -539,6 +545,7 @@ fn no_buckling(
     factorizations: usize,
     factor_err: f64,
     times: [f64; 3],
+    point: f64,
 ) -> PencilSolution {
     PencilSolution {
         lambda: vec![],
@@ -546,6 +553,7 @@ fn no_buckling(
         rel_residual: vec![],
         backward_error: vec![],
         sturm: BucklingSturm {
+            point,
             complete: true,
             ..Default::default()
         },
@@ -664,7 +672,9 @@ impl Iteration<'_> {
             // spectrum is sparse there (a mostly tensile load: a few factors, then values
             // crowding towards μ = 0, which the unshifted operator cannot separate). Their
             // estimates go to the shift; its count and the shifted iteration do the rest.
-            let sparse = pos >= 1 && pos < want && c >= 2 * want;
+            // None at all there after twenty applications per wanted pair: the count at a far
+            // point decides (`solve_pencil_from`).
+            let sparse = pos < want && c >= 2 * want && (pos >= 1 || self.applications >= 20 * want);
             if goal == Goal::Estimates && (pos >= want || sparse) && (0..pos.min(want)).all(settled) {
                 return Ok((vals, s));
             }
@@ -752,9 +762,15 @@ pub fn solve_pencil_from(
     let t_factor_k = t0.elapsed().as_secs_f64();
     let mut t_shift = 0.0;
     let t1 = Instant::now();
-    let empty = |applications, factor_err, times| no_buckling(n, applications, own_factorizations, factor_err, times);
     if g.values.iter().all(|&x| x == 0.0) {
-        return Ok(empty(0, factor_err, [t_factor_k, 0.0, 0.0]));
+        return Ok(no_buckling(
+            n,
+            0,
+            own_factorizations,
+            factor_err,
+            [t_factor_k, 0.0, 0.0],
+            0.0,
+        ));
     }
     let want = nev + 1; // one more, to place the shift between factors
     let b = want.clamp(3, 6).max(want / 4).min(32).min(n);
@@ -788,22 +804,52 @@ pub fn solve_pencil_from(
     drop(fk);
     let est = positive_factors(&vals, it.basis.cols, want);
     log::debug!("buckling: estimates {est:?} after {} applications", it.applications);
-    if est.is_empty() {
-        return Ok(empty(
-            it.applications,
-            factor_err,
-            [t_factor_k, t1.elapsed().as_secs_f64(), 0.0],
-        ));
+    // No positive estimate: the count at a far point, 1/(NO_FACTOR_BELOW · max|μ|), proves that
+    // no factor lies below it (there K − σG = K + σ|G| is positive definite when G has no
+    // positive part, a stable factorisation), or shows the ones to find.
+    let mut far = None;
+    if est.is_empty() && first_shift.is_none() {
+        let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
+        let point = 1.0 / (NO_FACTOR_BELOW * top);
+        let t = Instant::now();
+        let f = Factor::new_shifted(sym.clone(), k, Some((&g, point)))?;
+        t_shift += t.elapsed().as_secs_f64();
+        factor_err = factor_err.max(f.probe_residual);
+        log::debug!(
+            "buckling: no positive estimate; count {} below {point:e}",
+            f.negative_pivots
+        );
+        if f.negative_pivots == 0 {
+            let times = [t_factor_k + t_shift, t1.elapsed().as_secs_f64() - t_shift, 0.0];
+            return Ok(no_buckling(
+                n,
+                it.applications,
+                own_factorizations + 1,
+                factor_err,
+                times,
+                point,
+            ));
+        }
+        // Values from the unshifted operator cannot count as settled under the new one.
+        it.prev.clear();
+        far = Some((f, point));
     }
     // The shifted iteration: the factor of K − σG serves both the operator and the count.
-    let mut sigma = first_shift.unwrap_or_else(|| shift_from_estimates(&est, nev));
+    let mut sigma =
+        first_shift.unwrap_or_else(|| far.as_ref().map_or_else(|| shift_from_estimates(&est, nev), |f| f.1));
     let mut shifts = 0;
     let (count, s, computed) = loop {
-        let t = Instant::now();
-        let f = Factor::new_shifted(sym.clone(), k, Some((&g, sigma)))?;
-        t_shift += t.elapsed().as_secs_f64();
+        let f = match far.take() {
+            Some((f, _)) => f,
+            None => {
+                let t = Instant::now();
+                let f = Factor::new_shifted(sym.clone(), k, Some((&g, sigma)))?;
+                t_shift += t.elapsed().as_secs_f64();
+                factor_err = factor_err.max(f.probe_residual);
+                f
+            }
+        };
         shifts += 1;
-        factor_err = factor_err.max(f.probe_residual);
         let count = f.negative_pivots;
         let target = if count >= nev { count } else { want };
         let (vals, s) = it.run(&f, target, Goal::Converged)?;
@@ -913,10 +959,14 @@ pub fn solve(
     let mut notes = model.notes.clone();
     notes.extend(case.notes.iter().cloned());
     if sol.no_buckling {
-        notes.push(
-            "no buckling under this load: the geometric stiffness has no compressive part (no positive load factor)"
-                .to_string(),
-        );
+        notes.push(if sol.sturm.point > 0.0 {
+            format!(
+                "no buckling under this load: the Sturm count of K + σK_σ at σ = {} finds no positive load factor below it (σ is 1e6 times the smallest |λ|, a tensile factor)",
+                crate::io::fmt_sig(sol.sturm.point, 6)
+            )
+        } else {
+            "no buckling under this load: the geometric stiffness is zero".to_string()
+        });
     } else if sol.lambda.len() < opts.modes {
         // What is proved is the count below the Sturm point; above it, that the iteration found
         // no further positive value of 1/λ (above 1e-10 of the largest |1/λ|).

@@ -245,3 +245,36 @@ fn a_mostly_tensile_load_gives_its_few_positive_factors_without_stalling() {
         assert!((a / b - 1.0).abs() < 1e-9, "{a} vs {b}");
     }
 }
+
+/// A load without a positive factor: the solid bar of the test above pulled instead of
+/// pushed. The answer "no buckling" rests on a Sturm count of zero at σ = 10⁶ times the
+/// smallest |λ|, where `K − σG = K + σ|G|` is positive definite. Before, it rested on the
+/// largest Ritz value 1/λ having settled below 0. That value is a lower bound only, and it
+/// crept towards 0 for 6 575 applications, 6 s. The bound of 500 applications (a hundred per
+/// wanted pair, the unshifted estimates giving up after twenty) fails that iteration.
+#[test]
+fn a_tensile_load_has_no_buckling_proved_by_a_far_sturm_count() {
+    use vibrofem::analysis::buckling::{BucklingOptions, run_buckling};
+    use vibrofem::mesh::CellKind;
+    use vibrofem::mesh::generate::box_mesh;
+    let mesh = box_mesh(CellKind::Hex20, [0.2, 0.01, 0.01], [40, 2, 2]);
+    let opts = BucklingOptions {
+        spec: ModelSpec {
+            fixes: vec![("xmin".into(), UX | UY | UZ)],
+            ..Default::default()
+        },
+        modes: 4,
+        ..Default::default()
+    };
+    let loads = vec![Load::Force {
+        group: "xmax".into(),
+        force: [1e6, 0.0, 0.0],
+    }];
+    let r = run_buckling(&mesh, "bar", &opts, &loads, 0.0).unwrap().report;
+    assert!(r.no_buckling && r.load_factors.is_empty(), "{:?}", r.load_factors);
+    assert!(r.complete, "{:?}", r.sturm);
+    assert_eq!(r.sturm.count, 0);
+    assert!(r.sturm.point > 0.0, "{:?}", r.sturm);
+    assert!(r.operator_applications < 500, "{}", r.operator_applications);
+    assert!(r.notes.iter().any(|n| n.contains("Sturm count")), "{:?}", r.notes);
+}

@@ -578,8 +578,9 @@ class Model:
         """Linear buckling (as ``vibrofem buckling``): the ``n`` lowest positive load factors λ
         of (K + λK_σ)φ = 0 for the static case given as in :meth:`static`, verified (backward
         errors, Sturm count). Returns a namespace with ``load_factors`` (ascending; empty with
-        ``no_buckling`` True when the load has no compressive part), ``shapes`` (n_nodes × 3 × k,
-        largest translation 1), ``complete``, ``accurate`` and the JSON ``report``."""
+        ``no_buckling`` True when the load has no positive load factor, proved by a Sturm
+        count), ``shapes`` (n_nodes × 3 × k, largest translation 1), ``complete``, ``accurate``
+        and the JSON ``report``."""
         import types
 
         f, p, g, d = self._loads(force, pressure, gravity, displace)

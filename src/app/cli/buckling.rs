@@ -56,7 +56,7 @@ pub fn buckling_table(r: &BucklingReport) -> String {
     );
     let _ = writeln!(s);
     if r.no_buckling {
-        let _ = writeln!(s, "no buckling under this load (no compressive geometric stiffness)");
+        let _ = writeln!(s, "no buckling under this load (no positive load factor)");
         return s;
     }
     let _ = writeln!(
