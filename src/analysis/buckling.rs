@@ -592,7 +592,37 @@ struct Iteration<'a> {
     max_applications: usize,
 }
 
-impl Iteration<'_> {
+impl<'a> Iteration<'a> {
+    /// The iteration for `want` pairs, its basis started with a block of `K⁻¹G` applied to
+    /// random vectors (in the range of G: no null-space part); `fk` factors K.
+    fn start(k: &'a SymMatrix, g: &'a SymMatrix, fk: &Factor, want: usize, max_applications: usize) -> Self {
+        let n = k.n();
+        let b = want.clamp(3, 6).max(want / 4).min(32).min(n);
+        let mut it = Iteration {
+            basis: Basis {
+                k,
+                g,
+                v: Mat::zeros(n, 0),
+                kv: Mat::zeros(n, 0),
+                gv: Mat::zeros(n, 0),
+                t: Mat::zeros(0, 0),
+                cols: 0,
+            },
+            rng: Rng(0x5eed_b0c1_1e00_0001),
+            prev: Vec::new(),
+            applications: b,
+            b,
+            max_applications,
+        };
+        it.reserve(want);
+        let w = Mat::from_fn(n, b, |_, _| it.rng.next());
+        let mut gw = Mat::zeros(n, b);
+        g.mul_block(w.as_ref(), gw.as_mut());
+        fk.solve_in_place(gw.as_mut());
+        it.basis.append(gw.as_ref());
+        it
+    }
+
     /// Room for `want` pairs and the expansion blocks.
     fn reserve(&mut self, want: usize) {
         let n = self.basis.v.nrows();
@@ -773,81 +803,59 @@ pub fn solve_pencil_from(
         ));
     }
     let want = nev + 1; // one more, to place the shift between factors
-    let b = want.clamp(3, 6).max(want / 4).min(32).min(n);
-    let mut it = Iteration {
-        basis: Basis {
-            k,
-            g: &g,
-            v: Mat::zeros(n, 0),
-            kv: Mat::zeros(n, 0),
-            gv: Mat::zeros(n, 0),
-            t: Mat::zeros(0, 0),
-            cols: 0,
-        },
-        rng: Rng(0x5eed_b0c1_1e00_0001),
-        prev: Vec::new(),
-        applications: 0,
-        b,
-        max_applications,
-    };
-    it.reserve(want);
-    // Start block: K⁻¹G applied to random vectors (in the range of G: no null-space part).
-    let mut w = Mat::from_fn(n, b, |_, _| it.rng.next());
-    let mut gw = Mat::zeros(n, b);
-    g.mul_block(w.as_ref(), gw.as_mut());
-    fk.solve_in_place(gw.as_mut());
-    w = gw;
-    it.applications = b;
-    it.basis.append(w.as_ref());
+    let mut it = Iteration::start(k, &g, &fk, want, max_applications);
     // Estimates of the lowest factors with the factor of K (upper bounds: Ritz values).
     let (vals, _) = it.run(&fk, want, Goal::Estimates)?;
     drop(fk);
     let est = positive_factors(&vals, it.basis.cols, want);
     log::debug!("buckling: estimates {est:?} after {} applications", it.applications);
-    // No positive estimate: the count at a far point, 1/(NO_FACTOR_BELOW · max|μ|), proves that
-    // no factor lies below it (there K − σG = K + σ|G| is positive definite when G has no
-    // positive part, a stable factorisation), or shows the ones to find.
-    let mut far = None;
-    if est.is_empty() && first_shift.is_none() {
-        let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
-        let point = 1.0 / (NO_FACTOR_BELOW * top);
+    let mut shifted = |sigma: f64| -> Result<Factor> {
         let t = Instant::now();
-        let f = Factor::new_shifted(sym.clone(), k, Some((&g, point)))?;
+        let f = Factor::new_shifted(sym.clone(), k, Some((&g, sigma)))?;
         t_shift += t.elapsed().as_secs_f64();
         factor_err = factor_err.max(f.probe_residual);
-        log::debug!(
-            "buckling: no positive estimate; count {} below {point:e}",
-            f.negative_pivots
-        );
-        if f.negative_pivots == 0 {
-            let times = [t_factor_k + t_shift, t1.elapsed().as_secs_f64() - t_shift, 0.0];
-            return Ok(no_buckling(
-                n,
-                it.applications,
-                own_factorizations + 1,
-                factor_err,
-                times,
-                point,
-            ));
+        Ok(f)
+    };
+    // No positive estimate: the count at a far point, 1/(NO_FACTOR_BELOW · max|μ|), proves that
+    // no factor lies below it (there K − σG = K + σ|G| is positive definite when G has no
+    // positive part, a stable factorisation), or shows the ones to find (that factor is then
+    // the first shifted operator).
+    let mut far = None;
+    let mut sigma = match first_shift {
+        Some(sigma) => sigma,
+        None if est.is_empty() => {
+            let top = vals.iter().fold(0.0f64, |a, &m| a.max(m.abs()));
+            let point = 1.0 / (NO_FACTOR_BELOW * top);
+            let f = shifted(point)?;
+            log::debug!(
+                "buckling: no positive estimate; count {} below {point:e}",
+                f.negative_pivots
+            );
+            if f.negative_pivots == 0 {
+                drop(shifted);
+                let times = [t_factor_k + t_shift, t1.elapsed().as_secs_f64() - t_shift, 0.0];
+                return Ok(no_buckling(
+                    n,
+                    it.applications,
+                    own_factorizations + 1,
+                    factor_err,
+                    times,
+                    point,
+                ));
+            }
+            // Values from the unshifted operator cannot count as settled under the new one.
+            it.prev.clear();
+            far = Some(f);
+            point
         }
-        // Values from the unshifted operator cannot count as settled under the new one.
-        it.prev.clear();
-        far = Some((f, point));
-    }
+        None => shift_from_estimates(&est, nev),
+    };
     // The shifted iteration: the factor of K − σG serves both the operator and the count.
-    let mut sigma =
-        first_shift.unwrap_or_else(|| far.as_ref().map_or_else(|| shift_from_estimates(&est, nev), |f| f.1));
     let mut shifts = 0;
     let (count, s, computed) = loop {
         let f = match far.take() {
-            Some((f, _)) => f,
-            None => {
-                let t = Instant::now();
-                let f = Factor::new_shifted(sym.clone(), k, Some((&g, sigma)))?;
-                t_shift += t.elapsed().as_secs_f64();
-                factor_err = factor_err.max(f.probe_residual);
-                f
-            }
+            Some(f) => f,
+            None => shifted(sigma)?,
         };
         shifts += 1;
         let count = f.negative_pivots;
@@ -861,6 +869,7 @@ pub fn solve_pencil_from(
         }
         sigma = point_above(&computed, nev.min(computed.len()));
     };
+    drop(shifted);
     let t_solve = t1.elapsed().as_secs_f64() - t_shift;
     let t2 = Instant::now();
     let report_n = computed.len().min(nev);
