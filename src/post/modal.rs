@@ -202,7 +202,9 @@ pub struct RigidAnalysis {
 /// ≤ 4e-17 of that scale on a 1 m × 1 m × 1 mm hex20 sheet, a 4 m × 20 mm hex20 bar and tet10
 /// boxes of 0.1 mm and 10 km; a body on springs has the quotient of its suspension frequency²
 /// (a 1.6 Hz suspension of a 0.1 m hex20 cube: 4e-10), so suspension modes down to ~3e-7 of
-/// the mesh's highest frequency scale are elastic, not rigid. The test is
+/// the mesh's highest frequency scale are elastic, not rigid. A free motion must also have a
+/// strain energy at rounding level against its stiffness scale ([`FREE_STIFFNESS`]), so that a
+/// point mass that outweighs the structure cannot make a supported motion look free. The test is
 /// scale-free: lengths, masses and stiffnesses of any magnitude give the same labels. A mode is
 /// rigid when it lies in the span of all parts' free motions in the M-norm, so a loose part of
 /// a supported model gets its rigid modes labelled rigid.
@@ -220,8 +222,8 @@ pub fn rigid_analysis(
     let (mut kr, mut mr) = (Mat::<f64>::zeros(dofs.n_free, 6), Mat::<f64>::zeros(dofs.n_free, 6));
     k.mul_block(r.as_ref(), kr.as_mut());
     m.mul_block(r.as_ref(), mr.as_mut());
-    let (gk, gm) = part_grams(&comp, nc, &r, &kr, &mr);
     let (kd, md) = (k.diagonal(), m.diagonal());
+    let grams = part_grams(&comp, nc, &r, &kr, &mr, &kd);
     let scale = kd
         .iter()
         .zip(&md)
@@ -229,7 +231,7 @@ pub fn rigid_analysis(
         .map(|(&ki, &mi)| ki / mi)
         .fold(0.0f64, f64::max);
     let tol = 1e-13 * scale;
-    let (basis, free) = free_motions(&gk, &gm, tol, &comp, &parts, dofs, nodes.len());
+    let (basis, free) = free_motions(&grams, tol, &comp, &parts, dofs, nodes.len());
     let rigid = if basis.is_empty() {
         vec![false; phi.ncols()]
     } else {
@@ -325,36 +327,52 @@ fn part_rigid_vectors(comp: &[usize], parts: &PartShapes, dofs: &DofMap, nodes: 
     r
 }
 
-/// The 6 × 6 matrices `G_K = RᵀKR`, `G_M = RᵀMR` of each part, from `KR` and `MR`.
-fn part_grams(
-    comp: &[usize],
-    nc: usize,
-    r: &Mat<f64>,
-    kr: &Mat<f64>,
-    mr: &Mat<f64>,
-) -> (Vec<nalgebra::Matrix6<f64>>, Vec<nalgebra::Matrix6<f64>>) {
-    let mut gk = vec![nalgebra::Matrix6::<f64>::zeros(); nc];
-    let mut gm = vec![nalgebra::Matrix6::<f64>::zeros(); nc];
+/// The 6 × 6 matrices of each part: `G_K = RᵀKR`, `G_M = RᵀMR` and `G_D = RᵀDR` with
+/// D = diag(K) (the stiffness scale of the same motions), from `KR`, `MR` and K's diagonal.
+struct PartGrams {
+    k: Vec<nalgebra::Matrix6<f64>>,
+    m: Vec<nalgebra::Matrix6<f64>>,
+    d: Vec<nalgebra::Matrix6<f64>>,
+}
+
+fn part_grams(comp: &[usize], nc: usize, r: &Mat<f64>, kr: &Mat<f64>, mr: &Mat<f64>, kd: &[f64]) -> PartGrams {
+    let zero = vec![nalgebra::Matrix6::<f64>::zeros(); nc];
+    let mut g = PartGrams {
+        k: zero.clone(),
+        m: zero.clone(),
+        d: zero,
+    };
     for (e, &c) in comp.iter().enumerate() {
         for i in 0..6 {
             if r[(e, i)] == 0.0 {
                 continue;
             }
             for j in 0..6 {
-                gk[c][(i, j)] += r[(e, i)] * kr[(e, j)];
-                gm[c][(i, j)] += r[(e, i)] * mr[(e, j)];
+                g.k[c][(i, j)] += r[(e, i)] * kr[(e, j)];
+                g.m[c][(i, j)] += r[(e, i)] * mr[(e, j)];
+                g.d[c][(i, j)] += r[(e, i)] * kd[e].abs() * r[(e, j)];
             }
         }
     }
-    (gk, gm)
+    g
 }
+
+/// Strain energy of a free motion relative to its stiffness scale, `yᵀG_K y / yᵀG_D y`, at or
+/// below which the motion is free: rounding. A motion held by supports or springs has the
+/// share of its stiffness scale that the supports carry: 7e-3 for the translation and 5e-6 for
+/// the rotation about the clamp of a 40-element hex20 cantilever, 1e-9 for a 0.1 m hex20 cube on
+/// 1 kN/m springs. A free body's share is rounding: at most 8e-17 on tet10 boxes of 0.1 mm and
+/// 10 km, a 1 m × 1 m × 1 mm hex20 sheet, a 4 m hex20 bar and the 119k-DOF tet10 plate. The
+/// quotient test alone cannot tell them apart once a point mass outweighs the structure: the
+/// cantilever's tip mass 6e7 times its own mass brings the clamped translation's quotient
+/// below the tolerance.
+const FREE_STIFFNESS: f64 = 1e-12;
 
 /// The free motions of each part: the generalised eigenvectors of (`G_K`, `G_M`) with Rayleigh
 /// quotient below `tol`, as (part, coefficient vector of R), M-orthonormal; and the parts that
 /// have any, described.
 fn free_motions(
-    gk: &[nalgebra::Matrix6<f64>],
-    gm: &[nalgebra::Matrix6<f64>],
+    g: &PartGrams,
     tol: f64,
     comp: &[usize],
     parts: &PartShapes,
@@ -365,9 +383,9 @@ fn free_motions(
     // Free motions per part: coefficient vectors (6) of R.
     let mut basis: Vec<(usize, nalgebra::Vector6<f64>)> = Vec::new();
     let mut free = Vec::new();
-    for c in 0..gk.len() {
-        let gms = (gm[c] + gm[c].transpose()) * 0.5;
-        let gks = (gk[c] + gk[c].transpose()) * 0.5;
+    for c in 0..g.k.len() {
+        let gms = (g.m[c] + g.m[c].transpose()) * 0.5;
+        let gks = (g.k[c] + g.k[c].transpose()) * 0.5;
         let em = gms.symmetric_eigen();
         let emax = em.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
         if emax <= 0.0 {
@@ -385,8 +403,10 @@ fn free_motions(
         let ea = a.symmetric_eigen();
         let mut count = 0;
         for (i, &mu) in ea.eigenvalues.iter().enumerate() {
-            if mu <= tol {
-                let y = &w * ea.eigenvectors.column(i);
+            let y = &w * ea.eigenvectors.column(i);
+            let y6 = nalgebra::Vector6::from_fn(|k, _| y[k]);
+            let scale = (y6.transpose() * g.d[c] * y6)[(0, 0)];
+            if mu <= tol && (y6.transpose() * gks * y6)[(0, 0)] <= FREE_STIFFNESS * scale {
                 basis.push((c, nalgebra::Vector6::from_fn(|k, _| y[k])));
                 count += 1;
             }
@@ -395,7 +415,11 @@ fn free_motions(
             continue;
         }
         let motions = (0..6)
-            .filter(|&d| gms[(d, d)] > 1e-10 * emax && gks[(d, d)] / gms[(d, d)] <= tol)
+            .filter(|&d| {
+                gms[(d, d)] > 1e-10 * emax
+                    && gks[(d, d)] / gms[(d, d)] <= tol
+                    && gks[(d, d)] <= FREE_STIFFNESS * g.d[c][(d, d)]
+            })
             .map(|d| NAMES[d])
             .collect();
         let node_list = (0..n_nodes.min(dofs.n_nodes()))
