@@ -407,7 +407,7 @@ fn free_motions(
             let y6 = nalgebra::Vector6::from_fn(|k, _| y[k]);
             let scale = (y6.transpose() * g.d[c] * y6)[(0, 0)];
             if mu <= tol && (y6.transpose() * gks * y6)[(0, 0)] <= FREE_STIFFNESS * scale {
-                basis.push((c, nalgebra::Vector6::from_fn(|k, _| y[k])));
+                basis.push((c, y6));
                 count += 1;
             }
         }
