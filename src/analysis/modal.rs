@@ -431,13 +431,14 @@ pub fn finish(
     tm.post = t.elapsed().as_secs_f64();
     tm.total = t_all.elapsed().as_secs_f64() + sys.timings.wall;
     let (volume, solid_mass) = model.volume_and_mass()?;
-    let mass = solid_mass + model.discrete_mass();
+    let discrete_mass = model.discrete_mass();
+    let mass = solid_mass + discrete_mass;
 
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| max_nan(a, b));
     let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| max_nan(a, b));
     let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
     let mut notes = solution_notes(model, &sol, &parts, &modes, verify_tol, accurate);
-    notes.extend(mass_contrast_note(solid_mass, model.discrete_mass(), accurate));
+    notes.extend(mass_contrast_note(solid_mass, discrete_mass, accurate));
     // The factorisation this process analysed (none when another engine solved).
     let (factor_flops, factor_nnz) = sys.symbolic().map_or((0.0, 0), |s| (s.flops, s.nnz_l));
     let memory_bytes = memory_by_phase(sys, &sol)?;

@@ -2369,10 +2369,17 @@ impl Lanczos {
                 // orthogonalisation, pass after pass). Massless equations take the mean mass.
                 let d = m.diagonal();
                 let mean = d.iter().map(|x| x.abs()).sum::<f64>() / d.len().max(1) as f64;
+                let scale: Vec<f64> = d
+                    .iter()
+                    .map(|&mi| match (mi > 0.0, mean > 0.0) {
+                        (true, _) => 1.0 / mi.sqrt(),
+                        (false, true) => 1.0 / mean.sqrt(),
+                        (false, false) => 1.0,
+                    })
+                    .collect();
                 for &k in &deficient {
-                    for (i, &mi) in d.iter().enumerate().take(self.n) {
-                        let mi = if mi > 0.0 { mi } else { mean };
-                        w[(i, k)] = self.rng.next() / if mi > 0.0 { mi.sqrt() } else { 1.0 };
+                    for (i, &si) in scale.iter().enumerate().take(self.n) {
+                        w[(i, k)] = self.rng.next() * si;
                     }
                 }
                 m.mul_block(w.as_ref(), mw.as_mut());
