@@ -384,7 +384,18 @@ impl System {
 fn check_finite(source: &str, model: &Model, km: &crate::assembly::Assembled) -> Result<()> {
     use rayon::prelude::*;
     for (name, mat, what) in [("K", &km.k, "stiffness"), ("M", &km.m, "mass")] {
-        if let Some(p) = mat.values.par_iter().position_first(|v| !v.is_finite()) {
+        // By chunks (a short-circuiting search per entry took 0.15 s for K and M at 119k DOFs,
+        // a scan per chunk 0.01 s): the first chunk holding a non-finite entry, then the entry.
+        const CHUNK: usize = 1 << 14;
+        let first = mat
+            .values
+            .par_chunks(CHUNK)
+            .position_first(|c| !c.iter().fold(true, |ok, v| ok & v.is_finite()))
+            .and_then(|c| {
+                let c0 = c * CHUNK;
+                mat.values[c0..].iter().position(|v| !v.is_finite()).map(|i| c0 + i)
+            });
+        if let Some(p) = first {
             let col = mat.pattern.col_ptr.partition_point(|&c| c <= p).saturating_sub(1);
             return Err(Error::InvalidInput(format!(
                 "{source}: the {what} matrix {name} has a non-finite entry ({}) at {}: the material constants or the \

@@ -375,6 +375,13 @@ fn inputs_beyond_double_precision_are_named() {
         1,
         &["element 1", "beyond double precision"],
     );
+    // Finite element matrices whose assembled sums overflow: the first non-finite entry of K,
+    // named by its node and component (the scan goes by chunks of entries).
+    expect_error(
+        &["modes", "box:1e154,1e154,1e154:2,2,2:hex8"],
+        1,
+        &["stiffness matrix K has a non-finite entry", "at node 1 ux"],
+    );
     let (code, _, err) = run(&["modes", b, "--material", "2.1e5,0.3,7.85e-9", "--modes", "7"]);
     assert_eq!(code, 0, "{err}");
 }
