@@ -78,6 +78,26 @@ fn prefetch(xr: &[f64], at: usize) {
     let _ = (xr, at);
 }
 
+/// `body()` compiled for AVX-512F where the CPU has it, else as is. The products' per-entry
+/// updates of up to eight columns then take one vector multiply and one add instead of four
+/// of each (the baseline x86-64 target has two-wide vectors only): the same operations in the
+/// same order, so the same bits. On the 119k-DOF tet10 plate (medians of 15, three runs each):
+/// K·X with the backward errors' norms, 19 columns, 0.089–0.102 → 0.067–0.076 s; M·X alone,
+/// bound by the memory more than by the arithmetic, 0.039 → 0.032–0.034 s.
+#[inline(always)]
+fn wide<R>(body: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx512f") {
+        #[target_feature(enable = "avx512f")]
+        unsafe fn run<R>(body: impl FnOnce() -> R) -> R {
+            body()
+        }
+        // SAFETY: the CPU has AVX-512F (checked above).
+        return unsafe { run(body) };
+    }
+    body()
+}
+
 /// `f::<w>(args)` for a chunk width `w` of 1 to 8 (the compile-time widths of the kernels).
 macro_rules! by_width {
     ($w:expr, $f:ident($($a:expr),*)) => {
@@ -142,15 +162,20 @@ fn gather_rows_and_abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f6
         .par_row_chunks_mut(ABS_ROWS)
         .enumerate()
         .map(|(ch, mut o)| {
-            let mut s2 = [0.0f64; B];
-            for jj in 0..o.nrows() {
-                let (acc, abs) = column_sums_and_abs::<B>(p, vals, xr, ch * ABS_ROWS + jj);
-                for c in 0..B {
-                    o[(jj, c)] = acc[c];
-                    s2[c] += abs[c] * abs[c];
-                }
-            }
-            s2
+            wide(
+                #[inline(always)]
+                || {
+                    let mut s2 = [0.0f64; B];
+                    for jj in 0..o.nrows() {
+                        let (acc, abs) = column_sums_and_abs::<B>(p, vals, xr, ch * ABS_ROWS + jj);
+                        for c in 0..B {
+                            o[(jj, c)] = acc[c];
+                            s2[c] += abs[c] * abs[c];
+                        }
+                    }
+                    s2
+                },
+            )
         })
         .collect();
     summed_norms(&parts)
@@ -162,12 +187,17 @@ fn gather_rows_and_abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f6
 fn gather_rows<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64], out: MatMut<'_, f64>) {
     const ROWS: usize = 256;
     out.par_row_chunks_mut(ROWS).enumerate().for_each(|(ch, mut o)| {
-        for jj in 0..o.nrows() {
-            let acc = column_sums::<B>(p, vals, xr, ch * ROWS + jj, |a| a);
-            for (c, v) in acc.iter().enumerate() {
-                o[(jj, c)] = *v;
-            }
-        }
+        wide(
+            #[inline(always)]
+            || {
+                for jj in 0..o.nrows() {
+                    let acc = column_sums::<B>(p, vals, xr, ch * ROWS + jj, |a| a);
+                    for (c, v) in acc.iter().enumerate() {
+                        o[(jj, c)] = *v;
+                    }
+                }
+            },
+        )
     });
 }
 
@@ -206,14 +236,19 @@ fn abs_norms<const B: usize>(p: &Pattern, vals: &[f64], xr: &[f64]) -> Vec<f64> 
     let parts: Vec<[f64; B]> = (0..n.div_ceil(ABS_ROWS))
         .into_par_iter()
         .map(|ch| {
-            let mut s2 = [0.0f64; B];
-            for j in ch * ABS_ROWS..((ch + 1) * ABS_ROWS).min(n) {
-                let acc = column_sums::<B>(p, vals, xr, j, f64::abs);
-                for c in 0..B {
-                    s2[c] += acc[c] * acc[c];
-                }
-            }
-            s2
+            wide(
+                #[inline(always)]
+                || {
+                    let mut s2 = [0.0f64; B];
+                    for j in ch * ABS_ROWS..((ch + 1) * ABS_ROWS).min(n) {
+                        let acc = column_sums::<B>(p, vals, xr, j, f64::abs);
+                        for c in 0..B {
+                            s2[c] += acc[c] * acc[c];
+                        }
+                    }
+                    s2
+                },
+            )
         })
         .collect();
     summed_norms(&parts)
