@@ -72,6 +72,44 @@ pub struct EigenParams {
     /// one-factorisation solve deflates those that are null vectors to rounding
     /// ([`null_vectors`]) rather than iterating for them.
     pub null_candidates: Option<NullCandidates>,
+    /// Raised when the iteration with the last factorisation starts (its factor complete and
+    /// resident): work waiting on it ([`Signal::wait`]) then runs beside the iteration, which
+    /// leaves part of the cores idle, without slowing the factorisation.
+    pub iterating: Option<Signal>,
+}
+
+/// A one-shot signal between the solver and work waiting to run beside it: raised ("go") or
+/// called off, whichever comes first.
+#[derive(Clone, Default)]
+pub struct Signal(Arc<(std::sync::Mutex<Option<bool>>, std::sync::Condvar)>);
+
+impl Signal {
+    /// Raise it (`true`) or call it off (`false`); the first call decides.
+    pub fn set(&self, go: bool) {
+        let (state, cv) = &*self.0;
+        let mut s = state.lock().unwrap_or_else(|p| p.into_inner());
+        if s.is_none() {
+            *s = Some(go);
+            cv.notify_all();
+        }
+    }
+    /// Wait until it is raised (`true`) or called off (`false`).
+    pub fn wait(&self) -> bool {
+        let (state, cv) = &*self.0;
+        let mut s = state.lock().unwrap_or_else(|p| p.into_inner());
+        loop {
+            if let Some(go) = *s {
+                return go;
+            }
+            s = cv.wait(s).unwrap_or_else(|p| p.into_inner());
+        }
+    }
+}
+
+impl std::fmt::Debug for Signal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Signal")
+    }
 }
 
 /// Vectors over the free DOFs offered as candidates for K's null space, typically the six
@@ -99,6 +137,7 @@ impl Default for EigenParams {
             verify_tol: 1e-10,
             dense_below: 300,
             null_candidates: None,
+            iterating: None,
         }
     }
 }
@@ -1470,6 +1509,9 @@ fn solve_below_bound(
         return Ok(None);
     }
     let time_factor = est.t0.elapsed().as_secs_f64();
+    if let Some(s) = &p.iterating {
+        s.set(true);
+    }
     let ti = Instant::now();
     // The deflated null vectors (nz < nm ≤ count) are among the eigenvalues below U.
     let nz = null_count(null);
@@ -1543,6 +1585,9 @@ fn solve_below_bound(
             return Ok(None);
         };
         (done, time_factor) = (d, time_factor + seconds);
+    } else {
+        // The factor is not needed any more: freed while the caller post-processes.
+        crate::util::memory::drop_in_background(fa);
     }
     let (rel_residual, m_orthonormality, backward_error) = done.verified;
     Ok(Some(EigenSolution {

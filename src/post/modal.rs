@@ -83,46 +83,82 @@ pub fn rigid_vectors(dofs: &DofMap, nodes: &[[f64; 3]], c: [f64; 3]) -> Mat<f64>
 
 /// Participation factors and effective masses of M-normalised modes `phi`.
 pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatRef<'_, f64>) -> ParticipationTable {
-    // Centre of mass from the translational vectors: c_d = (r_dᵀ M x_d) / (r_dᵀ M r_d).
-    let r0 = rigid_vectors(dofs, nodes, [0.0; 3]);
-    let mut mr0 = Mat::zeros(dofs.n_free, 6);
-    m.mul_block(r0.as_ref(), mr0.as_mut());
-    let mut c = [0.0; 3];
-    for d in 0..3 {
-        let mut xd = vec![0.0; dofs.n_free];
-        for (a, x) in nodes.iter().enumerate() {
-            if let Some(e) = dofs.eq_of(a, d) {
-                xd[e] = x[d];
+    participation_of(&ParticipationBasis::new(m, dofs, nodes), phi)
+}
+
+/// What the participation factors need of the model alone: the rigid-body vectors about the
+/// centre of mass, their M-images, their Gram matrix's pseudo-inverse and its diagonal.
+pub struct ParticipationBasis {
+    c: [f64; 3],
+    mr: Mat<f64>,
+    total: [f64; 6],
+    ginv: nalgebra::DMatrix<f64>,
+    emax: f64,
+}
+
+impl ParticipationBasis {
+    /// The basis of `m` on the free DOFs of `dofs` at `nodes`.
+    pub fn new(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]]) -> Self {
+        // Centre of mass from the translational vectors: c_d = (r_dᵀ M x_d) / (r_dᵀ M r_d).
+        let r0 = rigid_vectors(dofs, nodes, [0.0; 3]);
+        let mut mr0 = Mat::zeros(dofs.n_free, 6);
+        m.mul_block(r0.as_ref(), mr0.as_mut());
+        let mut c = [0.0; 3];
+        for d in 0..3 {
+            let mut xd = vec![0.0; dofs.n_free];
+            for (a, x) in nodes.iter().enumerate() {
+                if let Some(e) = dofs.eq_of(a, d) {
+                    xd[e] = x[d];
+                }
+            }
+            let mass: f64 = col(mr0.as_ref(), d).iter().sum();
+            let mom = dot(col(mr0.as_ref(), d), &xd);
+            c[d] = if mass > 0.0 { mom / mass } else { 0.0 };
+        }
+        let r = rigid_vectors(dofs, nodes, c);
+        let mut mr = Mat::zeros(dofs.n_free, 6);
+        m.mul_block(r.as_ref(), mr.as_mut());
+        // Gram matrix of the rigid-body vectors, G = RᵀMR (its diagonal: the totals), and its
+        // pseudo-inverse (a model may not carry all six motions, e.g. fixed DOFs remove parts
+        // of them).
+        let mut g = nalgebra::DMatrix::zeros(6, 6);
+        for i in 0..6 {
+            for j in 0..6 {
+                g[(i, j)] = dot(col(r.as_ref(), i), col(mr.as_ref(), j));
             }
         }
-        let mass: f64 = col(mr0.as_ref(), d).iter().sum();
-        let mom = dot(col(mr0.as_ref(), d), &xd);
-        c[d] = if mass > 0.0 { mom / mass } else { 0.0 };
-    }
-    let r = rigid_vectors(dofs, nodes, c);
-    let mut mr = Mat::zeros(dofs.n_free, 6);
-    m.mul_block(r.as_ref(), mr.as_mut());
-    // Gram matrix of the rigid-body vectors, G = RᵀMR (its diagonal: the totals), and its
-    // pseudo-inverse (a model may not carry all six motions, e.g. fixed DOFs remove parts of
-    // them).
-    let mut g = nalgebra::DMatrix::zeros(6, 6);
-    for i in 0..6 {
-        for j in 0..6 {
-            g[(i, j)] = dot(col(r.as_ref(), i), col(mr.as_ref(), j));
+        let total: [f64; 6] = std::array::from_fn(|d| g[(d, d)]);
+        let g = (&g + g.transpose()) * 0.5;
+        let eig = g.clone().symmetric_eigen();
+        let emax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+        let mut ginv = nalgebra::DMatrix::zeros(6, 6);
+        for k in 0..6 {
+            let e = eig.eigenvalues[k];
+            if e > 1e-12 * emax {
+                let v = eig.eigenvectors.column(k);
+                ginv += v * v.transpose() / e;
+            }
+        }
+        ParticipationBasis {
+            c,
+            mr,
+            total,
+            ginv,
+            emax,
         }
     }
-    let total: [f64; 6] = std::array::from_fn(|d| g[(d, d)]);
-    let g = (&g + g.transpose()) * 0.5;
-    let eig = g.clone().symmetric_eigen();
-    let emax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
-    let mut ginv = nalgebra::DMatrix::zeros(6, 6);
-    for k in 0..6 {
-        let e = eig.eigenvalues[k];
-        if e > 1e-12 * emax {
-            let v = eig.eigenvectors.column(k);
-            ginv += v * v.transpose() / e;
-        }
-    }
+}
+
+/// [`participation`] with the model's part formed beforehand.
+pub fn participation_of(b: &ParticipationBasis, phi: MatRef<'_, f64>) -> ParticipationTable {
+    let ParticipationBasis {
+        c,
+        mr,
+        total,
+        ginv,
+        emax,
+    } = b;
+    let (c, total, emax) = (*c, *total, *emax);
     let mut rigid = Vec::with_capacity(phi.ncols());
     let mut modes = Vec::with_capacity(phi.ncols());
     let mut cumulative_ratio = Vec::with_capacity(phi.ncols());
@@ -147,7 +183,7 @@ pub fn participation(m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]], phi: MatR
         }
         // M-norm² of the part of φ in span(R): Γᵀ G⁺ Γ (φ is M-normalised).
         let gv = nalgebra::DVector::from_column_slice(&factor);
-        let inside = (gv.transpose() * &ginv * &gv)[(0, 0)];
+        let inside = (gv.transpose() * ginv * &gv)[(0, 0)];
         rigid.push(emax > 0.0 && 1.0 - inside < 1e-8);
         modes.push(Participation { factor, effective });
         cumulative_ratio.push(ratio);
@@ -215,32 +251,60 @@ pub fn rigid_analysis(
     nodes: &[[f64; 3]],
     phi: MatRef<'_, f64>,
 ) -> RigidAnalysis {
-    let (comp, nc) = connected_parts(k, dofs, nodes.len());
-    let parts = PartShapes::of(&comp, nc, dofs, nodes);
-    // Rigid vectors, each row about its part's centroid, rotations scaled by 1/size.
-    let r = part_rigid_vectors(&comp, &parts, dofs, nodes);
-    let (mut kr, mut mr) = (Mat::<f64>::zeros(dofs.n_free, 6), Mat::<f64>::zeros(dofs.n_free, 6));
-    k.mul_block(r.as_ref(), kr.as_mut());
-    m.mul_block(r.as_ref(), mr.as_mut());
-    let (kd, md) = (k.diagonal(), m.diagonal());
-    let grams = part_grams(&comp, nc, &r, &kr, &mr, &kd);
-    let scale = kd
-        .iter()
-        .zip(&md)
-        .filter(|&(_, &mi)| mi > 0.0)
-        .map(|(&ki, &mi)| ki / mi)
-        .fold(0.0f64, f64::max);
-    let tol = 1e-13 * scale;
-    let (basis, free) = free_motions(&grams, tol, &comp, &parts, dofs, nodes.len());
-    let rigid = if basis.is_empty() {
+    rigid_analysis_of(m, &RigidParts::new(k, m, dofs, nodes), phi)
+}
+
+/// What [`rigid_analysis`] needs of the model alone: its connected parts, their free rigid
+/// motions and the parts' rigid-body vectors' M-images.
+pub struct RigidParts {
+    comp: Vec<usize>,
+    nc: usize,
+    basis: Vec<(usize, nalgebra::Vector6<f64>)>,
+    free: Vec<FreePart>,
+    mr: Mat<f64>,
+}
+
+/// [`rigid_analysis`] with the model's part formed beforehand.
+pub fn rigid_analysis_of(m: &SymMatrix, p: &RigidParts, phi: MatRef<'_, f64>) -> RigidAnalysis {
+    let rigid = if p.basis.is_empty() {
         vec![false; phi.ncols()]
     } else {
-        modes_in_span(m, phi, &basis, &comp, nc, &mr)
+        modes_in_span(m, phi, &p.basis, &p.comp, p.nc, &p.mr)
     };
     RigidAnalysis {
-        n_parts: nc,
-        free,
+        n_parts: p.nc,
+        free: p.free.clone(),
         rigid,
+    }
+}
+
+impl RigidParts {
+    /// The parts of the model of `k`, `m` on the free DOFs of `dofs` at `nodes`.
+    pub fn new(k: &SymMatrix, m: &SymMatrix, dofs: &DofMap, nodes: &[[f64; 3]]) -> Self {
+        let (comp, nc) = connected_parts(k, dofs, nodes.len());
+        let parts = PartShapes::of(&comp, nc, dofs, nodes);
+        // Rigid vectors, each row about its part's centroid, rotations scaled by 1/size.
+        let r = part_rigid_vectors(&comp, &parts, dofs, nodes);
+        let (mut kr, mut mr) = (Mat::<f64>::zeros(dofs.n_free, 6), Mat::<f64>::zeros(dofs.n_free, 6));
+        k.mul_block(r.as_ref(), kr.as_mut());
+        m.mul_block(r.as_ref(), mr.as_mut());
+        let (kd, md) = (k.diagonal(), m.diagonal());
+        let grams = part_grams(&comp, nc, &r, &kr, &mr, &kd);
+        let scale = kd
+            .iter()
+            .zip(&md)
+            .filter(|&(_, &mi)| mi > 0.0)
+            .map(|(&ki, &mi)| ki / mi)
+            .fold(0.0f64, f64::max);
+        let tol = 1e-13 * scale;
+        let (basis, free) = free_motions(&grams, tol, &comp, &parts, dofs, nodes.len());
+        RigidParts {
+            comp,
+            nc,
+            basis,
+            free,
+            mr,
+        }
     }
 }
 
