@@ -329,7 +329,6 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
             if !iterating.wait() {
                 return None;
             }
-            crate::util::memory::lower_thread_priority();
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(1)
                 .start_handler(|_| crate::util::memory::lower_thread_priority())
@@ -337,8 +336,9 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
                 .ok()?;
             Some(pool.install(|| PostBasis::new(k_mat, m_mat, model)))
         });
+        let off = iterating.off_on_drop();
         let sol = eigen::solve_with_prepared(k_mat, m_mat, sym, &params, sys.coarse_space(), sys.take_coarse_model());
-        iterating.set(false);
+        drop(off);
         // A panic in the background leaves the post-processing to form it itself.
         (sol, basis.join().ok().flatten())
     });

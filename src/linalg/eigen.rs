@@ -93,6 +93,17 @@ impl Signal {
             cv.notify_all();
         }
     }
+    /// A guard that calls it off when dropped, on return or unwinding alike: work waiting on
+    /// the signal never outlives the solve that was to raise it.
+    pub fn off_on_drop(&self) -> impl Drop + '_ {
+        struct Off<'a>(&'a Signal);
+        impl Drop for Off<'_> {
+            fn drop(&mut self) {
+                self.0.set(false);
+            }
+        }
+        Off(self)
+    }
     /// Wait until it is raised (`true`) or called off (`false`).
     pub fn wait(&self) -> bool {
         let (state, cv) = &*self.0;
@@ -2963,6 +2974,34 @@ mod tests {
     /// step; one step from below the spectrum ([`refine_below_spectrum`]) damps it by λ₁/λ₇.
     /// Fixed–free chain of 200 unit masses and springs, whose modes are known in closed form:
     /// x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)), λ_j = 4 sin²((2j − 1)π/(4n + 2)).
+    /// The signal between the solver and the work waiting on it: the first call decides, a
+    /// waiter wakes to it, and the guard calls it off on unwinding as on return.
+    #[test]
+    fn signal_first_call_decides_and_the_guard_calls_it_off() {
+        let s = Signal::default();
+        let waiter = {
+            let s = s.clone();
+            std::thread::spawn(move || s.wait())
+        };
+        s.set(true);
+        s.set(false);
+        assert!(waiter.join().unwrap());
+        assert!(s.wait());
+        let off = Signal::default();
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let _g = off.off_on_drop();
+            panic!("a solve that fails");
+        }));
+        assert!(r.is_err());
+        assert!(!off.wait());
+        let raised = Signal::default();
+        {
+            let _g = raised.off_on_drop();
+            raised.set(true);
+        }
+        assert!(raised.wait());
+    }
+
     #[test]
     fn refinement_below_the_spectrum_removes_what_refinement_at_u_amplifies() {
         let n = 200;
