@@ -615,8 +615,7 @@ fn free_motions(sys: &System, req: &HarmonicRequest, method: Method) -> Result<F
         });
     }
     let model = sys.model();
-    let empty = faer::Mat::<f64>::zeros(sys.n_free(), 0);
-    let parts = crate::post::modal::rigid_analysis(sys.k(), sys.m()?, &model.dofs, &model.nodes, empty.as_ref());
+    let parts = crate::post::modal::RigidParts::new(sys.k(), sys.m()?, &model.dofs, &model.nodes);
     let free = FreeMotions {
         count: parts.free.iter().map(|p| p.count).sum(),
         names: parts.free.iter().flat_map(|p| p.motions.iter().copied()).collect(),

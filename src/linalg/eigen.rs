@@ -1544,32 +1544,7 @@ fn solve_below_bound(
         memory: est.memory,
         probe: None,
     };
-    let mut want = count - nz;
-    let mut attempt = 0;
-    let done = loop {
-        attempt += 1;
-        lz.set_want(want);
-        let (lambda, x) = bb.lanczos(&mut lz)?;
-        match bb.purify(lambda, x, attempt)? {
-            Purified::Short { lambda, x, below } => {
-                // A cluster wider than the block, or a pair that had not converged: iterate
-                // on, with the pairs found locked at the start of a new basis.
-                want = (want + (count - below) + p.block.min(4)).min(n);
-                // The deflated pairs are among those found: from here on they are locked in
-                // the basis like the others.
-                if bb.null.take().is_some() {
-                    lz.deflate = None;
-                    want = (want + nz).min(n);
-                }
-                log::info!(
-                    "{below} of the {count} eigenvalues below U found: iterating for more, the pairs found locked"
-                );
-                lz.set_want(want.max(lambda.len()));
-                lz.restart_from(&lambda, x.as_ref(), m, u);
-            }
-            Purified::Done(d) => break d,
-        }
-    };
+    let done = bb.iterate(&mut lz, nz)?;
     let time_iterate = ti.elapsed().as_secs_f64() - done.tv.elapsed().as_secs_f64();
     log::info!(
         "Sturm check: {count} eigenvalues below {u:.6e} rad²/s², {} found ({} refinement step{})",
@@ -1850,6 +1825,39 @@ enum Purified {
 }
 
 impl BelowBound<'_, '_> {
+    /// Lanczos rounds below U, each purified, until every one of the `count` pairs below U is
+    /// found (or the rounds are spent): a round short of pairs iterates on with the pairs
+    /// found locked at the start of a new basis. `nz`: null vectors deflated.
+    fn iterate(&mut self, lz: &mut Lanczos, nz: usize) -> Result<Purification> {
+        let (n, count, p, m, u) = (self.k.n(), self.count, self.p, self.m, self.u);
+        let mut want = count - nz;
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            lz.set_want(want);
+            let (lambda, x) = self.lanczos(lz)?;
+            match self.purify(lambda, x, attempt)? {
+                Purified::Short { lambda, x, below } => {
+                    // A cluster wider than the block, or a pair that had not converged: iterate
+                    // on, with the pairs found locked at the start of a new basis.
+                    want = (want + (count - below) + p.block.min(4)).min(n);
+                    // The deflated pairs are among those found: from here on they are locked
+                    // in the basis like the others.
+                    if self.null.take().is_some() {
+                        lz.deflate = None;
+                        want = (want + nz).min(n);
+                    }
+                    log::info!(
+                        "{below} of the {count} eigenvalues below U found: iterating for more, the pairs found locked"
+                    );
+                    lz.set_want(want.max(lambda.len()));
+                    lz.restart_from(&lambda, x.as_ref(), m, u);
+                }
+                Purified::Done(d) => return Ok(d),
+            }
+        }
+    }
+
     /// A⁻¹MX, the first time with the factor's probe solved along ([`inverse_images_probed`]).
     fn images(&mut self, x: MatRef<'_, f64>) -> Mat<f64> {
         if self.probe.is_some() {
@@ -2969,11 +2977,6 @@ mod tests {
         (k, m)
     }
 
-    /// Refinement at U, above the wanted modes, amplifies a mode between U and 2U in the lowest
-    /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here), and the refinement undoes such a
-    /// step; one step from below the spectrum ([`refine_below_spectrum`]) damps it by λ₁/λ₇.
-    /// Fixed–free chain of 200 unit masses and springs, whose modes are known in closed form:
-    /// x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)), λ_j = 4 sin²((2j − 1)π/(4n + 2)).
     /// The signal between the solver and the work waiting on it: the first call decides, a
     /// waiter wakes to it, and the guard calls it off on unwinding as on return.
     #[test]
@@ -3002,6 +3005,11 @@ mod tests {
         assert!(raised.wait());
     }
 
+    /// Refinement at U, above the wanted modes, amplifies a mode between U and 2U in the lowest
+    /// mode's vector (by |λ₁ − U|/|λ₇ − U| ≈ 6 a step here), and the refinement undoes such a
+    /// step; one step from below the spectrum ([`refine_below_spectrum`]) damps it by λ₁/λ₇.
+    /// Fixed–free chain of 200 unit masses and springs, whose modes are known in closed form:
+    /// x_j(i) = sin((2j − 1)π(i + 1)/(2n + 1)), λ_j = 4 sin²((2j − 1)π/(4n + 2)).
     #[test]
     fn refinement_below_the_spectrum_removes_what_refinement_at_u_amplifies() {
         let n = 200;

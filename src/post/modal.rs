@@ -260,7 +260,8 @@ pub struct RigidParts {
     comp: Vec<usize>,
     nc: usize,
     basis: Vec<(usize, nalgebra::Vector6<f64>)>,
-    free: Vec<FreePart>,
+    /// The parts that have free rigid motions.
+    pub free: Vec<FreePart>,
     mr: Mat<f64>,
 }
 
