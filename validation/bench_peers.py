@@ -17,7 +17,9 @@ process of the run):
 
 Sizes (label: h in mm): 20k: 40, 65k: 25, 120k: 20.3, 300k: 14.9, 1M: 9.4 (vibrofem alone at
 1M). Runs under ``--repeat-below`` seconds are repeated (``--repeat``, default 3) and the
-median is reported. ``--lowmem`` compares the in-core and the low-memory paths instead (time
+median is reported; ``--rounds N`` runs every tool N times instead, in rounds (each tool once
+per round, the order rotated), and adds each peer's time over vibrofem's round by round (median
+and range): on a shared machine a slow spell then falls on all the tools alike. ``--lowmem`` compares the in-core and the low-memory paths instead (time
 per mode, memory per DOF; live up to ``--lowmem-live-up-to`` DOFs, from the runs logged in
 ``validation/lowmem_results.json`` above). Writes ``validation/out/bench_peers.json``, a log-log plot of wall time and
 peak memory against DOFs (``validation/out/bench_peers.svg``, copied to ``docs/bench_peers.svg``
@@ -30,6 +32,7 @@ Usage (crate root, after ``cargo build --release``; installs CalculiX and SLEPc 
 
     validation/.venv/bin/python validation/bench_peers.py --quick          # 20k, all tools, 1 run
     validation/.venv/bin/python validation/bench_peers.py --sizes 20k,65k,120k --tools vibrofem,slepc
+    validation/.venv/bin/python validation/bench_peers.py --sizes 120k --tools vibrofem,slepc,calculix --rounds 3
     validation/.venv/bin/python validation/bench_peers.py --readme          # everything (hours)
 """
 
@@ -188,11 +191,8 @@ def measure_in(cwd: str, cmd: list, timeout: float, env: dict) -> dict:
             "peak_rss_bytes": int(m.group(1)) * 1024 if m else None}
 
 
-def median_run(tool: str, mesh: str, args) -> dict:
-    """Median of `--repeat` runs when one takes under `--repeat-below` seconds."""
-    runs = [run_tool(tool, mesh, args)]
-    if "failed" not in runs[0] and runs[0]["wall_s"] < args.repeat_below:
-        runs += [run_tool(tool, mesh, args) for _ in range(args.repeat - 1)]
+def aggregate(runs: list) -> dict:
+    """Medians (and ranges) of the timed figures of `runs`; the rest from the median run."""
     good = [r for r in runs if "failed" not in r]
     if not good:
         return runs[0]
@@ -204,6 +204,55 @@ def median_run(tool: str, mesh: str, args) -> dict:
             out[key + "_range"] = [min(vals), max(vals)]
     out["runs"] = len(good)
     return out
+
+
+def median_run(tool: str, mesh: str, args) -> dict:
+    """Median of `--repeat` runs when one takes under `--repeat-below` seconds."""
+    runs = [run_tool(tool, mesh, args)]
+    if "failed" not in runs[0] and runs[0]["wall_s"] < args.repeat_below:
+        runs += [run_tool(tool, mesh, args) for _ in range(args.repeat - 1)]
+    return aggregate(runs)
+
+
+def rounds_run(tools: list, mesh: str, args) -> tuple[dict, dict]:
+    """`--rounds` rounds, each running every tool once (the order rotated from round to round),
+    so that a slow spell of a shared machine falls on all the tools alike. Returns the medians
+    per tool and, per peer, the ratio of its compared time to vibrofem's in the same round
+    (median and range over the rounds)."""
+    runs = {t: [] for t in tools}
+    for k in range(args.rounds):
+        order = tools[k % len(tools):] + tools[:k % len(tools)]
+        for tool in order:
+            r = run_tool(tool, mesh, args)
+            runs[tool].append(r)
+            print(f"#   round {k + 1}/{args.rounds} {tool}: " + (r.get("failed") or
+                  f"{r['wall_s']:.2f} s wall, compared {r.get('compared_s') or 0:.2f} s"),
+                  file=sys.stderr, flush=True)
+    ratios = {}
+    if "vibrofem" in tools:
+        for peer in tools:
+            if peer == "vibrofem":
+                continue
+            q = [p["compared_s"] / v["compared_s"] for v, p in zip(runs["vibrofem"], runs[peer])
+                 if "failed" not in v and "failed" not in p and v.get("compared_s") and p.get("compared_s")]
+            if q:
+                ratios[peer] = {"median": statistics.median(q), "range": [min(q), max(q)], "rounds": len(q)}
+    return {t: aggregate(rs) for t, rs in runs.items()}, ratios
+
+
+def ratio_lines(rows: list) -> str:
+    """The round-by-round ratios of `--rounds`, one line per size."""
+    lines = []
+    for row in rows:
+        rat = row.get("ratios")
+        if rat:
+            parts = [f"{peer} {q['median']:.2f}× ({q['range'][0]:.2f}–{q['range'][1]:.2f}, {q['rounds']} rounds)"
+                     for peer, q in rat.items()]
+            lines.append(f"- {format(row['dofs'], ',').replace(',', ' ')} DOFs: " + ", ".join(parts))
+    if not lines:
+        return ""
+    return ("Compared time of each peer over vibrofem's, run by run in the same round (median, range):\n\n"
+            + "\n".join(lines))
 
 
 def dgemm_gflops() -> float | None:
@@ -435,6 +484,9 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="20k only, one run each")
     ap.add_argument("--repeat", type=int, default=3, help="runs for the median")
     ap.add_argument("--repeat-below", type=float, default=60.0, help="repeat runs shorter than this (s)")
+    ap.add_argument("--rounds", type=int, default=0,
+                    help="interleave: N rounds of every tool once, medians of all and per-round ratios "
+                         "(replaces --repeat)")
     ap.add_argument("--peers-up-to", type=int, default=400_000,
                     help="run the other tools only up to this many DOFs (vibrofem alone above)")
     ap.add_argument("--skfem-up-to", type=int, default=150_000, help="scikit-fem only up to this many DOFs")
@@ -470,15 +522,21 @@ def main(argv=None) -> int:
         row = {"size": label, "h_mm": SIZES[label] * 1000, "mesh": os.path.relpath(mesh, ROOT),
                "dofs": dofs_of(mesh), "tools": {}}
         print(f"# {label}: {row['mesh']} ({row['dofs']} DOFs)", file=sys.stderr, flush=True)
+        live = []
         for tool in tools:
             if tool != "vibrofem" and row["dofs"] > args.peers_up_to:
                 row["tools"][tool] = {"skipped": f"DOFs > {args.peers_up_to}"}
-                continue
-            if tool == "skfem" and row["dofs"] > args.skfem_up_to:
+            elif tool == "skfem" and row["dofs"] > args.skfem_up_to:
                 row["tools"][tool] = {"skipped": f"DOFs > {args.skfem_up_to}"}
-                continue
-            r = median_run(tool, os.path.abspath(mesh), args)
-            row["tools"][tool] = r
+            else:
+                live.append(tool)
+        if args.rounds > 0:
+            medians, row["ratios"] = rounds_run(live, os.path.abspath(mesh), args)
+            row["tools"].update(medians)
+        for tool in live:
+            if args.rounds <= 0:
+                row["tools"][tool] = median_run(tool, os.path.abspath(mesh), args)
+            r = row["tools"][tool]
             print(f"#   {tool}: " + (r.get("failed") or f"{r['wall_s']:.2f} s wall, "
                   f"{(r.get('peak_bytes') or 0) / 2 ** 20:.0f} MiB"), file=sys.stderr, flush=True)
         rows.append(row)
@@ -491,6 +549,9 @@ def main(argv=None) -> int:
     with open(os.path.join(OUT, "bench_peers.json"), "w") as fh:
         json.dump(report, fh, indent=1)
     text = table(rows, dgemm)
+    ratios = ratio_lines(rows)
+    if ratios:
+        text += "\n\n" + ratios
     floors = floor_table(rows)
     if floors:
         text += "\n\n" + floors
