@@ -356,14 +356,14 @@ pub fn solve(sys: &System, opts: &ModalParams) -> Result<ModalRun> {
 
 /// What the post-processing needs of the model alone, whatever the modes: the participation
 /// factors' rigid-body basis and the connected parts with their free motions.
-pub struct PostBasis {
+struct PostBasis {
     participation: ParticipationBasis,
     rigid: RigidParts,
 }
 
 impl PostBasis {
     /// Both parts for the model of `k`, `m`, side by side.
-    pub fn new(k: &SymMatrix, m: &SymMatrix, model: &Model) -> Self {
+    fn new(k: &SymMatrix, m: &SymMatrix, model: &Model) -> Self {
         let (participation, rigid) = rayon::join(
             || ParticipationBasis::new(m, &model.dofs, &model.nodes),
             || RigidParts::new(k, m, &model.dofs, &model.nodes),
