@@ -142,6 +142,9 @@ pub fn plan(sn: &Symbolic) -> Plan {
     }
 }
 
+/// The subtrees below the top separators are cut down to 1/(`SPLIT` · threads) of the flops.
+const SPLIT: usize = 32;
+
 /// Whether this machine runs the update kernel (x86-64 with AVX2 and FMA, or AVX-512).
 pub fn available() -> bool {
     instr_set().is_some()
@@ -265,9 +268,64 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
             heap.push((plan.subtree_flops[c as usize] as u64, c));
         }
     }
-    // Heaviest first, so that the last ones to finish are small.
-    let mut subtrees: Vec<(u64, u32)> = heap.into_vec();
-    subtrees.sort_by(|a, b| b.cmp(a));
+    // The subtrees are split further, down to a share of the flops that leaves the last tasks
+    // small: the supernodes split off here (the mid-level separators) run alone with
+    // sequential kernels once their children are complete, on whichever worker is free. With
+    // whole subtrees of ~1/6 of the flops, a worker slowed for a while (a core the host took)
+    // left the other idle at the end for up to the length of one subtree (0.25–0.3 s of the
+    // 119k-DOF factorisation's 1.5 s of subtrees).
+    let fine = total / (SPLIT * threads) as f64;
+    let mut mid = Vec::new();
+    while let Some(&(w, s)) = heap.peek() {
+        if (w as f64) <= fine {
+            break;
+        }
+        heap.pop();
+        mid.push(s);
+        let s = s as usize;
+        for &c in &plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]] {
+            heap.push((plan.subtree_flops[c as usize] as u64, c));
+        }
+    }
+    // Tasks: the subtrees (whole) and the mid-level supernodes (alone); each waits for its
+    // children in the tree. Priority: the flops from the task up through its mid-level
+    // ancestors (the longest chain first, then the heaviest subtree).
+    let subtrees: Vec<u32> = heap.into_vec().into_iter().map(|(_, r)| r).collect();
+    let tasks: Vec<u32> = subtrees.iter().chain(&mid).copied().collect();
+    let mut task_of = vec![u32::MAX; ns];
+    for (t, &s) in tasks.iter().enumerate() {
+        task_of[s as usize] = t as u32;
+    }
+    let mut parent: Vec<Option<usize>> = vec![None; tasks.len()];
+    for (t, &m) in tasks.iter().enumerate().skip(subtrees.len()) {
+        let m = m as usize;
+        for &c in &plan.children[plan.child_ptr[m]..plan.child_ptr[m + 1]] {
+            parent[task_of[c as usize] as usize] = Some(t);
+        }
+    }
+    let own = |t: usize| {
+        let s = tasks[t] as usize;
+        if t < subtrees.len() {
+            plan.subtree_flops[s]
+        } else {
+            let below: f64 = plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]]
+                .iter()
+                .map(|&c| plan.subtree_flops[c as usize])
+                .sum();
+            plan.subtree_flops[s] - below
+        }
+    };
+    let priority: Vec<u64> = (0..tasks.len())
+        .map(|t| {
+            let mut chain = own(t);
+            let mut a = parent[t];
+            while let Some(p) = a {
+                chain += own(p);
+                a = parent[p];
+            }
+            chain as u64
+        })
+        .collect();
     let pool = std::sync::Mutex::new(Vec::<Work>::new());
     let take = || {
         pool.lock()
@@ -275,27 +333,30 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
             .and_then(|mut p| p.pop())
             .unwrap_or_else(|| Work::new(n, plan))
     };
-    // Taken heaviest first by whichever worker is free.
-    let done = crate::util::queue::map(&subtrees, |_, &(_, root)| {
+    crate::util::queue::forest(&parent, &priority, |t| {
         let mut w = take();
-        // The subtree's supernodes, ascending (children before parents).
-        let mut nodes = Vec::new();
-        let mut stack = vec![root];
-        while let Some(s) = stack.pop() {
-            nodes.push(s);
-            let s = s as usize;
-            stack.extend_from_slice(&plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]]);
-        }
-        nodes.sort_unstable();
-        let r = nodes
-            .iter()
-            .try_for_each(|&s| node(sn, plan, input, shared, s as usize, &mut w, Par::Seq));
+        let root = tasks[t];
+        let r = if t < subtrees.len() {
+            // The subtree's supernodes, ascending (children before parents).
+            let mut nodes = Vec::new();
+            let mut stack = vec![root];
+            while let Some(s) = stack.pop() {
+                nodes.push(s);
+                let s = s as usize;
+                stack.extend_from_slice(&plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]]);
+            }
+            nodes.sort_unstable();
+            nodes
+                .iter()
+                .try_for_each(|&s| node(sn, plan, input, shared, s as usize, &mut w, Par::Seq))
+        } else {
+            node(sn, plan, input, shared, root as usize, &mut w, Par::Seq)
+        };
         if let Ok(mut p) = pool.lock() {
             p.push(w);
         }
         r
-    });
-    done.into_iter().collect::<Result<(), _>>()?;
+    })?;
     let t_sub = tq.elapsed().as_secs_f64();
     let ntop = top.len();
     top.sort_unstable();
@@ -304,7 +365,9 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
         node(sn, plan, input, shared, s, &mut w, Par::rayon(0))?;
     }
     log::debug!(
-        "subtrees {t_sub:.3} s, {ntop} top nodes {:.3} s",
+        "subtrees {t_sub:.3} s ({} whole, {} mid-level supernodes), {ntop} top nodes {:.3} s",
+        subtrees.len(),
+        mid.len(),
         tq.elapsed().as_secs_f64() - t_sub
     );
     Ok(())

@@ -1,28 +1,93 @@
-//! Independent tasks of unequal size on the current thread pool, taken in list order by
-//! whichever worker is free (a shared counter), so that a list sorted heaviest first is
-//! scheduled longest-task-first. Rayon's `par_iter` over the same list splits it into halves
-//! ahead of time instead: at 119k DOFs one worker of two got the two heaviest subtrees of the
-//! factorisation and finished 0.1 s after the other.
+//! Tasks of unequal size on the current thread pool, each taken by whichever worker is free
+//! (the ready task of highest priority), rather than split among the workers ahead of time as
+//! rayon's `par_iter` does: at 119k DOFs that gave one worker of two the two heaviest subtrees
+//! of the factorisation, and it finished 0.1 s after the other.
 
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// `f(i, &items[i])` for every item, on up to `rayon::current_num_threads()` workers, each
-/// taking the next untaken item when it is free; the results in item order.
-pub fn map<T: Sync, R: Send>(items: &[T], f: impl Fn(usize, &T) -> R + Sync) -> Vec<R> {
-    let next = AtomicUsize::new(0);
-    let out: Vec<Mutex<Option<R>>> = items.iter().map(|_| Mutex::new(None)).collect();
-    let workers = rayon::current_num_threads().max(1).min(items.len());
+/// Tasks forming a forest, on up to `rayon::current_num_threads()` workers: a task waits for
+/// all the tasks whose `parent` it is, and a free worker takes the ready task of highest
+/// `priority` (ties: the lower index). `f(i)` runs each task once; after a task's error no
+/// task is started any more, and of the errors met the one of the lowest task index is
+/// returned. What a task computes must not depend on the schedule (only on its children
+/// being complete): the schedule follows the workers' speeds, so a core the host takes away
+/// for a while delays a share of the remaining tasks rather than one whole list.
+pub fn forest<E: Send>(
+    parent: &[Option<usize>],
+    priority: &[u64],
+    f: impl Fn(usize) -> Result<(), E> + Sync,
+) -> Result<(), E> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let n = parent.len();
+    assert_eq!(priority.len(), n);
+    let mut pending = vec![0usize; n];
+    for p in parent.iter().flatten() {
+        pending[*p] += 1;
+    }
+    struct State<E> {
+        pending: Vec<usize>,
+        ready: BinaryHeap<(u64, Reverse<usize>)>,
+        taken: usize,
+        running: usize,
+        error: Option<(usize, E)>,
+    }
+    let ready = (0..n)
+        .filter(|&i| pending[i] == 0)
+        .map(|i| (priority[i], Reverse(i)))
+        .collect();
+    let state = Mutex::new(State {
+        pending,
+        ready,
+        taken: 0,
+        running: 0,
+        error: None,
+    });
+    let wake = std::sync::Condvar::new();
     let work = || {
+        let Ok(mut st) = state.lock() else { return };
         loop {
-            let i = next.fetch_add(1, Ordering::Relaxed);
-            let Some(item) = items.get(i) else { break };
-            let r = f(i, item);
-            if let Ok(mut slot) = out[i].lock() {
-                *slot = Some(r);
+            // Done: every task taken, or an error and nothing left running.
+            if st.taken == n || (st.error.is_some() && st.running == 0) {
+                wake.notify_all();
+                return;
             }
+            let next = if st.error.is_some() { None } else { st.ready.pop() };
+            let Some((_, Reverse(i))) = next else {
+                st = match wake.wait(st) {
+                    Ok(g) => g,
+                    Err(_) => return,
+                };
+                continue;
+            };
+            st.taken += 1;
+            st.running += 1;
+            drop(st);
+            let r = f(i);
+            st = match state.lock() {
+                Ok(g) => g,
+                Err(_) => return,
+            };
+            st.running -= 1;
+            match r {
+                Ok(()) => {
+                    if let Some(p) = parent[i] {
+                        st.pending[p] -= 1;
+                        if st.pending[p] == 0 {
+                            st.ready.push((priority[p], Reverse(p)));
+                        }
+                    }
+                }
+                Err(e) => {
+                    if st.error.as_ref().is_none_or(|(j, _)| i < *j) {
+                        st.error = Some((i, e));
+                    }
+                }
+            }
+            wake.notify_all();
         }
     };
+    let workers = rayon::current_num_threads().max(1).min(n.max(1));
     if workers <= 1 {
         work();
     } else {
@@ -33,33 +98,71 @@ pub fn map<T: Sync, R: Send>(items: &[T], f: impl Fn(usize, &T) -> R + Sync) -> 
             work();
         });
     }
-    out.into_iter()
-        .map(|m| {
-            m.into_inner()
-                .ok()
-                .flatten()
-                .expect("every item is taken by exactly one worker")
-        })
-        .collect()
+    let st = state.into_inner().unwrap_or_else(|e| e.into_inner());
+    match st.error {
+        Some((_, e)) => Err(e),
+        None => {
+            assert_eq!(
+                st.taken, n,
+                "every task of a forest runs (each parent index is a task of it)"
+            );
+            Ok(())
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
+    /// Every task runs once and after all its children; an error stops the rest.
     #[test]
-    fn every_item_once_results_in_order() {
-        let items: Vec<u64> = (0..100).rev().collect();
+    fn forest_runs_children_first_and_stops_at_an_error() {
+        use std::sync::Mutex;
+        // 0..8 leaves; 8 waits for 0..4, 9 for 4..8, 10 for 8 and 9; 11 alone.
+        let mut parent = vec![Some(8); 4];
+        parent.extend([Some(9); 4]);
+        parent.extend([Some(10), Some(10), None, None]);
+        let priority: Vec<u64> = (0..12).map(|i| (i * 7 % 5) as u64).collect();
         let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
-        let calls = std::sync::atomic::AtomicUsize::new(0);
-        let out = pool.install(|| {
-            super::map(&items, |i, &x| {
-                calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                (i, x * x)
+        let order = Mutex::new(Vec::new());
+        let r: Result<(), ()> = pool.install(|| {
+            super::forest(&parent, &priority, |i| {
+                order.lock().unwrap().push(i);
+                Ok(())
             })
         });
-        assert_eq!(calls.into_inner(), 100);
-        for (i, &(j, sq)) in out.iter().enumerate() {
-            assert_eq!((i, sq), (j, items[i] * items[i]));
+        assert!(r.is_ok());
+        let order = order.into_inner().unwrap();
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..12).collect::<Vec<_>>());
+        let pos = |t: usize| order.iter().position(|&x| x == t).unwrap();
+        for (c, p) in parent.iter().enumerate() {
+            if let Some(p) = p {
+                assert!(pos(c) < pos(*p), "task {c} ran after its parent {p}: {order:?}");
+            }
         }
-        assert!(super::map(&[] as &[u8], |_, _| 0).is_empty());
+        // A failing leaf: its parent and grandparent never run; the error comes back.
+        let ran = Mutex::new(Vec::new());
+        let r = pool.install(|| {
+            super::forest(&parent, &priority, |i| {
+                ran.lock().unwrap().push(i);
+                if i == 5 { Err(i) } else { Ok(()) }
+            })
+        });
+        assert_eq!(r, Err(5));
+        let ran = ran.into_inner().unwrap();
+        assert!(!ran.contains(&9) && !ran.contains(&10), "{ran:?}");
+        // One worker, and no task at all.
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let count = Mutex::new(0);
+        let r: Result<(), ()> = one.install(|| {
+            super::forest(&parent, &priority, |_| {
+                *count.lock().unwrap() += 1;
+                Ok(())
+            })
+        });
+        assert!(r.is_ok());
+        assert_eq!(count.into_inner().unwrap(), 12);
+        assert!(super::forest::<()>(&[], &[], |_| Ok(())).is_ok());
     }
 }
