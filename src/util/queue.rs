@@ -31,6 +31,9 @@ pub fn forest<E: Send>(
         taken: usize,
         running: usize,
         error: Option<(usize, E)>,
+        /// A task's panic, passed on once every worker has stopped (a waiting worker would
+        /// otherwise wait for the panicked task forever).
+        panic: Option<Box<dyn std::any::Any + Send>>,
     }
     let ready = (0..n)
         .filter(|&i| pending[i] == 0)
@@ -42,17 +45,19 @@ pub fn forest<E: Send>(
         taken: 0,
         running: 0,
         error: None,
+        panic: None,
     });
     let wake = std::sync::Condvar::new();
     let work = || {
         let Ok(mut st) = state.lock() else { return };
         loop {
-            // Done: every task taken, or an error and nothing left running.
-            if st.taken == n || (st.error.is_some() && st.running == 0) {
+            // Done: every task taken, or an error (or panic) and nothing left running.
+            let stopped = st.error.is_some() || st.panic.is_some();
+            if st.taken == n || (stopped && st.running == 0) {
                 wake.notify_all();
                 return;
             }
-            let next = if st.error.is_some() { None } else { st.ready.pop() };
+            let next = if stopped { None } else { st.ready.pop() };
             let Some((_, Reverse(i))) = next else {
                 st = match wake.wait(st) {
                     Ok(g) => g,
@@ -63,14 +68,14 @@ pub fn forest<E: Send>(
             st.taken += 1;
             st.running += 1;
             drop(st);
-            let r = f(i);
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(i)));
             st = match state.lock() {
                 Ok(g) => g,
                 Err(_) => return,
             };
             st.running -= 1;
             match r {
-                Ok(()) => {
+                Ok(Ok(())) => {
                     if let Some(p) = parent[i] {
                         st.pending[p] -= 1;
                         if st.pending[p] == 0 {
@@ -78,10 +83,13 @@ pub fn forest<E: Send>(
                         }
                     }
                 }
-                Err(e) => {
+                Ok(Err(e)) => {
                     if st.error.as_ref().is_none_or(|(j, _)| i < *j) {
                         st.error = Some((i, e));
                     }
+                }
+                Err(payload) => {
+                    st.panic.get_or_insert(payload);
                 }
             }
             wake.notify_all();
@@ -99,6 +107,9 @@ pub fn forest<E: Send>(
         });
     }
     let st = state.into_inner().unwrap_or_else(|e| e.into_inner());
+    if let Some(payload) = st.panic {
+        std::panic::resume_unwind(payload);
+    }
     match st.error {
         Some((_, e)) => Err(e),
         None => {
@@ -164,5 +175,16 @@ mod tests {
         assert!(r.is_ok());
         assert_eq!(count.into_inner().unwrap(), 12);
         assert!(super::forest::<()>(&[], &[], |_| Ok(())).is_ok());
+        // A panicking task is passed on to the caller once the others have stopped; nobody
+        // waits for it forever.
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| {
+                super::forest::<()>(&parent, &priority, |i| {
+                    assert_ne!(i, 2, "task 2 fails");
+                    Ok(())
+                })
+            })
+        }));
+        assert!(caught.is_err());
     }
 }
