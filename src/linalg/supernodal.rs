@@ -7,9 +7,11 @@
 //! is solved by [`super::factor`]'s supernodal solve and reads the same pivots. What differs is
 //! the schedule: faer walks the supernodes one after another and is parallel only inside the
 //! dense kernels, which on a mesh's many medium supernodes leaves most threads idle. Here the
-//! elimination tree is cut into independent subtrees that run at once, each with sequential
-//! kernels, and only the supernodes above the cut (the top separators, few and large) run
-//! one after another with parallel kernels. A supernode's result does not depend on which
+//! elimination tree is cut into independent subtrees and the mid-level separators between
+//! them, run as tasks by whichever thread is free (a separator once its children are
+//! complete), each with sequential kernels; only the supernodes above them (the top
+//! separators, few and large) run one after another with parallel kernels. A supernode's
+//! result does not depend on which
 //! thread computes it or when, so the factor is the same bit for bit on any thread count.
 //!
 //! The matrix is read straight from K and M (`K − σM` entry by entry, in elimination order):

@@ -51,9 +51,11 @@ pub fn forest<E: Send>(
     let work = || {
         let Ok(mut st) = state.lock() else { return };
         loop {
-            // Done: every task taken, or an error (or panic) and nothing left running.
+            // Done: every task taken, or an error (or panic) and nothing left running; or
+            // nothing ready and nothing running (a cycle among the parents: the check below).
             let stopped = st.error.is_some() || st.panic.is_some();
-            if st.taken == n || (stopped && st.running == 0) {
+            let stalled = st.ready.is_empty() && st.running == 0;
+            if st.taken == n || (stopped && st.running == 0) || stalled {
                 wake.notify_all();
                 return;
             }
@@ -113,10 +115,7 @@ pub fn forest<E: Send>(
     match st.error {
         Some((_, e)) => Err(e),
         None => {
-            assert_eq!(
-                st.taken, n,
-                "every task of a forest runs (each parent index is a task of it)"
-            );
+            assert_eq!(st.taken, n, "every task of a forest runs (the parents form no cycle)");
             Ok(())
         }
     }
@@ -186,5 +185,10 @@ mod tests {
             })
         }));
         assert!(caught.is_err());
+        // Parents in a cycle: a clear panic, not workers waiting forever.
+        let cycle = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| super::forest::<()>(&[Some(1), Some(0), None], &[0, 0, 0], |_| Ok(())))
+        }));
+        assert!(cycle.is_err());
     }
 }
