@@ -11,8 +11,8 @@
 //! them, run as tasks by whichever thread is free (a separator once its children are
 //! complete), each with sequential kernels; only the supernodes above them (the top
 //! separators, few and large) run one after another with parallel kernels. A supernode's
-//! result does not depend on which
-//! thread computes it or when, so the factor is the same bit for bit on any thread count.
+//! result does not depend on which thread computes it or when, so the factor is the same bit
+//! for bit on any thread count.
 //!
 //! The matrix is read straight from K and M (`K − σM` entry by entry, in elimination order):
 //! neither the shifted matrix nor its permuted copy is built.
@@ -258,18 +258,10 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
         .iter()
         .map(|&r| (plan.subtree_flops[r as usize] as u64, r))
         .collect();
-    let mut top = Vec::new();
-    while let Some(&(w, s)) = heap.peek() {
-        if (w as f64) <= limit {
-            break;
-        }
-        heap.pop();
-        top.push(s as usize);
-        let s = s as usize;
-        for &c in &plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]] {
-            heap.push((plan.subtree_flops[c as usize] as u64, c));
-        }
-    }
+    let mut top: Vec<usize> = split_heaviest(plan, &mut heap, limit)
+        .into_iter()
+        .map(|s| s as usize)
+        .collect();
     // The subtrees are split further, down to a share of the flops that leaves the last tasks
     // small: the supernodes split off here (the mid-level separators) run alone with
     // sequential kernels once their children are complete, on whichever worker is free. With
@@ -277,18 +269,7 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
     // left the other idle at the end for up to the length of one subtree (0.25–0.3 s of the
     // 119k-DOF factorisation's 1.5 s of subtrees).
     let fine = total / (SPLIT * threads) as f64;
-    let mut mid = Vec::new();
-    while let Some(&(w, s)) = heap.peek() {
-        if (w as f64) <= fine {
-            break;
-        }
-        heap.pop();
-        mid.push(s);
-        let s = s as usize;
-        for &c in &plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]] {
-            heap.push((plan.subtree_flops[c as usize] as u64, c));
-        }
-    }
+    let mid = split_heaviest(plan, &mut heap, fine);
     // Tasks: the subtrees (whole) and the mid-level supernodes (alone); each waits for its
     // children in the tree. Priority: the flops from the task up through its mid-level
     // ancestors (the longest chain first, then the heaviest subtree).
@@ -373,6 +354,24 @@ pub fn factorize(sn: &Symbolic, plan: &Plan, input: &Input<'_>, values: &mut [f6
         tq.elapsed().as_secs_f64() - t_sub
     );
     Ok(())
+}
+
+/// Split the heaviest subtree of `heap` (flops, root) into its children until none is heavier
+/// than `limit`; the roots split, in the order split.
+fn split_heaviest(plan: &Plan, heap: &mut std::collections::BinaryHeap<(u64, u32)>, limit: f64) -> Vec<u32> {
+    let mut split = Vec::new();
+    while let Some(&(w, s)) = heap.peek() {
+        if (w as f64) <= limit {
+            break;
+        }
+        heap.pop();
+        split.push(s);
+        let s = s as usize;
+        for &c in &plan.children[plan.child_ptr[s]..plan.child_ptr[s + 1]] {
+            heap.push((plan.subtree_flops[c as usize] as u64, c));
+        }
+    }
+    split
 }
 
 /// Factor supernode `s`: gather its columns of the matrix, subtract the updates of its
