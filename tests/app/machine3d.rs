@@ -303,3 +303,44 @@ fn search_reports_the_lightest_passing_variant() {
     assert!(r.checks.iter().all(|c| c.ok), "{:?}", r.checks);
     assert_eq!(o.spacer_effect.len(), 2);
 }
+
+#[test]
+fn passing_variant_folder_holds_only_a_passing_variant() {
+    // The design job's search runs variants whole, each writing its plots; the folder
+    // `passing-variant/` must appear only when one passes (with its report), and an earlier
+    // run's must not stay beside a report whose search found none. Same two variants as above:
+    // neither passes at the 10 % uniformity limit, the lighter one at 20 %.
+    use vibrofem::app::design::job;
+    let mut d = Design::paper();
+    d.search.top_thickness = vec![0.02, 0.016];
+    d.search.bottom_thickness = vec![0.008];
+    d.search.bottom_width = vec![0.4];
+    d.search.long_web_span = vec![0.3];
+    d.search.n_long_webs = vec![3];
+    d.search.n_trans_webs = vec![3];
+    d.search.spacers = vec!["plates".into()];
+    d.search.max_full_runs = 1;
+    d.search.pull = vec![];
+    d.search.leaf_shift = vec![0.0];
+    d.search.required_margin = 0.0;
+    d.search.over_envelope = false;
+    d.envelope.enabled = false;
+    let out = crate::support::tmp("passing_variant");
+    let vdir = out.join("passing-variant");
+    std::fs::create_dir_all(&vdir).unwrap();
+    std::fs::write(vdir.join("report.md"), "an earlier run's variant").unwrap();
+    let j = job::run(&d, &out, &|_| {}).unwrap();
+    let (o, _, _) = j.search.as_ref().expect("the nominal design fails: the search runs");
+    assert!(o.best.is_none() && j.variant.is_none());
+    assert!(!vdir.exists(), "no variant passed, yet {} is there", vdir.display());
+    assert!(!out.join("passing-variant.partial").exists());
+    assert!(out.join("search.txt").is_file() && out.join("report.md").is_file());
+    d.machine.max_nonuniformity = 0.2;
+    let j = job::run(&d, &out, &|_| {}).unwrap();
+    assert!(j.variant.is_some());
+    let report = std::fs::read_to_string(vdir.join("report.md")).unwrap();
+    assert!(report.contains("top 16 mm"), "{}", &report[..report.len().min(400)]);
+    assert!(vdir.join("table_modes.vtu").is_file());
+    assert!(!out.join("passing-variant.partial").exists());
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -106,18 +106,23 @@ where
 pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Job> {
     let mut r = run_design(d, Some(out), progress)?;
     let vdir = out.join("passing-variant");
+    // The variants run whole write their plots here; it becomes `vdir` only when one passes.
+    let staging = out.join("passing-variant.partial");
     let nominal_fails = r.checks.iter().any(|c| !c.ok);
     let (st, early_search) = if d.search.enabled && nominal_fails {
-        crate::io::create_dir(&vdir)?;
+        crate::io::create_dir(&staging)?;
         let (st, o) = beside(
             || studies(d, &r, progress),
             |st: &Studies| st.env.as_ref().map(envelope::patterns_of),
-            |patterns| search_lazy(d, Some(&vdir), &|| patterns().flatten(), progress),
+            |patterns| search_lazy(d, Some(&staging), &|| patterns().flatten(), progress),
         );
         (st, Some(o))
     } else {
         (studies(d, &r, progress), None)
     };
+    if st.is_err() {
+        let _ = remove_output(&staging);
+    }
     let st = st?;
     r.timings_s.push(("start-up and run-down".into(), st.startup_s));
     let mut rep = report::report(&r);
@@ -143,13 +148,14 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
         // Issue 13 item 3: a failing design is followed by the lightest passing variant (issue
         // 29 item 7: over the envelope, with the required margin).
         let o = match early_search {
-            Some(o) => o?,
+            Some(o) => o,
             None => {
-                crate::io::create_dir(&vdir)?;
+                crate::io::create_dir(&staging)?;
                 let patterns = st.env.as_ref().map(envelope::patterns_of);
-                search_with(d, Some(&vdir), patterns.as_deref(), progress)?
+                search_with(d, Some(&staging), patterns.as_deref(), progress)
             }
         };
+        let o = settle_variant_dir(o, &staging, &vdir)?;
         let text = search_text(d, &o);
         std::fs::write(out.join("search.txt"), &text).map_err(|e| Error::io(out.join("search.txt"), e))?;
         rep.data["search"] = search_json(&o)?;
@@ -162,6 +168,11 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
             variant = Some(vreport);
         }
         search = Some((o, text, vdir));
+    } else {
+        // No search this run: an earlier run's search and passing variant do not belong beside
+        // this report.
+        remove_output(&vdir)?;
+        remove_output(&out.join("search.txt"))?;
     }
     render::write_all(&rep, out)?;
     Ok(Job {
@@ -169,6 +180,32 @@ pub fn run(d: &Design, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<J
         search,
         variant,
     })
+}
+
+/// Settle the search's staging folder: renamed `vdir` (replacing an earlier run's) when a
+/// variant passed, removed otherwise or when the search failed. The plots of the failing
+/// variants run whole under the name `passing-variant`, or an earlier run's passing variant
+/// beside this run's report, would mislead.
+fn settle_variant_dir(o: Result<SearchOutcome>, staging: &Path, vdir: &Path) -> Result<SearchOutcome> {
+    remove_output(vdir)?;
+    match &o {
+        Ok(o) if o.best.is_some() => std::fs::rename(staging, vdir).map_err(|e| Error::io(vdir, e))?,
+        _ => remove_output(staging)?,
+    }
+    o
+}
+
+/// Remove the file or folder `dir` (and what it holds); one that is not there is fine.
+fn remove_output(dir: &Path) -> Result<()> {
+    let removed = if dir.is_dir() {
+        std::fs::remove_dir_all(dir)
+    } else {
+        std::fs::remove_file(dir)
+    };
+    match removed {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(dir, e)),
+        _ => Ok(()),
+    }
 }
 
 /// The envelope's sections after the checks, its data under `envelope`, its tuning chart.
