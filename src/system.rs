@@ -89,6 +89,8 @@ pub struct System {
     /// The Galerkin model on it, when [`SystemOptions::coarse_model`] asked for it and until
     /// taken ([`System::take_coarse_model`]).
     coarse_model: std::sync::Mutex<Option<CoarseModel>>,
+    /// K was replaced ([`System::replace_stiffness`]): it may be indefinite.
+    k_replaced: bool,
     /// Time spent building.
     pub timings: SystemTimings,
 }
@@ -222,6 +224,7 @@ impl System {
             ordering: opts.ordering,
             coarse: coarse_space,
             coarse_model: std::sync::Mutex::new(coarse_model),
+            k_replaced: false,
             timings: SystemTimings {
                 assemble: t_graph + pat_s + km_s,
                 order: ordering_time + symbolic_time,
@@ -263,6 +266,7 @@ impl System {
             symbolic: None,
             coarse: Default::default(),
             coarse_model: Default::default(),
+            k_replaced: false,
             ordering: Ordering::Natural,
             timings: SystemTimings {
                 assemble: t.elapsed().as_secs_f64(),
@@ -328,7 +332,15 @@ impl System {
         }
         // A coarse model formed from the previous K is not this K's.
         self.take_coarse_model();
+        self.k_replaced = true;
         Ok(std::mem::replace(&mut self.k, k))
+    }
+
+    /// Whether K is the one assembled from the model's elements, springs and couplings: positive
+    /// semidefinite in exact arithmetic, so that a negative eigenvalue of (K, M) is rounding.
+    /// False once it was replaced (a prestressed tangent, a magnet's negative stiffness).
+    pub fn k_is_assembled(&self) -> bool {
+        !self.k_replaced
     }
 
     /// True if the mass matrix was assembled.

@@ -497,8 +497,11 @@ fn finish_with(
 
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| max_nan(a, b));
     let max_back = sol.backward_error.iter().fold(0.0f64, |a, &b| max_nan(a, b));
-    let accurate = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
-    let mut notes = solution_notes(model, &sol, &parts, &modes, verify_tol, accurate);
+    let verified = max_back <= verify_tol && sol.m_orthonormality <= 1e-8 && sol.factor_backward_error <= 1e-8;
+    let rounding = sys.k_is_assembled().then(|| rounding_note(&modes)).flatten();
+    let accurate = verified && rounding.is_none();
+    let mut notes = solution_notes(model, &sol, &parts, &modes, verify_tol, verified);
+    notes.extend(rounding);
     notes.extend(mass_contrast_note(solid_mass, discrete_mass, accurate));
     // The factorisation this process analysed (none when another engine solved).
     let (factor_flops, factor_nnz) = sys.symbolic().map_or((0.0, 0), |s| (s.flops, s.nnz_l));
@@ -631,6 +634,36 @@ fn mass_contrast_note(elements: f64, discrete: f64, accurate: bool) -> Option<St
             "the point masses ({discrete:.3e} kg) are {ratio:.1e} times the mass of the elements ({elements:.3e} kg): \
              at such a contrast double precision may not resolve the modes of the structure beside them. \
              The large-mass method needs about 1e6 times; check the units of --point-mass"
+        )
+    })
+}
+
+/// The note for elastic modes with negative eigenvalues of an assembled K (positive
+/// semidefinite in exact arithmetic): their values are the rounding of an ill-conditioned
+/// model, and every mode as low as their magnitude is unresolved. The run is then not
+/// verified: a backward-stable pair of the rounded K, Kx = λMx to 1e-16, still says nothing of
+/// the structure's frequency (a 1 µm wide shell strip gives −14…−2.5 Hz for its rigid-body
+/// motions and first bending mode, 1.5 Hz).
+fn rounding_note(modes: &[ModeRow]) -> Option<String> {
+    let negative: Vec<&ModeRow> = modes
+        .iter()
+        .filter(|m| m.kind == "elastic" && m.eigenvalue < 0.0)
+        .collect();
+    let noise = negative.iter().map(|m| -m.eigenvalue).fold(0.0, f64::max);
+    (noise > 0.0).then(|| {
+        let below = modes
+            .iter()
+            .filter(|m| m.kind == "elastic" && m.eigenvalue.abs() <= 10.0 * noise)
+            .count();
+        format!(
+            "{} mode(s) have negative eigenvalues (down to {:.3e} rad²/s²), which K as assembled cannot have: \
+             they are the rounding of an ill-conditioned model, and the {below} elastic mode(s) below {:.4} Hz \
+             (ten times that eigenvalue) are not resolved; rigid-body motions among them are not recognised. \
+             Slender or thin parts (elements much narrower than long), or stiffness contrasts of many orders: \
+             coarsen across the thin direction, or model rigid parts with --couple",
+            negative.len(),
+            -noise,
+            (10.0 * noise).sqrt() / std::f64::consts::TAU
         )
     })
 }

@@ -849,6 +849,15 @@ fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f6
     (lambda, xs)
 }
 
+/// How far outside the null space a computed pair may lie and still be taken for a null pair:
+/// 1 − ‖ZᵀMx‖² ≤ 1e-2 (the pair is at least 99 % rigid-body motion by M-norm). An elastic
+/// eigenvector is M-orthogonal to the null space (its share there is its error, squared), so no
+/// elastic pair comes near; a rigid-body pair of an ill-conditioned model solved without
+/// deflation (a 0.1 mm wide shell strip: eigenvalue noise ~1e-16 λ_max, ±0.07 Hz, near its
+/// first elastic mode at 1.5 Hz) carries elastic components of 1e-4–1e-3 in its share, far
+/// above the 1e-10 an earlier bar asked, and was left as six 'elastic' modes at ±0.07 Hz.
+const NULL_SHARE_TOL: f64 = 1e-2;
+
 /// The leading pairs of a solution that lie in K's null space (the rigid-body motions of a free
 /// model) replaced by the M-orthonormal null vectors a deflating solve reports there
 /// ([`null_vectors`]: translations first, then rotations about the principal axes of inertia,
@@ -857,7 +866,7 @@ fn with_null(null: Option<&Null>, l: Vec<f64>, x: Mat<f64>) -> (Vec<f64>, Mat<f6
 /// quotients are rounding (±1e-4 rad²/s² on a steel bar, printed as −0.003 Hz, with a residual
 /// relative to that |λ| of order 1); any M-orthonormal basis of the null space is as valid a set
 /// of eigenvectors, and this one is the same whichever path solved. The pairs replaced are the
-/// leading M-orthonormal ones inside span(Z) (‖x − Z ZᵀMx‖²_M = 1 − ‖ZᵀMx‖² ≤ 1e-10), at most
+/// leading M-orthonormal ones inside span(Z) (‖x − Z ZᵀMx‖²_M = 1 − ‖ZᵀMx‖² ≤ [`NULL_SHARE_TOL`]), at most
 /// as many as Z has columns; the pairs after them are orthogonal to the null space already
 /// (eigenvectors of other eigenvalues). Nothing is done (and no product formed) when the first
 /// eigenvalue is exactly 0 (a deflating solve's) or above 1e-6 of the typical K_ii/M_ii (no
@@ -887,15 +896,16 @@ pub fn canonical_null_pairs(
     }
     let c = z.ncols();
     let a = tall::gram((*mz).as_ref(), vectors.get(.., 0..c.min(lambda.len())));
-    let r = (0..a.ncols())
-        .take_while(|&j| {
-            let s: f64 = (0..c).map(|i| a[(i, j)] * a[(i, j)]).sum();
-            (1.0 - s).abs() <= 1e-10
-        })
-        .count();
+    let outside: Vec<f64> = (0..a.ncols())
+        .map(|j| (1.0 - (0..c).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>()).abs())
+        .take_while(|&o| o <= NULL_SHARE_TOL)
+        .collect();
+    let r = outside.len();
     if r == 0 {
         return false;
     }
+    let worst = outside.iter().copied().fold(0.0, f64::max);
+    log::debug!("{r} pairs replaced by null vectors (largest share outside the null space {worst:.1e})");
     vectors.get_mut(.., 0..r).copy_from(z.get(.., 0..r));
     lambda[..r].fill(0.0);
     // The pairs after them carry the null space to the iteration's accuracy only (1.3e-8 on a
@@ -905,6 +915,16 @@ pub fn canonical_null_pairs(
     if r < nc {
         let mut rest = vectors.get_mut(.., r..nc);
         project_out(&z, &mz, rest.as_mut());
+        // Pairs mixed with the null space beyond rounding (the replaced ones were more than
+        // 1e-10 outside it): a Rayleigh–Ritz step on what is left makes them M-orthonormal
+        // again, with the best eigenvalues their span holds.
+        if worst > 1e-10
+            && let Ok((l, x)) = rayleigh_ritz(k, m, rest.to_owned())
+        {
+            lambda[r..].copy_from_slice(&l);
+            vectors.get_mut(.., r..nc).copy_from(&x);
+            return true;
+        }
         let mut mr = Mat::zeros(rest.nrows(), nc - r);
         m.mul_block(rest.as_ref(), mr.as_mut());
         for (j, s) in tall::col_dots(rest.as_ref(), mr.as_ref()).into_iter().enumerate() {

@@ -202,7 +202,7 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
         return Ok(2);
     }
     if !run.report.accurate {
-        eprintln!("error: accuracy not guaranteed (residual or orthonormality above tolerance)");
+        eprintln!("error: accuracy not guaranteed (the notes above say why)");
         return Ok(2);
     }
     Ok(0)

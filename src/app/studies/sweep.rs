@@ -754,6 +754,19 @@ pub fn analyse_modes(
             "sandwich table modal analysis: a mode was missed".into(),
         ));
     }
+    if !run.report.accurate {
+        // A design so thin or so small that its frequencies are rounding (negative ones among
+        // them) must not enter the table, let alone its Pareto front.
+        let why = run
+            .report
+            .notes
+            .iter()
+            .find(|n| n.contains("negative eigenvalues") || n.starts_with("accuracy not guaranteed"))
+            .map_or(String::new(), |n| format!(": {n}"));
+        return Err(Error::Verification(format!(
+            "sandwich table modal analysis: accuracy not guaranteed{why}"
+        )));
+    }
     let el: Vec<f64> = run.report.elastic_frequencies();
     if el.is_empty() {
         return Err(Error::Verification(
