@@ -134,8 +134,8 @@ pub enum Error {
     /// The eigen solver did not converge.
     #[error("eigen solve did not converge: {0}")]
     EigenNotConverged(String),
-    /// The verification of an eigen solution failed (a mode missed, or accuracy lost).
-    #[error("eigen solution failed verification: {0}")]
+    /// The verification of a result failed (a mode missed, or accuracy lost).
+    #[error("verification failed: {0}")]
     Verification(String),
     /// A sparse factorisation failed (singular or indefinite where it must not be).
     #[error("factorization failed: {0}")]
