@@ -280,3 +280,23 @@ fn committed_design_file_runs() {
     let r = run_design(&d, None, &|_| {}).unwrap();
     assert!(r.checks[0].ok, "work-table check: {:?}", r.checks[0]);
 }
+
+#[test]
+fn a_coarse_table_mesh_still_carries_the_shoes_and_armatures() {
+    // At table.element_size = 0.05 m the bottom plate's nodes are 50 mm apart: a leaf's shoe
+    // (50 mm along the leaf) could fall between two rows of them and the run stopped with "its
+    // shoe covers no node" under a key the file never set. The shoe is now tied at the nearest
+    // node; at 0.2 m a magnet's armature finds none within reach and the error names the
+    // element size.
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/designs/s8_transverse_webs.toml");
+    let mut d = Design::from_toml(&p).unwrap();
+    d.table.elem_size = 0.05;
+    let r = run_design(&d, None, &|_| {}).unwrap();
+    assert!(r.checks.iter().any(|c| c.ok), "{:?}", r.checks);
+    d.table.elem_size = 0.2;
+    let e = run_design(&d, None, &|_| {})
+        .err()
+        .expect("no armature node at 0.2 m")
+        .to_string();
+    assert!(e.contains("table.element_size"), "{e}");
+}

@@ -169,6 +169,48 @@ fn patch(mesh: &Mesh, plate: &[u32], c: [f64; 2], e: [f64; 2], h: [f64; 2], excl
         .collect()
 }
 
+/// [`patch`], or where it holds no node (a table mesh coarser than the patch) the nearest node
+/// not excluded within the patch's half-diagonal plus an element size `elem` of its centre: the
+/// rigid part is then tied to the plate at that node. `true` with the fallback's node.
+fn patch_or_nearest(
+    mesh: &Mesh,
+    plate: &[u32],
+    c: [f64; 2],
+    e: [f64; 2],
+    h: [f64; 2],
+    exclude: &[bool],
+    elem: f64,
+) -> (Vec<u32>, bool) {
+    let nodes = patch(mesh, plate, c, e, h, exclude);
+    if !nodes.is_empty() {
+        return (nodes, false);
+    }
+    let reach = (h[0].hypot(h[1]) + elem).powi(2);
+    let nearest = plate
+        .iter()
+        .copied()
+        .filter(|&a| !exclude[a as usize])
+        .map(|a| {
+            let x = mesh.nodes[a as usize];
+            ((x[0] - c[0]).powi(2) + (x[1] - c[1]).powi(2), a)
+        })
+        .filter(|&(d2, _)| d2 <= reach)
+        .min_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+    (nearest.map(|(_, a)| vec![a]).unwrap_or_default(), true)
+}
+
+/// What a patch's error adds when the table's mesh is coarser than the patch.
+fn coarse_hint(d: &Design, fallback: bool) -> String {
+    if fallback {
+        format!(
+            " (table.element_size = {} m is coarser than the patch: a finer table mesh)",
+            d.table.elem_size
+        )
+    } else {
+        String::new()
+    }
+}
+
 fn point_group(mesh: &mut Mesh, block: &mut CellBlock, bp: u32, name: &str, nodes: &[u32]) {
     let mut tag = mesh
         .blocks
@@ -651,23 +693,28 @@ fn leaf_shoes(
     for (i, l) in md.leaves.iter().enumerate() {
         let n = (l[2] * l[2] + l[3] * l[3]).sqrt();
         let e = [l[2] / n, l[3] / n];
-        let nodes = patch(
+        let (nodes, fallback) = patch_or_nearest(
             mesh,
             bottom,
             [l[0], l[1]],
             e,
             [0.5 * md.shoe_length, 0.5 * d.leaf.width],
             &in_link,
+            d.table.elem_size,
         );
         let at = format!("leaf {} at ({}, {}) m", i + 1, l[0], l[1]);
+        let hint = coarse_hint(d, fallback);
         if nodes.is_empty() {
             return Err(bad(
                 "machine.leaves",
-                format!("{at}: its shoe covers no node of the bottom plate"),
+                format!("{at}: its shoe covers no node of the bottom plate{hint}"),
             ));
         }
         if nodes.iter().any(|&a| used[a as usize]) {
-            return Err(bad("machine.leaves", format!("{at}: its shoe overlaps another leaf's")));
+            return Err(bad(
+                "machine.leaves",
+                format!("{at}: its shoe overlaps another leaf's{hint}"),
+            ));
         }
         nodes.iter().for_each(|&a| used[a as usize] = true);
         let name = format!("leaf_shoe_{}", i + 1);
@@ -710,22 +757,24 @@ fn armature_patches(
     }
     let mut armatures = vec![];
     for (i, m) in md.magnets.iter().enumerate() {
-        let nodes = patch(
+        let (nodes, fallback) = patch_or_nearest(
             mesh,
             bottom,
             *m,
             [1.0, 0.0],
             [0.5 * md.armature[0], 0.5 * md.armature[1]],
             &tied,
+            d.table.elem_size,
         );
         if nodes.is_empty() {
             return Err(bad(
                 "machine.magnets",
                 format!(
-                    "magnet {} at ({}, {}) m: its armature covers no node of the bottom plate",
+                    "magnet {} at ({}, {}) m: its armature covers no node of the bottom plate{}",
                     i + 1,
                     m[0],
-                    m[1]
+                    m[1],
+                    coarse_hint(d, fallback)
                 ),
             ));
         }
