@@ -7,6 +7,7 @@ mod common;
 
 mod batch_resume;
 mod cli;
+mod conditioning;
 mod converge_geo;
 mod converge_pairing;
 mod design;

@@ -1,0 +1,91 @@
+//! Ill-conditioned models at the extremes: what a run reports must hold, or the run says it
+//! does not (exit 2). A shell strip far narrower than long (free–free modes) and a static bar
+//! whose coupling's reference point lies far from its face.
+
+use crate::common::run;
+
+/// The free–free modes of a 0.6 m shell strip, 2 mm thick and `width` wide (one MITC4 element
+/// across it, six along), as JSON with the exit code.
+fn strip(width: &str) -> (i32, serde_json::Value, String) {
+    let g = format!("box:{width},0.6,0.1:1,6,1:hex8");
+    let (code, out, err) = run(&["modes", &g, "--shell", "zmin=0.002", "--modes", "8", "--json"]);
+    let v = serde_json::from_str(&out).unwrap_or(serde_json::Value::Null);
+    (code, v, err)
+}
+
+#[test]
+fn a_narrow_strip_keeps_its_rigid_body_modes() {
+    // 0.1 mm wide: solved densely (84 DOFs), the six rigid-body motions came out as ±0.07 Hz
+    // 'elastic' modes (rounding of λ_max ~ 1e15 rad²/s²), 1.8e-4 of their M-norm outside the
+    // null space. They must be recognised: six rigid modes at 0 Hz, the run verified.
+    let (code, v, err) = strip("1e-4");
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(v["n_rigid"], 6, "{v}");
+    assert_eq!(v["accurate"], true);
+    let f: Vec<f64> = v["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(f[..6].iter().all(|&x| x == 0.0), "{f:?}");
+    // The first elastic mode is the strip's in-plane bending, a free–free Euler–Bernoulli beam
+    // (Blevins, Formulas for Natural Frequency and Mode Shape, table 8-1: λ₁ = 4.7300):
+    // f = λ₁²/(2π L²)·√(E w²/(12 ρ)) = 1.477 Hz for w = 0.1 mm. Six bilinear elements along
+    // 0.6 m are stiffer (1.535 Hz, +4 %): 8 % allowed for that discretisation.
+    let (e, rho, w, l) = (2.1e11_f64, 7850.0_f64, 1e-4_f64, 0.6_f64);
+    let beam = 4.7300_f64.powi(2) / (std::f64::consts::TAU * l * l) * (e * w * w / (12.0 * rho)).sqrt();
+    assert!((f[6] / beam - 1.0).abs() < 0.08, "{} Hz against {beam} Hz", f[6]);
+}
+
+#[test]
+fn a_strip_too_thin_for_double_precision_is_not_verified() {
+    // 1 µm wide: the rounding of λ_max ~ 1e19 rad²/s² reaches ~1e4 rad²/s² (±15 Hz), above the
+    // 1.5 Hz bending mode: every low eigenvalue is rounding, several of them negative, which an
+    // assembled K (positive semidefinite) cannot have. Reported, they would look like modes; the
+    // run must end unverified (exit 2) and say why.
+    let (code, v, _) = strip("1e-6");
+    assert_eq!(code, 2, "{v}");
+    assert_eq!(v["accurate"], false);
+    let notes = v["notes"].to_string();
+    assert!(
+        notes.contains("negative eigenvalues") && notes.contains("not resolved"),
+        "{notes}"
+    );
+}
+
+#[test]
+fn a_static_solve_that_misses_equilibrium_fails() {
+    // A 1 m hex20 bar clamped at one end, its other face coupled to a reference point X m away
+    // and loaded there. At X = 100 m refinement brings the solve residual ‖f − Ku‖/‖f‖ to ~3e-8
+    // (3.8e-6 unrefined); at X = 10 km it stays ~7e-5 (18 unrefined): above the 1e-6 accepted,
+    // the run ends with exit 2 rather than report displacements that miss equilibrium.
+    let bar = "box:1,0.1,0.1:10,2,2:hex20";
+    let static_at = |x: &str| {
+        let couple = format!("xmax@{x},0.05,0.05");
+        run(&[
+            "static",
+            bar,
+            "--fix",
+            "xmin",
+            "--couple",
+            &couple,
+            "--force",
+            "xmax=0,0,1",
+        ])
+    };
+    let (code, out, err) = static_at("100");
+    assert_eq!(code, 0, "{err}");
+    let res: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("solve residual"))
+        .and_then(|s| s.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no solve residual in: {out}"));
+    assert!(res <= 1e-6, "{res}");
+    let (code, _, err) = static_at("1e4");
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("solve residual") && err.contains("ill-conditioned"),
+        "{err}"
+    );
+}
