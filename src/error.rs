@@ -62,7 +62,8 @@ pub enum Error {
     },
     /// An element whose Jacobian determinant is zero or negative at an integration point.
     #[error(
-        "element {element} ({kind}) has a non-positive Jacobian determinant {det:.3e}: {}",
+        "{}element {element} ({kind}) has a non-positive Jacobian determinant {det:.3e}: {}",
+        file.as_ref().map(|f| format!("{f}: ")).unwrap_or_default(),
         if det.is_finite() { "inverted or degenerate" } else { "its coordinates are beyond double precision (check their units)" }
     )]
     InvertedElement {
@@ -72,6 +73,8 @@ pub enum Error {
         kind: &'static str,
         /// The offending determinant.
         det: f64,
+        /// The mesh (file or generator) it is in, once known ([`Error::in_source`]).
+        file: Option<String>,
     },
     /// A material with invalid constants.
     #[error("invalid material {name}: {msg}")]
@@ -281,6 +284,25 @@ impl Error {
     /// ([`Error::out_of_memory`]). `modes --solver auto` answers these with the low-memory path.
     pub fn is_memory_refusal(&self) -> bool {
         matches!(self, Error::InvalidInput(m) if MEMORY_REFUSALS.iter().any(|k| m.contains(k)))
+    }
+
+    /// An inverted element's error naming the mesh `source` it is in (the element sets know
+    /// only the element's tag).
+    pub fn in_source(self, source: &str) -> Self {
+        match self {
+            Error::InvertedElement {
+                element,
+                kind,
+                det,
+                file: None,
+            } => Error::InvertedElement {
+                element,
+                kind,
+                det,
+                file: Some(source.to_string()),
+            },
+            e => e,
+        }
     }
 
     /// Name the equation of a [`Error::Singular`] in the user's terms with `describe` (an

@@ -100,6 +100,10 @@ impl System {
     /// (the mesh file or generator). Fails when every DOF is constrained, or when the
     /// factorisation would not fit in memory ([`SystemOptions::max_memory`]).
     pub fn build(model: Model, opts: &SystemOptions, source: &str) -> Result<System> {
+        Self::build_in(model, opts, source).map_err(|e| e.in_source(source))
+    }
+
+    fn build_in(model: Model, opts: &SystemOptions, source: &str) -> Result<System> {
         let t = Instant::now();
         // Size every large buffer before allocating it, so a model too large for the memory is
         // refused with the estimate in seconds rather than killed (or aborted) in assembly.

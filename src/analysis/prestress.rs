@@ -147,6 +147,7 @@ fn shell_forces(set: &ShellSet, u: &[f64]) -> Result<(Vec<[[f64; 3]; 4]>, Extrem
                 element: set.tags[e],
                 kind: kind.name(),
                 det,
+                file: None,
             };
             let nf = geometric::shell_membrane_forces(kind, &x, &set.section, &set.material, &ue[..6 * nodes.len()])
                 .map_err(bad)?;
@@ -328,6 +329,7 @@ impl ElementSet for Geometric<'_> {
                     element: s.tags[e],
                     kind: kind.name(),
                     det,
+                    file: None,
                 })
             }
             Geometric::Beam(s, n) => {

@@ -25,6 +25,10 @@ impl Model {
     /// discrete elements, the constraints and the DOF numbering. `source` names the mesh in
     /// messages.
     pub fn build(mesh: &Mesh, spec: &ModelSpec, source: &str) -> Result<Model> {
+        Self::build_in(mesh, spec, source).map_err(|e| e.in_source(source))
+    }
+
+    fn build_in(mesh: &Mesh, spec: &ModelSpec, source: &str) -> Result<Model> {
         let (materials, group_materials) = materials(mesh, spec)?;
         let mesh_nodes: Nodes = Arc::new(mesh.nodes.clone());
         let mut solids = solid_parts(mesh, spec, &materials, &group_materials, &mesh_nodes)?;
@@ -497,6 +501,15 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
                 format!("spring on '{}': stiffnesses must be non-negative", sp.a),
             ));
         }
+        if sp.b.as_ref() == Some(&sp.a) {
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!(
+                    "spring from '{}' to itself: a spring joins two points (none named for one to the ground)",
+                    sp.a
+                ),
+            ));
+        }
         let a = point_of(mesh, references, &sp.a)?;
         match &sp.b {
             None => {
@@ -557,6 +570,15 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
             return Err(Error::group(
                 sp.a.as_str(),
                 format!("{what}: the stiffness matrix is not positive semi-definite (eigenvalue {lmin:.3e})"),
+            ));
+        }
+        if sp.b.as_ref() == Some(&sp.a) {
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!(
+                    "{what}: joins '{}' to itself; a spring joins two points (none named for one to the ground)",
+                    sp.a
+                ),
             ));
         }
         let a = point_of(mesh, references, &sp.a)?;

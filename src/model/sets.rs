@@ -62,6 +62,7 @@ impl ShellSet {
             element: self.tags[e],
             kind: self.kinds[e].name(),
             det,
+            file: None,
         }
     }
 
@@ -412,6 +413,7 @@ impl SolidSet {
             element: self.tags[e],
             kind: self.kind.name(),
             det,
+            file: None,
         }
     }
 }

@@ -147,7 +147,11 @@ fn unknown_group_is_named() {
 fn inverted_element_names_its_id() {
     // Tet 1 has nodes 1,3,2,4: negative orientation.
     let p = tmp("inverted.msh", &small_msh("1 4 2 2 1 1 3 2 4\n", 1));
-    expect_error(&["modes", p.to_str().unwrap()], 1, &["element 1", "Jacobian"]);
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["inverted.msh: element 1", "Jacobian"],
+    );
 }
 
 #[test]

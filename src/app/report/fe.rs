@@ -165,6 +165,7 @@ pub fn mesh_info(mesh: &Mesh, source: &str, mat: &Material) -> Result<MeshInfo> 
                 element: b.tags[e],
                 kind: b.kind.name(),
                 det,
+                file: None,
             })?;
         }
     }
