@@ -695,6 +695,17 @@ impl Reader<'_> {
                 );
             }
             self.ctx.finite(s.span(), "'k'", k)?;
+            if k.iter().any(|&v| v < 0.0) {
+                return self
+                    .ctx
+                    .err(s.span(), format!("'k' must be non-negative, got {k:?} in {place}"));
+            }
+            if r.b.as_ref() == Some(a) {
+                return self.ctx.err(
+                    s.span(),
+                    format!("'b' is '{a}', the group of 'a': a spring joins two points (leave 'b' out for one to the ground) in {place}"),
+                );
+            }
             self.refer(a, s.span(), place.clone());
             if let Some(b) = &r.b {
                 self.refer(b, s.span(), place);
