@@ -161,6 +161,7 @@ fn every_variant_maps_to_its_documented_exit_code() {
                 element: 1,
                 kind: "hex8",
                 det: -1.0,
+                file: None,
             },
             1,
         ),
