@@ -875,17 +875,7 @@ pub fn solve_pencil_from(
     let report_n = computed.len().min(nev);
     let lambda: Vec<f64> = computed[..report_n].to_vec();
     let vectors = combine(&it.basis.v, &s, it.basis.cols, report_n);
-    // Residuals of K φ − λ G φ (= Kφ + λK_σφ).
-    let backward_error = backward_errors(k, &g, &lambda, vectors.as_ref());
-    let rel_residual = relative_residuals(k, &g, &lambda, &vectors);
-    // Found below the point: every positive factor computed.
-    let found = computed.iter().filter(|&&l| l < sigma).count();
-    let sturm = BucklingSturm {
-        point: sigma,
-        count,
-        found,
-        complete: count == found,
-    };
+    let (rel_residual, backward_error, sturm) = verify(k, &g, &lambda, &vectors, sigma, count, &computed);
     Ok(PencilSolution {
         lambda,
         vectors,
@@ -898,6 +888,30 @@ pub fn solve_pencil_from(
         factor_backward_error: factor_err,
         times: [t_factor_k + t_shift, t_solve, t2.elapsed().as_secs_f64()],
     })
+}
+
+/// The reported pairs' relative residuals and backward errors (of K φ − λ G φ = Kφ + λK_σφ),
+/// and the Sturm record at `sigma` (`count` negative pivots there) against every positive
+/// factor `computed` below it.
+fn verify(
+    k: &SymMatrix,
+    g: &SymMatrix,
+    lambda: &[f64],
+    vectors: &Mat<f64>,
+    sigma: f64,
+    count: usize,
+    computed: &[f64],
+) -> (Vec<f64>, Vec<f64>, BucklingSturm) {
+    let backward_error = backward_errors(k, g, lambda, vectors.as_ref());
+    let rel_residual = relative_residuals(k, g, lambda, vectors);
+    let found = computed.iter().filter(|&&l| l < sigma).count();
+    let sturm = BucklingSturm {
+        point: sigma,
+        count,
+        found,
+        complete: count == found,
+    };
+    (rel_residual, backward_error, sturm)
 }
 
 /// Linear buckling of `mesh` under `loads` (one static case, with the prescribed displacements
@@ -1128,15 +1142,7 @@ fn solve_pencil_dense(
     let f = Factor::new_shifted(sym.clone(), k, Some((&g, sigma)))?;
     let t_factor = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let backward_error = backward_errors(k, &g, &lambda, vectors.as_ref());
-    let rel_residual = relative_residuals(k, &g, &lambda, &vectors);
-    let found = all.iter().filter(|&&l| l < sigma).count();
-    let sturm = BucklingSturm {
-        point: sigma,
-        count: f.negative_pivots,
-        found,
-        complete: f.negative_pivots == found,
-    };
+    let (rel_residual, backward_error, sturm) = verify(k, &g, &lambda, &vectors, sigma, f.negative_pivots, &all);
     Ok(Some(PencilSolution {
         lambda,
         vectors,

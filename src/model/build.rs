@@ -490,6 +490,17 @@ pub(crate) fn point_masses(
         .collect())
 }
 
+/// A spring's second point must be another group than its first (`what` names the spring).
+fn not_to_itself(a: &str, b: Option<&String>, what: &str) -> Result<()> {
+    if b.is_some_and(|b| b == a) {
+        return Err(Error::group(
+            a,
+            format!("{what}: joins '{a}' to itself; a spring joins two points (none named for one to the ground)"),
+        ));
+    }
+    Ok(())
+}
+
 /// Step 4b: springs with a diagonal 6×6 stiffness, to the ground or between two points.
 pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode]) -> Result<Vec<DiscreteSet>> {
     let mut springs1 = DiscreteSet::new(1, 6);
@@ -501,15 +512,7 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
                 format!("spring on '{}': stiffnesses must be non-negative", sp.a),
             ));
         }
-        if sp.b.as_ref() == Some(&sp.a) {
-            return Err(Error::group(
-                sp.a.as_str(),
-                format!(
-                    "spring from '{}' to itself: a spring joins two points (none named for one to the ground)",
-                    sp.a
-                ),
-            ));
-        }
+        not_to_itself(&sp.a, sp.b.as_ref(), &format!("spring on '{}'", sp.a))?;
         let a = point_of(mesh, references, &sp.a)?;
         match &sp.b {
             None => {
@@ -572,15 +575,7 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
                 format!("{what}: the stiffness matrix is not positive semi-definite (eigenvalue {lmin:.3e})"),
             ));
         }
-        if sp.b.as_ref() == Some(&sp.a) {
-            return Err(Error::group(
-                sp.a.as_str(),
-                format!(
-                    "{what}: joins '{}' to itself; a spring joins two points (none named for one to the ground)",
-                    sp.a
-                ),
-            ));
-        }
+        not_to_itself(&sp.a, sp.b.as_ref(), &what)?;
         let a = point_of(mesh, references, &sp.a)?;
         match &sp.b {
             None => springs1.push(&[a as u32], sp.k.clone(), vec![0.0; 36], what),
