@@ -291,33 +291,42 @@ impl FloorReport {
         let s = &self.block_solves;
         let a = &self.applications;
         let o = &self.other_s;
+        // A figure with nothing to measure (no block solve of a dense run: 0 GB at 0 GB/s) is a
+        // dash, not NaN.
+        let num = |v: f64, prec: usize| {
+            if v.is_finite() {
+                format!("{v:.prec$}")
+            } else {
+                "—".to_string()
+            }
+        };
         let mut t = String::new();
         t.push_str("floor         work                                   floor [s]  measured [s]  × floor\n");
         t.push_str(&format!(
-            "factorise     {:<38} {:>9.3}  {:>12.3}  {:>7.2}\n",
+            "factorise     {:<38} {:>9}  {:>12}  {:>7}\n",
             format!("{:.3e} flop at {:.1} GFLOP/s (DGEMM)", f.work, f.rate),
-            f.floor_s,
-            f.measured_s,
-            f.ratio
+            num(f.floor_s, 3),
+            num(f.measured_s, 3),
+            num(f.ratio, 2)
         ));
         t.push_str(&format!(
-            "block solves  {:<38} {:>9.3}  {:>12.3}  {:>7.2}\n",
+            "block solves  {:<38} {:>9}  {:>12}  {:>7}\n",
             format!(
                 "{} passes, {:.2} GB at {:.1} GB/s (read)",
                 self.solve_passes,
                 s.work / 1e9,
                 s.rate
             ),
-            s.floor_s,
-            s.measured_s,
-            s.ratio
+            num(s.floor_s, 3),
+            num(s.measured_s, 3),
+            num(s.ratio, 2)
         ));
         t.push_str(&format!(
-            "applications  {:<38} {:>9}  {:>12}  {:>7.2}\n",
+            "applications  {:<38} {:>9}  {:>12}  {:>7}\n",
             format!("{} for {} modes (floor: 1 per mode)", a.applications, a.modes),
             "",
             "",
-            a.per_mode
+            num(a.per_mode, 2)
         ));
         t.push_str(&format!(
             "rest [s]      read {:.2}, assemble+order {:.2}, coarse+pack {:.2}, iteration besides solves {:.2} (orthog. {:.2}), verify+post {:.2}; total {:.2}\n",
