@@ -268,13 +268,10 @@ fn channel_spacers_add_their_flanges() {
     assert!(e.contains("spacers"), "{e}");
 }
 
-#[test]
-fn search_reports_the_lightest_passing_variant() {
-    use vibrofem::app::design::search;
-    // Two table variants (3 transverse webs, top 16 and 20 mm): both reach the amplitude and
-    // the first-mode limit. With the given 10 % uniformity limit neither passes (their
-    // work-surface amplitude varies by about 15 % with the reconstruction's leaf layout); with
-    // a 20 % limit the lighter one passes and is the one reported.
+/// The paper design with a search over two table variants (3 transverse webs, top 20 and 16 mm),
+/// one run whole at most: the table search alone, at the nominal point (issue 29 added pulls,
+/// leaf moves, a margin and the envelope to the defaults).
+fn two_variant_search() -> Design {
     let mut d = Design::paper();
     d.search.top_thickness = vec![0.02, 0.016];
     d.search.bottom_thickness = vec![0.008];
@@ -284,12 +281,21 @@ fn search_reports_the_lightest_passing_variant() {
     d.search.n_trans_webs = vec![3];
     d.search.spacers = vec!["plates".into()];
     d.search.max_full_runs = 1;
-    // The table search alone, at the nominal point (issue 29 added pulls, leaf moves, a margin
-    // and the envelope to the defaults).
     d.search.pull = vec![];
     d.search.leaf_shift = vec![0.0];
     d.search.required_margin = 0.0;
     d.search.over_envelope = false;
+    d
+}
+
+#[test]
+fn search_reports_the_lightest_passing_variant() {
+    use vibrofem::app::design::search;
+    // Two table variants (3 transverse webs, top 16 and 20 mm): both reach the amplitude and
+    // the first-mode limit. With the given 10 % uniformity limit neither passes (their
+    // work-surface amplitude varies by about 15 % with the reconstruction's leaf layout); with
+    // a 20 % limit the lighter one passes and is the one reported.
+    let mut d = two_variant_search();
     let o = search(&d, None, &|_| {}).unwrap();
     assert_eq!(o.candidates.len(), 2);
     assert!(o.candidates[0].mass_kg < o.candidates[1].mass_kg, "lightest first");
@@ -311,19 +317,7 @@ fn passing_variant_folder_holds_only_a_passing_variant() {
     // run's must not stay beside a report whose search found none. Same two variants as above:
     // neither passes at the 10 % uniformity limit, the lighter one at 20 %.
     use vibrofem::app::design::job;
-    let mut d = Design::paper();
-    d.search.top_thickness = vec![0.02, 0.016];
-    d.search.bottom_thickness = vec![0.008];
-    d.search.bottom_width = vec![0.4];
-    d.search.long_web_span = vec![0.3];
-    d.search.n_long_webs = vec![3];
-    d.search.n_trans_webs = vec![3];
-    d.search.spacers = vec!["plates".into()];
-    d.search.max_full_runs = 1;
-    d.search.pull = vec![];
-    d.search.leaf_shift = vec![0.0];
-    d.search.required_margin = 0.0;
-    d.search.over_envelope = false;
+    let mut d = two_variant_search();
     d.envelope.enabled = false;
     let out = crate::support::tmp("passing_variant");
     let vdir = out.join("passing-variant");

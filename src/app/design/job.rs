@@ -195,15 +195,15 @@ fn settle_variant_dir(o: Result<SearchOutcome>, staging: &Path, vdir: &Path) -> 
     o
 }
 
-/// Remove the file or folder `dir` (and what it holds); one that is not there is fine.
-fn remove_output(dir: &Path) -> Result<()> {
-    let removed = if dir.is_dir() {
-        std::fs::remove_dir_all(dir)
+/// Remove the file or folder `path` (and what it holds); one that is not there is fine.
+fn remove_output(path: &Path) -> Result<()> {
+    let removed = if path.is_dir() {
+        std::fs::remove_dir_all(path)
     } else {
-        std::fs::remove_file(dir)
+        std::fs::remove_file(path)
     };
     match removed {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(dir, e)),
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(Error::io(path, e)),
         _ => Ok(()),
     }
 }
