@@ -297,3 +297,44 @@ fn converge_refuses_too_many_levels() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--levels 30: at most 6"), "{err}");
 }
+
+/// A design whose analysis fails (a 1 µm long table: its K is too ill-conditioned for the
+/// modes to be verified) is reported with its error and the study goes on: the other design is
+/// analysed and tabulated, the CSV keeps both in case order, and the command ends with exit
+/// code 3 as `batch` does for a run in which some cases failed.
+#[test]
+fn a_failing_design_is_reported_and_the_study_goes_on() {
+    let d = tmp("fail-cli");
+    let p = d.join("study.toml");
+    std::fs::write(&p, BASE).unwrap();
+    let out = d.join("out");
+    let (code, stdout, stderr) = crate::common::run(&[
+        "sweep",
+        p.to_str().unwrap(),
+        "--set",
+        "table.length=1e-6,1.2",
+        "--jobs",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 3, "{stdout}\n{stderr}");
+    assert!(stderr.contains("[") && stderr.contains("failed: verification failed"), "{stderr}");
+    assert!(stdout.contains("1 failed (the study went on past them)"), "{stdout}");
+    assert!(stdout.contains("case 1 (table.length=0.000001): verification failed"), "{stdout}");
+    assert!(stdout.contains("of 1 designs meet the constraints"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 3, "{csv}");
+    assert!(lines[0].ends_with(",feasible,pareto,error"), "{csv}");
+    assert!(lines[1].starts_with("1,0.000001,,,,,,,false,false,\"verification failed"), "{csv}");
+    // The analysed design: its numbers and an empty error.
+    let f: Vec<&str> = lines[2].split(',').collect();
+    assert_eq!(f[0], "2");
+    assert!(f[4].parse::<f64>().unwrap() > 1.0 && f.last() == Some(&""), "{csv}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(json["failed"][0]["case"], 1);
+    assert_eq!(json["failed"][0]["stage"], "design");
+    assert_eq!(json["rows"].as_array().unwrap().len(), 1);
+}

@@ -192,7 +192,8 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
     )?;
     out!("{}", sweep::table_text(&o));
     outln!("outputs in {}", a.out.display());
-    Ok(0)
+    // As `batch`: 3 when some designs (or checks) failed and the others completed.
+    Ok(if o.failed.is_empty() { 0 } else { 3 })
 }
 
 #[derive(clap::Args)]

@@ -825,6 +825,21 @@ pub struct SweepOutcome {
     pub rows: Vec<SweepRow>,
     /// Checks of the best designs.
     pub checks: Vec<CheckRow>,
+    /// Designs (and checks) whose analysis failed, in case order: the study goes on past them.
+    pub failed: Vec<FailedCase>,
+}
+
+/// A design of a sweep whose analysis failed (or whose check did).
+#[derive(Clone, Debug, Serialize)]
+pub struct FailedCase {
+    /// 1-based case number.
+    pub case: usize,
+    /// Values of the swept keys, in the study's order.
+    pub values: Vec<f64>,
+    /// `design` (the sweep's own analysis) or `check` (the re-run of a best design).
+    pub stage: &'static str,
+    /// Why, as the error reads.
+    pub error: String,
 }
 
 /// Options of [`run_sweep`].
@@ -871,11 +886,21 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     }
     let designs = study.designs()?;
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let one = |(i, (vals, _t, p)): (usize, &(Vec<f64>, TableSpec, SandwichParams))| -> Result<SweepRow> {
-        let r = analyse(p, study.material, solid)
-            .map_err(|e| Error::InvalidInput(format!("case {} ({}): {e}", i + 1, describe(study, vals))))?;
-        let mass = p.mass(study.material.density);
+    let one = |(i, (vals, _t, p)): (usize, &(Vec<f64>, TableSpec, SandwichParams))| -> std::result::Result<SweepRow, FailedCase> {
+        let r = analyse(p, study.material, solid);
         let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+        let r = r.map_err(|e| {
+            if opts.progress {
+                eprintln!("[{k}/{total}] {}: failed: {e}", describe(study, vals));
+            }
+            FailedCase {
+                case: i + 1,
+                values: vals.clone(),
+                stage: "design",
+                error: e.to_string(),
+            }
+        })?;
+        let mass = p.mass(study.material.density);
         if opts.progress {
             eprintln!(
                 "[{k}/{total}] {}: {mass:.1} kg, f1 {:.1} Hz ({:.2} s)",
@@ -898,7 +923,7 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
         })
     };
     let jobs = opts.jobs.max(1);
-    let rows: Result<Vec<SweepRow>> = if jobs == 1 {
+    let results: Vec<std::result::Result<SweepRow, FailedCase>> = if jobs == 1 {
         designs.iter().enumerate().map(one).collect()
     } else {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -907,43 +932,69 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
             .map_err(|e| Error::param("jobs", format!("sweep: cannot start {jobs} workers: {e}")))?;
         pool.install(|| designs.par_iter().enumerate().map(one).collect())
     };
-    let mut rows = rows?;
+    let (mut rows, mut failed) = (Vec::new(), Vec::new());
+    for r in results {
+        match r {
+            Ok(row) => rows.push(row),
+            Err(f) => failed.push(f),
+        }
+    }
     mark_pareto(&mut rows);
     let mut checks = Vec::new();
     if study.check.designs > 0 {
         for r in best(&rows, study.check.designs) {
-            let p = &designs[r.case - 1].2;
-            let mut fine = p.clone();
-            fine.elem_size = p.elem_size / study.check.shell_refine.max(1.0);
-            let s = analyse(&fine, study.material, None)?;
-            let so = analyse(p, study.material, Some(study.check.solid_size))?;
-            if opts.progress {
-                eprintln!(
-                    "check case {}: shell {} m {:.1} Hz, hex20 {} m {:.1} Hz",
-                    r.case, fine.elem_size, s.f1_hz, study.check.solid_size, so.f1_hz
-                );
+            match check_design(study, &designs[r.case - 1].2, r) {
+                Ok(c) => {
+                    if opts.progress {
+                        eprintln!(
+                            "check case {}: shell {} m {:.1} Hz, hex20 {} m {:.1} Hz",
+                            c.case, c.shell_size, c.f1_shell_fine_hz, c.solid_size, c.f1_solid_hz
+                        );
+                    }
+                    checks.push(c);
+                }
+                Err(e) => {
+                    if opts.progress {
+                        eprintln!("check case {}: failed: {e}", r.case);
+                    }
+                    failed.push(FailedCase {
+                        case: r.case,
+                        values: r.values.clone(),
+                        stage: "check",
+                        error: e.to_string(),
+                    });
+                }
             }
-            checks.push(CheckRow {
-                case: r.case,
-                mass_kg: r.mass_kg,
-                f1_sweep_hz: r.f1_hz,
-                f1_shell_fine_hz: s.f1_hz,
-                shell_size: fine.elem_size,
-                f1_solid_hz: so.f1_hz,
-                solid_size: study.check.solid_size,
-                feasible_solid: so.f1_hz >= study.constraints.min_f1_hz && r.mass_kg <= study.constraints.max_mass_kg,
-            });
         }
     }
     let outcome = SweepOutcome {
         study: study.clone(),
         rows,
         checks,
+        failed,
     };
     if let Some(dir) = &opts.out {
         write_outputs(&outcome, dir)?;
     }
     Ok(outcome)
+}
+
+/// The check of one of the best designs: a finer shell mesh and the hex20 solid.
+fn check_design(study: &Study, p: &SandwichParams, r: &SweepRow) -> Result<CheckRow> {
+    let mut fine = p.clone();
+    fine.elem_size = p.elem_size / study.check.shell_refine.max(1.0);
+    let s = analyse(&fine, study.material, None)?;
+    let so = analyse(p, study.material, Some(study.check.solid_size))?;
+    Ok(CheckRow {
+        case: r.case,
+        mass_kg: r.mass_kg,
+        f1_sweep_hz: r.f1_hz,
+        f1_shell_fine_hz: s.f1_hz,
+        shell_size: fine.elem_size,
+        f1_solid_hz: so.f1_hz,
+        solid_size: study.check.solid_size,
+        feasible_solid: so.f1_hz >= study.constraints.min_f1_hz && r.mass_kg <= study.constraints.max_mass_kg,
+    })
 }
 
 /// The `n` best designs: feasible ones by descending f1 (then ascending mass), else the Pareto
@@ -1007,6 +1058,13 @@ pub fn table_text(o: &SweepOutcome) -> String {
     }
     let nf = o.rows.iter().filter(|r| r.feasible).count();
     s.push_str(&format!("{nf} of {} designs meet the constraints\n", o.rows.len()));
+    if !o.failed.is_empty() {
+        s.push_str(&format!("{} failed (the study went on past them):\n", o.failed.len()));
+        for f in &o.failed {
+            let what = if f.stage == "check" { "check of case" } else { "case" };
+            s.push_str(&format!("  {what} {} ({}): {}\n", f.case, describe(&o.study, &f.values), f.error));
+        }
+    }
     if !o.checks.is_empty() {
         s.push_str(
             "check of the best designs:\n  case   mass kg   f1 sweep   f1 shell fine   f1 hex20   feasible (hex20)\n",
@@ -1028,24 +1086,40 @@ pub fn table_text(o: &SweepOutcome) -> String {
     s
 }
 
-/// The rows as CSV: `case,<keys…>,mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto`.
+/// The rows as CSV, in case order:
+/// `case,<keys…>,mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto,error`; a design
+/// whose analysis failed has its values, empty results and the error (quoted).
 pub fn sweep_csv(o: &SweepOutcome) -> String {
     let mut s = String::from("case");
     for (k, _) in &o.study.sweep {
         s.push_str(&format!(",{k}"));
     }
-    s.push_str(",mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto\n");
-    for r in &o.rows {
-        s.push_str(&r.case.to_string());
-        for v in &r.values {
-            s.push_str(&format!(",{v}"));
-        }
-        s.push_str(&format!(
-            ",{:.6},{:.6},{:.6},{:.6},{},{:.3},{},{}\n",
-            r.mass_kg, r.model_mass_kg, r.f1_hz, r.f2_hz, r.dofs, r.time_s, r.feasible, r.pareto
-        ));
+    s.push_str(",mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto,error\n");
+    let failed = o.failed.iter().filter(|f| f.stage == "design");
+    let mut lines: Vec<(usize, String)> = o
+        .rows
+        .iter()
+        .map(|r| {
+            let res = format!(
+                ",{:.6},{:.6},{:.6},{:.6},{},{:.3},{},{},",
+                r.mass_kg, r.model_mass_kg, r.f1_hz, r.f2_hz, r.dofs, r.time_s, r.feasible, r.pareto
+            );
+            (r.case, csv_values(&r.values) + &res)
+        })
+        .chain(failed.map(|f| {
+            let err = format!(",,,,,,,false,false,\"{}\"", f.error.replace('"', "\"\""));
+            (f.case, csv_values(&f.values) + &err)
+        }))
+        .collect();
+    lines.sort_by_key(|l| l.0);
+    for (case, l) in lines {
+        s.push_str(&format!("{case}{l}\n"));
     }
     s
+}
+
+fn csv_values(v: &[f64]) -> String {
+    v.iter().map(|v| format!(",{v}")).collect()
 }
 
 /// Write `sweep.csv`, `sweep.json` and `pareto.svg` to `dir` (created).
