@@ -709,7 +709,17 @@ fn solution_notes(
             sol.factor_backward_error
         ));
     }
-    if !sol.sturm.complete {
+    if !sol.sturm.complete && sol.sturm.expected == sol.sturm.found && sol.sturm.lower.1 > 0 {
+        notes.push(format!(
+            "Sturm check: {} eigenvalue(s) lie below the lowest mode found ({:.6e} rad²/s², {:.4} Hz): the modes \
+             listed are not the lowest (a preload past buckling has its lowest far below zero); ask for at least {} \
+             modes (--modes) to have them",
+            sol.sturm.lower.1,
+            sol.sturm.lower.0,
+            crate::post::modal::hz(sol.sturm.lower.0),
+            sol.sturm.upper.1
+        ));
+    } else if !sol.sturm.complete {
         notes.push(format!(
             "Sturm check failed: {} modes expected between {:.6e} and {:.6e} rad²/s², {} found",
             sol.sturm.expected, sol.sturm.lower.0, sol.sturm.upper.0, sol.sturm.found

@@ -1336,12 +1336,15 @@ impl Rounds<'_> {
                 "Sturm check: {expected} eigenvalues in ({lower_pt:.6e}, {upper_pt:.6e}) rad²/s², {n_between} found"
             );
         }
+        // The lowest modes asked for (the default shift): an eigenvalue below the lower point
+        // is a lower mode not found (a preload past buckling has them far below the shift).
+        let lowest = self.band.is_none() && self.pb.p.shift.is_none();
         Ok(SturmCheck {
             lower: (lower_pt, lower_count),
             upper: (upper_pt, upper_count),
             expected,
             found: n_between,
-            complete: expected == n_between,
+            complete: expected == n_between && !(check && lowest && lower_count > 0),
         })
     }
 
@@ -1517,7 +1520,8 @@ fn solve_below_bound(
     // The coarse model's matrices and factor are freed: give the memory back before the
     // model's factor is allocated.
     crate::util::memory::release_free_memory();
-    if lc.len() <= nm || !(lc[nm] > 0.0) {
+    // The next bound positive, or above a negative wanted one (a preload past buckling).
+    if lc.len() <= nm || !(lc[nm] > 0.0 || (lc[nm - 1] < 0.0 && lc[nm] > lc[nm - 1])) {
         return Ok(None);
     }
     let zero = default_shift(k, m).abs();
@@ -1759,6 +1763,13 @@ const COARSE_APPLICATIONS_PER_MODE: usize = 30;
 /// nothing (rigid-body modes only: the default solve).
 fn bound_shift(lc: &[f64], nm: usize, zero: f64) -> Option<f64> {
     let (a, b) = (lc[nm - 1], lc[nm]);
+    if a < -zero && b > a {
+        // A clearly negative bound: a preload past buckling (K + K_σ indefinite). The lowest
+        // modes are the most negative ones, and the fine model has more negative eigenvalues
+        // than the coarse one shows: U just above the bound (which the nm-th eigenvalue lies
+        // below) rather than halfway to the next, which would take in all of them.
+        return Some(a + (0.5 * (b - a)).min(0.02 * -a));
+    }
     if a <= zero {
         if b <= zero {
             return None;

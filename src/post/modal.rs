@@ -471,7 +471,9 @@ fn free_motions(
             let y = &w * ea.eigenvectors.column(i);
             let y6 = nalgebra::Vector6::from_fn(|k, _| y[k]);
             let scale = (y6.transpose() * g.d[c] * y6)[(0, 0)];
-            if mu <= tol && (y6.transpose() * gks * y6)[(0, 0)] <= FREE_STIFFNESS * scale {
+            // |·|: a prestressed K + K_σ can give a supported motion negative energy (a preload
+            // past buckling), which is not freedom.
+            if mu.abs() <= tol && (y6.transpose() * gks * y6)[(0, 0)].abs() <= FREE_STIFFNESS * scale {
                 basis.push((c, y6));
                 count += 1;
             }
@@ -482,8 +484,8 @@ fn free_motions(
         let motions = (0..6)
             .filter(|&d| {
                 gms[(d, d)] > 1e-10 * emax
-                    && gks[(d, d)] / gms[(d, d)] <= tol
-                    && gks[(d, d)] <= FREE_STIFFNESS * g.d[c][(d, d)]
+                    && (gks[(d, d)] / gms[(d, d)]).abs() <= tol
+                    && gks[(d, d)].abs() <= FREE_STIFFNESS * g.d[c][(d, d)]
             })
             .map(|d| NAMES[d])
             .collect();
