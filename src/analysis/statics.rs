@@ -710,7 +710,20 @@ pub fn factor_stiffness(sys: &System) -> Result<Factor> {
         Ok(f) => f,
         Err(e) => return Err(singular(e.locate(|eq| sys.describe_equation(eq)).to_string())),
     };
-    if fa.negative_pivots > 0 || fa.pivot_range.0 <= fa.pivot_range.1 * 1e-13 {
+    let ratio = fa.pivot_range.0 / fa.pivot_range.1.max(f64::MIN_POSITIVE);
+    if fa.negative_pivots > 0 && ratio > 1e-13 {
+        // No pivot at rounding level, so no motion is free: a negative pivot of a supported K
+        // (positive definite as assembled) is the rounding of an ill-conditioned elimination
+        // (a coupling's reference node 1000 km from its group: one negative pivot, ratio 9e-5).
+        return Err(Error::Factorization(format!(
+            "the stiffness matrix is too ill-conditioned to factorise reliably: {} negative pivot(s) where a \
+             supported K has none (smallest pivot {ratio:.1e} of the largest); stiffness contrasts or lever \
+             arms of many orders of magnitude (e.g. a coupling's reference node far from its group, a part \
+             much thinner than long)",
+            fa.negative_pivots
+        )));
+    }
+    if fa.negative_pivots > 0 || ratio <= 1e-13 {
         return Err(singular(format!(
             "pivot ratio {:.1e}, {} negative pivots",
             fa.pivot_range.0 / fa.pivot_range.1.max(f64::MIN_POSITIVE),

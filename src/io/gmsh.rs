@@ -205,10 +205,18 @@ fn read_physical_names(cur: &mut Cursor, b: &mut Builder) -> Result<()> {
         let dim = check_dim(cur, dim)?;
         let tag = cur.tok_i32("physical tag")?;
         let raw = cur.rest_of_line();
-        let name = raw
-            .strip_prefix(b"\"")
-            .and_then(|r| r.strip_suffix(b"\""))
-            .unwrap_or(raw);
+        // gmsh quotes names; an unquoted one is taken as it stands, a half-quoted one is a
+        // damaged line (its group would be looked up by a name no one typed).
+        let name = match (raw.strip_prefix(b"\""), raw.len() >= 2 && raw.ends_with(b"\"")) {
+            (Some(r), true) => r.strip_suffix(b"\"").unwrap_or(r),
+            (None, false) => raw,
+            _ => {
+                return Err(cur.err(format!(
+                    "physical group {dim}:{tag}: the name {} lacks a quote (gmsh writes \"name\")",
+                    shown(raw)
+                )));
+            }
+        };
         if name.is_empty() {
             return Err(cur.err(format!("physical group {dim}:{tag} has an empty name")));
         }
@@ -232,6 +240,24 @@ fn read_physical_names(cur: &mut Cursor, b: &mut Builder) -> Result<()> {
         b.names.insert((dim, tag), name);
     }
     cur.expect("$EndPhysicalNames")
+}
+
+/// A node's x, y, z (then `n_param` parametric coordinates, skipped); in ASCII on the line of its
+/// tag (MSH 2) or on a line of its own (MSH 4), nothing missing and nothing more.
+fn node_coords(cur: &mut Cursor, tag: u64, n_param: usize, after_tag: bool) -> Result<[f64; 3]> {
+    let mut x = [0.0; 3];
+    for (d, axis) in ["x", "y", "z"].into_iter().enumerate() {
+        if d > 0 || after_tag {
+            cur.more_on_line(|| format!("node {tag}: its line ends before its {axis} coordinate"))?;
+        }
+        x[d] = cur.coord(axis)?;
+    }
+    for _ in 0..n_param {
+        cur.more_on_line(|| format!("node {tag}: its line ends before its parametric coordinates"))?;
+        cur.float("parametric coordinate")?;
+    }
+    cur.line_done(|| format!("node {tag}"))?;
+    Ok(x)
 }
 
 /// An entity or group dimension, which must be 0..=3.

@@ -462,3 +462,56 @@ fn an_element_line_with_the_wrong_node_count_names_the_element() {
     let (code, out, err) = run(&["mesh-info", p.to_str().unwrap()]);
     assert_eq!(code, 0, "{out}{err}");
 }
+
+/// A record cut short is named at its own line. Before, the reader took the next line's first
+/// value for the missing one and reported a line or two later ("node 1 is defined twice",
+/// "element tag 4 is used for two different elements").
+#[test]
+fn short_records_are_named_at_their_line() {
+    // MSH 2.2: node 2 on line 12 with two coordinates.
+    let bad = small_msh("1 4 2 2 1 1 2 3 4\n", 1).replacen("\n2 1 0 0\n", "\n2 1 0\n", 1);
+    let p = tmp("two_coords.msh", &bad);
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["two_coords.msh", "line 12", "node 2", "before its z coordinate"],
+    );
+    // MSH 4.1 (the S1 plate): node 1's coordinates (line 48) lose z; tri6 element 2 (line 3786)
+    // its last node; tri6 element 1 (line 3785) gets a seventh.
+    let full = std::fs::read_to_string(plate()).unwrap();
+    let edit = |line: usize, text: &str| -> String {
+        let mut l: Vec<&str> = full.lines().collect();
+        l[line - 1] = text;
+        l.join("\n") + "\n"
+    };
+    let p = tmp("node_short41.msh", &edit(48, "0 0"));
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 48", "node 1", "before its z coordinate"]);
+    let p = tmp("elem_short41.msh", &edit(3786, "2 1 10 171 19 177"));
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 3786", "element 2", "after 5 of the 6"]);
+    let p = tmp("elem_long41.msh", &edit(3785, "1 2 1 171 9 175 176 7"));
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 3785", "element 1", "starting at '7'"]);
+}
+
+/// A physical name with one quote is a damaged line, not a name with a quote in it.
+#[test]
+fn a_half_quoted_group_name_is_refused() {
+    let bad = small_msh("1 4 2 2 1 1 2 3 4\n", 1).replacen("\"face\"", "\"face", 1);
+    let p = tmp("half_quoted.msh", &bad);
+    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 6", "2:1", "lacks a quote"]);
+}
+
+/// Counts that must be at least one are refused by name, not run as nothing.
+#[test]
+fn zero_jobs_and_zero_levels_are_refused() {
+    expect_error(&["batch", "--scene", "x.toml", "--jobs", "0"], 1, &["--jobs", "at least 1"]);
+    expect_error(&["sweep", "x.toml", "--jobs", "0"], 1, &["--jobs", "at least 1"]);
+    expect_error(&["converge", "s1", "--levels", "0"], 1, &["--levels", "at least 1"]);
+}
+
+/// A static case without load names no node for its zero displacement.
+#[test]
+fn an_unloaded_static_case_says_nothing_moves() {
+    let (code, out, err) = run(&["static", "box:1,0.1,0.1:4,1,1:hex20", "--fix", "xmin"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("nothing moves") && !out.contains("at node 0"), "{out}");
+}

@@ -89,6 +89,12 @@ fn a_static_solve_that_misses_equilibrium_fails() {
         err.contains("solve residual") && err.contains("ill-conditioned"),
         "{err}"
     );
+    // At 1000 km the factorisation meets a negative pivot (rounding: ratio ~1e-4, no pivot at
+    // rounding level). The model is supported: it was called "under-constrained" with all six
+    // rigid motions named free; the error must say ill-conditioned instead.
+    let (code, _, err) = static_at("1e6");
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("ill-conditioned") && !err.contains("under-constrained"), "{err}");
 }
 
 #[test]

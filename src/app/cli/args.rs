@@ -117,3 +117,12 @@ impl LoadArgs {
         .apply(spec)
     }
 }
+
+/// A count that must be at least 1 (`--jobs`, `--levels`): clap's parser for such options.
+pub fn at_least_one(s: &str) -> std::result::Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(v) => Ok(v),
+        Err(e) => Err(format!("expected a whole number ≥ 1 ({e})")),
+    }
+}

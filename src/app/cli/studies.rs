@@ -53,7 +53,7 @@ pub struct BatchArgs {
     #[arg(short, long, default_value = "vibrofem-batch")]
     out: PathBuf,
     /// Cases run at once (capped further by available memory).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::args::at_least_one)]
     jobs: usize,
     /// Rerun cases whose result file already exists.
     #[arg(long)]
@@ -128,7 +128,7 @@ pub struct SweepArgs {
     #[arg(short, long, default_value = "vibrofem-sweep")]
     out: PathBuf,
     /// Designs analysed at once.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::args::at_least_one)]
     jobs: usize,
     /// Model: shell (MITC4 mid-surface) or solid (hex20 of --solid-size).
     #[arg(long)]
@@ -206,7 +206,7 @@ pub struct ConvergeArgs {
     #[arg(short, long, default_value = "vibrofem-converge")]
     out: PathBuf,
     /// Refinement levels of a scene (each halves the element size).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = super::args::at_least_one)]
     levels: usize,
     /// Element sizes of a .geo (gmsh's Mesh.MeshSizeMax, in the geometry's units), e.g. 20,10,5.
     #[arg(long, value_name = "H1,H2,…")]

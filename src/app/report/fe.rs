@@ -324,11 +324,16 @@ pub fn static_text(r: &StaticReport) -> String {
             "  applied force   [{:.6e}, {:.6e}, {:.6e}] N",
             c.applied.force[0], c.applied.force[1], c.applied.force[2]
         );
-        let _ = writeln!(
-            s,
-            "  max |u|         {:.6e} m at node {}",
-            c.max_displacement.0, c.max_displacement.1
-        );
+        if c.max_displacement.0 > 0.0 {
+            let _ = writeln!(
+                s,
+                "  max |u|         {:.6e} m at node {}",
+                c.max_displacement.0, c.max_displacement.1
+            );
+        } else {
+            // No node moves (no load and no prescribed motion): no node to name.
+            let _ = writeln!(s, "  max |u|         0 m (nothing moves: the case has no load)");
+        }
         for rf in &c.references {
             let d = rf.displacement;
             let _ = writeln!(

@@ -134,6 +134,26 @@ impl<'a> Cursor<'a> {
         true
     }
 
+    /// In ASCII data, an error unless another token follows on the current line: records that
+    /// must fit one line (a node's coordinates, an element's nodes) are then reported at their
+    /// own line, not where the next line's tokens stop fitting. `what` names what is missing.
+    pub fn more_on_line(&mut self, what: impl FnOnce() -> String) -> crate::Result<()> {
+        if self.bin.is_some() || self.file_binary || !self.line_ends() {
+            return Ok(());
+        }
+        Err(self.err(what()))
+    }
+
+    /// In ASCII data, an error unless the current line ends here (`what`: the record, for a
+    /// message on the extra values).
+    pub fn line_done(&mut self, what: impl FnOnce() -> String) -> crate::Result<()> {
+        if self.bin.is_some() || self.file_binary || self.line_ends() {
+            return Ok(());
+        }
+        let extra = self.next_token().map(shown).unwrap_or_default();
+        Err(self.err(format!("{}: more values on its line than expected, starting at '{extra}'", what())))
+    }
+
     /// The next whitespace-separated ASCII token, or `None` at the end of the file.
     ///
     /// At the end of the file, the line of errors stays that of the last token read, i.e. the

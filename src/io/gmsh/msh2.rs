@@ -64,7 +64,7 @@ fn read_nodes(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<()> 
     b.reserve_nodes(cur.cap(n, min_bytes));
     for _ in 0..n {
         let tag = cur.int_tag("node tag")?;
-        let x = [cur.coord("x")?, cur.coord("y")?, cur.coord("z")?];
+        let x = super::node_coords(cur, tag, 0, true)?;
         b.add_node(cur, tag, x)?;
     }
     cur.set_binary(None);

@@ -145,10 +145,7 @@ fn read_nodes(cur: &mut Cursor, b: &mut Builder) -> Result<()> {
             tags.push(cur.size("node tag")?);
         }
         for &tag in &tags {
-            let x = [cur.coord("x")?, cur.coord("y")?, cur.coord("z")?];
-            for _ in 0..n_param {
-                cur.float("parametric coordinate")?;
-            }
+            let x = super::node_coords(cur, tag, n_param, false)?;
             b.add_node(cur, tag, x)?;
         }
         read += n;
@@ -207,10 +204,17 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
         for _ in 0..n {
             let tag = cur.size("element tag")?;
             nodes.clear();
-            for _ in 0..nn {
+            for k in 0..nn {
+                cur.more_on_line(|| {
+                    format!(
+                        "element {tag}: its line ends after {k} of the {nn} node tags of a {} (gmsh type {gmsh_type})",
+                        kind.name()
+                    )
+                })?;
                 let node = cur.size("node tag")?;
                 nodes.push(b.node(cur, tag, node)?);
             }
+            cur.line_done(|| format!("element {tag} (a {} of {nn} nodes)", kind.name()))?;
             // Within 4.1 an element in several groups is written once (its entity carries the
             // groups): any repeat is a duplicate, counted once, with a note.
             let (cell, merged) = b.add_cell(cur, kind, tag, &nodes)?;
