@@ -368,6 +368,7 @@ pub fn run_with(sys: &System, mesh: &Mesh, req: &HarmonicRequest, keep: Fields) 
         points.push(point);
     }
     tm.total = t_all.elapsed().as_secs_f64();
+    disagreement_note(&points, &mut notes);
     let mode_hz: Vec<f64> = modes.as_ref().map_or_else(Vec::new, |m| {
         m.lambda.iter().map(|&l| crate::post::modal::hz(l)).collect()
     });
@@ -397,6 +398,31 @@ pub fn run_with(sys: &System, mesh: &Mesh, req: &HarmonicRequest, keep: Fields) 
         nodal,
         field_points,
     })
+}
+
+/// The largest modal-vs-direct difference (`--method both`) above which a note says which to
+/// trust: the superposition's truncation and its static correction are approximations, the
+/// direct solve is exact for the model; 1 % is the accuracy a response is read to.
+const MODAL_DIRECT_NOTE: f64 = 1e-2;
+
+/// With both methods run: a note when they differ by more than [`MODAL_DIRECT_NOTE`] (the modal
+/// response is the one tabulated).
+fn disagreement_note(points: &[Point], notes: &mut Vec<String>) {
+    let worst = points
+        .iter()
+        .filter_map(|p| p.modal_vs_direct.map(|d| (d, p.freq_hz)))
+        .max_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some((d, f)) = worst.filter(|w| w.0 > MODAL_DIRECT_NOTE) {
+        // The truncation note (if any) asked for this check: drop its advice, which is done.
+        notes.retain(|n| !n.contains("check with --method both"));
+        notes.push(format!(
+            "modal superposition and the direct solve differ by up to {} % (at {} Hz): the direct solve is \
+             exact for the model, the superposition is not here (modes missing above the ones superposed, or \
+             damping too heavy for the static correction); take --method direct, or raise --modes",
+            crate::io::fmt_sig(100.0 * d, 3),
+            crate::io::fmt_sig(f, 4)
+        ));
+    }
 }
 
 /// Refuse a request without forces or frequencies, with a frequency out of range, without

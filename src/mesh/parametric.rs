@@ -92,6 +92,14 @@ fn grid_lines(what: &str, size_name: &str, required: &[f64], h: f64, min_div: us
     for w in pts.windows(2) {
         total += ((w[1] - w[0]) / h - 1e-9).ceil().max(min_div as f64);
     }
+    if total > MAX_CELLS as f64 && !(extent <= 1e6) {
+        // Not the element size's fault: a dimension beyond any machine (over 1000 km, 1e308 m,
+        // infinite).
+        return Err(Error::InvalidInput(format!(
+            "{what}: the geometry spans {extent:.3e} m along one axis: check its dimensions (the element size \
+             {size_name} = {h} is not the cause)"
+        )));
+    }
     if total > MAX_CELLS as f64 {
         return Err(invalid(
             size_name,

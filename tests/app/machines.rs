@@ -622,8 +622,11 @@ fn imbalance_scatter_against_complex_arithmetic() {
 #[test]
 fn bad_csv_rows_named_by_line() {
     let head = "# comment\nrecord,label,x,y\nversion,balancer-data,1,\n";
-    let cases: [(&str, usize, &str); 8] = [
+    let cases: [(&str, usize, &str); 11] = [
         ("ball,,0.002,0.03\nmount,1,abc,12\n", 5, "cannot read 'abc'"),
+        ("ball,,0.002,0.03\nmount,1,1e300,12\n", 5, "within ±360°"),
+        ("ball,,0.002,0.03\nspread,\"on a disc,150,\n", 5, "a quote"),
+        ("ball,,0.002,0.03\nspread,\"on, a disc\",150,\n", 5, "a quote"),
         ("ball,,0.002,0.03\nwobble,1,2,3\n", 5, "unknown record 'wobble'"),
         ("ball,,0.002,0.03\nball,,0.003,0.03\n", 5, "second 'ball'"),
         ("mount,1,10,20\nmount,2,30,40\n", 4, "needs a 'ball'"),

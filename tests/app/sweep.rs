@@ -321,13 +321,13 @@ fn a_failing_design_is_reported_and_the_study_goes_on() {
     assert_eq!(code, 3, "{stdout}\n{stderr}");
     assert!(stderr.contains("[") && stderr.contains("failed: verification failed"), "{stderr}");
     assert!(stdout.contains("1 failed (the study went on past them)"), "{stdout}");
-    assert!(stdout.contains("case 1 (table.length=0.000001): verification failed"), "{stdout}");
+    assert!(stdout.contains("case 1 (table.length=1e-6): verification failed"), "{stdout}");
     assert!(stdout.contains("of 1 designs meet the constraints"), "{stdout}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 3, "{csv}");
     assert!(lines[0].ends_with(",feasible,pareto,error"), "{csv}");
-    assert!(lines[1].starts_with("1,0.000001,,,,,,,false,false,\"verification failed"), "{csv}");
+    assert!(lines[1].starts_with("1,1e-6,,,,,,,false,false,\"verification failed"), "{csv}");
     // The analysed design: its numbers and an empty error.
     let f: Vec<&str> = lines[2].split(',').collect();
     assert_eq!(f[0], "2");
@@ -337,4 +337,23 @@ fn a_failing_design_is_reported_and_the_study_goes_on() {
     assert_eq!(json["failed"][0]["case"], 1);
     assert_eq!(json["failed"][0]["stage"], "design");
     assert_eq!(json["rows"].as_array().unwrap().len(), 1);
+}
+
+/// An absurd dimension (1e308 m) is named as the geometry's fault, not the element size's (the
+/// grid-line count overflows either way; before, the error said "elem_size = 0.1 is too small").
+#[test]
+fn an_absurd_dimension_is_not_blamed_on_the_element_size() {
+    let mut s = study(BASE, "absurd");
+    s.set("table.top_thickness", vec![1e308]);
+    let opts = SweepOptions {
+        out: None,
+        jobs: 1,
+        progress: false,
+        yes: false,
+    };
+    let o = sweep::run_sweep(&s, &opts).unwrap();
+    assert!(o.rows.is_empty());
+    let e = &o.failed[0].error;
+    assert!(e.contains("check its dimensions") && !e.contains("too small"), "{e}");
+    assert!(sweep::table_text(&o).contains("table.top_thickness=1e308"));
 }

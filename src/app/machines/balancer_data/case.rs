@@ -171,6 +171,14 @@ pub fn parse_csv(file: &str, text: &str) -> Result<StandData> {
         if l.is_empty() || l.starts_with('#') {
             continue;
         }
+        // Fields are plain (no CSV quoting): a quote is refused rather than kept in a label or
+        // a quoted comma read as a separator.
+        if l.contains('"') {
+            return Err(ctx.err(
+                line,
+                "a quote: fields are read without CSV quoting, so a label cannot hold quotes or commas",
+            ));
+        }
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         if !header_seen {
             if f.len() != 4 || f.iter().zip(COLUMNS).any(|(a, b)| !a.eq_ignore_ascii_case(b)) {
@@ -270,6 +278,10 @@ fn record(row: &Row, d: &mut StandData) -> Result<()> {
         "mount" => {
             let a = row.num(2, "ball angle α (deg)")?;
             let b = row.num(3, "ball angle β (deg)")?;
+            // A reading on the race: within a turn either way (1e300° has no angle left in it).
+            if let Some(v) = [a, b].into_iter().find(|v| v.abs() > 360.0) {
+                return Err(row.err(format!("a ball angle must lie within ±360°, got {v}")));
+            }
             d.mounts.push(Mount {
                 label,
                 alpha_deg: a,
