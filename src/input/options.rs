@@ -125,7 +125,7 @@ pub fn length_scale(u: &str) -> Result<f64> {
         "cm" => Ok(1e-2),
         _ => Err(Error::option(
             "--length-unit",
-            format!("--length-unit: unknown unit '{u}' (use m or mm)"),
+            format!("--length-unit: unknown unit '{u}' (use m, cm or mm)"),
         )),
     }
 }

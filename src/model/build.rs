@@ -88,6 +88,18 @@ pub(crate) fn materials<'m>(mesh: &'m Mesh, spec: &ModelSpec) -> Result<(Vec<Mat
     for (g, m) in &spec.group_materials {
         m.validate(&format!("for group '{g}'"))?;
         let grp = mesh.group(g)?;
+        // A group material reaches the volume cells of its group, or a shell or beam part of
+        // that group (its own material first): on any other group it would do nothing.
+        let part = spec.shells.iter().any(|p| p.group == *g) || spec.beams.iter().any(|p| p.group == *g);
+        if !part && !grp.cells.iter().any(|c| mesh.blocks[c.block as usize].kind.dim() == 3) {
+            return Err(Error::group(
+                g.as_str(),
+                format!(
+                    "a material for group '{g}', which has no volume cells and is no shell or beam part: it would \
+                     apply to nothing (a material belongs to solid cells or to a shell or beam part's group)"
+                ),
+            ));
+        }
         materials.push(*m);
         group_mat_idx.push((grp, (materials.len() - 1) as u16));
     }
@@ -95,6 +107,11 @@ pub(crate) fn materials<'m>(mesh: &'m Mesh, spec: &ModelSpec) -> Result<(Vec<Mat
         return Err(Error::param("ModelSpec::group_materials", "too many materials"));
     }
     Ok((materials, group_mat_idx))
+}
+
+/// The material a group material gives group `g` (the last one named wins, as for cells).
+fn group_material(spec: &ModelSpec, g: &str) -> Option<Material> {
+    spec.group_materials.iter().rev().find(|(n, _)| n == g).map(|(_, m)| *m)
 }
 
 /// Which volume cells are solids: every one when the model names no shell or beam part (a
@@ -172,7 +189,7 @@ pub(crate) fn shell_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Resul
     let mut shells = Vec::new();
     for sp in &spec.shells {
         sp.section.validate(&format!("shell '{}'", sp.group))?;
-        let mat = sp.material.unwrap_or(spec.material);
+        let mat = sp.material.or_else(|| group_material(spec, &sp.group)).unwrap_or(spec.material);
         mat.validate(&format!("for shell '{}'", sp.group))?;
         let grp = mesh.group_of_dim(&sp.group, 2)?;
         let mut set = ShellSet {
@@ -234,7 +251,7 @@ pub(crate) fn beam_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result
     let mut beams = Vec::new();
     for bp in &spec.beams {
         bp.section.validate(&format!("beam '{}'", bp.group))?;
-        let mat = bp.material.unwrap_or(spec.material);
+        let mat = bp.material.or_else(|| group_material(spec, &bp.group)).unwrap_or(spec.material);
         mat.validate(&format!("for beam '{}'", bp.group))?;
         let grp = mesh.group_of_dim(&bp.group, 1)?;
         let mut set = BeamSet {

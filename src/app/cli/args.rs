@@ -56,7 +56,7 @@ pub struct ModelArgs {
     /// channel sections) along local y: the orientation vector points along the flanges.
     #[arg(long, value_name = "GROUP=SECTION@ORIENT", allow_hyphen_values = true)]
     pub beam: Vec<String>,
-    /// Length unit of the mesh coordinates: m (default) or mm.
+    /// Length unit of the mesh coordinates: m (default), cm or mm.
     #[arg(long = "length-unit", default_value = "m")]
     pub length_unit: String,
 }
