@@ -115,3 +115,25 @@ def test_ctrl_c_stops_a_long_modal_analysis_at_once() -> None:
     assert p.returncode == 3, (p.returncode, out, err)
     assert "interrupted" in out and "finished" not in out, out
     print(out.strip())
+
+
+def test_values_of_the_wrong_length_or_kind_are_refused() -> None:
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    # A fifth force value and a third Rayleigh coefficient were dropped without a word.
+    with pytest.raises(vf.InputError, match="force for group 'xmax'"):
+        model.harmonic(force={"xmax": (0, 0, 10, 90, 123)}, freq=100.0, damping=0.02)
+    with pytest.raises(vf.InputError, match="rayleigh"):
+        model.harmonic(force={"xmax": (0, 0, 10)}, freq=100.0, rayleigh=(1.0, 1e-5, 99.0))  # type: ignore[arg-type]
+    with pytest.raises(vf.InputError, match="rayleigh"):
+        model.harmonic(force={"xmax": (0, 0, 10)}, freq=100.0, rayleigh=1.0)  # type: ignore[arg-type]
+    # {group: False} is "not fixed"; a number is not a component list (1 was taken as True).
+    free = vf.Model(vf.read_mesh(BAR), fix={"xmin": False})
+    assert free.modes(7).report["n_rigid"] == 6
+    with pytest.raises(vf.InputError, match="fix: group 'xmin'"):
+        vf.Model(vf.read_mesh(BAR), fix={"xmin": 1})  # type: ignore[dict-item]
+    with pytest.raises(vf.InputError, match="couple: group 'xmax'"):
+        vf.Model(vf.read_mesh(BAR), couple={"xmax": 1})
+    with pytest.raises(vf.InputError, match="unknown component 'qq'"):
+        model.dofs.index(0, "qq")
+    with pytest.raises(vf.InputError, match="m, cm or mm"):
+        vf.read_mesh(BAR, length_unit="inch")

@@ -199,3 +199,35 @@ def test_from_arrays_makes_a_tet() -> None:
         vf.Mesh.from_arrays(pts, {"tet4": [[0, 1, 2, 3]]}, groups={"base": {"tri3": [0]}})
     with pytest.raises(vf.InputError, match="tet4 cells have 4 nodes"):
         vf.Mesh.from_arrays(pts, {"tet4": [[0, 1, 2]]})
+
+
+def test_a_pyvista_grid_makes_the_same_model() -> None:
+    # A PyVista grid has points and cells too (other meanings): it was taken for a meshio mesh
+    # and failed with an AttributeError. It goes through pyvista.to_meshio now.
+    pytest.importorskip("pyvista")
+    mesh = vf.read_mesh("box:0.3,0.05,0.02:6,2,2:hex20")
+    kw: Dict[str, Any] = dict(material=(2.1e11, 0.3, 7850.0))
+    direct, via = vf.Model(mesh, **kw), vf.Model(mesh.to_pyvista(), **kw)
+    assert via.mass == pytest.approx(direct.mass, rel=1e-13)
+    f1, f2 = direct.modes(8).frequencies_hz, via.modes(8).frequencies_hz
+    assert np.allclose(f1[6:], f2[6:], rtol=1e-10), (f1, f2)
+    for bad in (5, None):
+        with pytest.raises(TypeError, match="meshio"):
+            vf.from_meshio(bad)
+
+
+def test_from_arrays_refuses_what_it_cannot_read_exactly() -> None:
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    # Non-integer indices were cast (0.5 → 0) without a word.
+    with pytest.raises(vf.InputError, match="whole numbers"):
+        vf.Mesh.from_arrays(pts, {"tet4": [[0.5, 1, 2, 3]]})
+    with pytest.raises(vf.InputError, match="whole numbers"):
+        vf.Mesh.from_arrays(pts, {"tet4": [[0, 1, 2, 3]], "tri3": [[0, 1, 2]]}, groups={"b": {"tri3": [0.7]}})
+    # Whole floats are indices.
+    assert vf.Mesh.from_arrays(pts, {"tet4": np.array([[0.0, 1.0, 2.0, 3.0]])}).cell_kinds == {"tet4": 1}
+    with pytest.raises(vf.InputError, match="n × 3"):
+        vf.Mesh.from_arrays(pts.ravel(), {"tet4": [[0, 1, 2, 3]]})
+    with pytest.raises(vf.InputError, match="groups must be a dict"):
+        vf.Mesh.from_arrays(pts, {"tet4": [[0, 1, 2, 3]]}, groups=[0])  # type: ignore[arg-type]
+    with pytest.raises(vf.InputError, match="out of range"):
+        vf.Mesh.from_arrays(pts, {"tet4": np.array([[0, 1, 2, 2**63]], dtype=np.uint64)})

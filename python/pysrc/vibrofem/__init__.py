@@ -125,7 +125,19 @@ def _fixes(d):
     if isinstance(d, str):
         return [d]
     if isinstance(d, dict):
-        return [g if c in (None, "", True) else f"{g}:{c if isinstance(c, str) else ','.join(c)}" for g, c in d.items()]
+        out = []
+        for g, c in d.items():
+            if c is False:
+                continue  # {group: False}: not fixed
+            if c is None or c is True or c == "":
+                out.append(g)
+            elif isinstance(c, str):
+                out.append(f"{g}:{c}")
+            elif _np.ndim(c) == 1 and all(isinstance(x, str) for x in c):
+                out.append(f"{g}:{','.join(c)}")
+            else:
+                raise InputError(f"fix: group '{g}': give True, components such as 'ux,uz' or ['ux', 'uz'], got {c!r}")
+        return out
     return list(d)
 
 
@@ -137,8 +149,13 @@ def _couplings(d):
     if isinstance(d, dict):
         out = []
         for g, v in d.items():
-            if v in (None, "", True):
+            if v is False:
+                continue  # {group: False}: not coupled
+            if v is None or v is True or (isinstance(v, str) and v == ""):
                 out.append(g)
+            elif isinstance(v, (bool, int, float)) and not isinstance(v, str):
+                raise InputError(f"couple: group '{g}': give True, a guided axis 'x'/'y'/'z', '@X,Y,Z' or a point "
+                                 f"(x, y, z), got {v!r}")
             elif v in ("x", "y", "z"):
                 out.append(f"{g}:guided={v}")
             elif isinstance(v, str) and v.startswith(("@", ":")):
@@ -175,6 +192,24 @@ def _sweep(sweep):
     if n < 2:
         raise InputError(f"sweep: need at least 2 points, got {n}")
     return float(f0), float(f1), n
+
+
+def _rayleigh(r):
+    """(α, β) of C = αM + βK, exactly two numbers."""
+    if isinstance(r, (str, bytes)) or _np.ndim(r) != 1 or len(r) != 2:
+        raise InputError(f"rayleigh: give (alpha, beta) (1/s, s), got {r!r}")
+    return float(r[0]), float(r[1])
+
+
+def _indices(a, what):
+    """An integer index array: integer dtypes as they are, floats only when whole."""
+    a = _np.asarray(a)
+    if a.size and a.dtype.kind not in "iu":
+        if a.dtype.kind != "f" or not _np.all(_np.isfinite(a)) or not _np.all(a == _np.round(a)):
+            raise InputError(f"{what}: indices must be whole numbers, got {a.ravel()[:4].tolist()}…")
+    if a.size and a.dtype.kind == "u" and a.max() > _np.iinfo(_np.int64).max:
+        raise InputError(f"{what}: index {int(a.max())} is out of range")
+    return a.astype(_np.int64)
 
 
 def _mesh_of(result):
@@ -251,21 +286,33 @@ class Mesh:
         """A mesh from arrays in metres: ``points`` (n × 3), ``cells`` {kind: connectivity
         (c × k, 0-based, gmsh node order)}, ``groups`` {name: {kind: cell indices}} (each group
         of one dimension)."""
+        if not isinstance(cells, dict):
+            raise InputError(f"from_arrays: cells must be a dict {{kind: connectivity}}, got {type(cells).__name__}")
+        if groups is not None and not isinstance(groups, dict):
+            raise InputError(f"from_arrays: groups must be a dict {{name: {{kind: cell indices}}}}, got "
+                             f"{type(groups).__name__}")
         kinds = list(cells)
-        blocks = [(k, _np.ascontiguousarray(_np.asarray(cells[k], dtype=_np.int64))) for k in kinds]
+        blocks = [(k, _np.ascontiguousarray(_indices(cells[k], f"from_arrays: {k} connectivity"))) for k in kinds]
         gs = []
         for tag, (name, parts) in enumerate((groups or {}).items(), start=1):
+            if not isinstance(parts, dict):
+                raise InputError(f"from_arrays: group '{name}': give {{kind: cell indices}}, got {parts!r}")
             ref = []
             dims = set()
             for kind, idx in parts.items():
                 if kind not in kinds:
                     raise InputError(f"group '{name}': no {kind} cells in the mesh (it has: {', '.join(kinds)})")
-                ref.append((kinds.index(kind), [int(i) for i in _np.asarray(idx).ravel()]))
+                ref.append((kinds.index(kind), [int(i) for i in _indices(idx, f"from_arrays: group '{name}'").ravel()]))
                 dims.add(_meshio._dim_of(kind))
             if len(dims) != 1:
                 raise InputError(f"group '{name}': give cells of one dimension, got {sorted(dims) or 'none'}")
             gs.append((str(name), dims.pop(), tag, ref))
         pts = _np.ascontiguousarray(_np.asarray(points, dtype=float))
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            raise InputError(f"from_arrays: points must be n × 3 coordinates (m), got shape {pts.shape}")
+        for k, c in blocks:
+            if c.ndim != 2:
+                raise InputError(f"from_arrays: {k} connectivity must be c × (nodes per cell), got shape {c.shape}")
         return cls(_core.mesh_from_arrays(pts, blocks, gs, source))
 
     def to_meshio(self):
@@ -285,9 +332,10 @@ class Mesh:
 
 
 def from_meshio(mesh, length_unit="m"):
-    """A :class:`Mesh` from a ``meshio.Mesh``: cell blocks merged per kind, groups from its
-    ``cell_sets`` or else its ``gmsh:physical`` cell data (named by ``field_data``);
-    coordinates scaled from ``length_unit`` (m, cm, mm) to metres."""
+    """A :class:`Mesh` from a ``meshio.Mesh`` (or a PyVista grid, through ``pyvista.to_meshio``):
+    cell blocks merged per kind, groups from its ``cell_sets`` or else its ``gmsh:physical``
+    cell data (named by ``field_data``); coordinates scaled from ``length_unit`` (m, cm, mm) to
+    metres."""
     return _meshio.mesh_from_meshio(mesh, length_unit)
 
 
@@ -314,6 +362,8 @@ class Dofs:
     def index(self, node, component):
         """Row of a node's component (component as an index or a name such as "uz"), or -1."""
         if isinstance(component, str):
+            if component not in COMPONENTS:
+                raise InputError(f"Dofs.index: unknown component '{component}' (use {', '.join(COMPONENTS)})")
             component = COMPONENTS.index(component)
         hit = _np.nonzero((self.node == node) & (self.component == component))[0]
         return int(hit[0]) if len(hit) else -1
@@ -422,9 +472,9 @@ class Model:
         if isinstance(mesh, (str, bytes, _os.PathLike)):
             mesh = read_mesh(mesh)
         elif not isinstance(mesh, Mesh) and hasattr(mesh, "points") and hasattr(mesh, "cells"):
-            mesh = from_meshio(mesh)  # a meshio.Mesh
+            mesh = from_meshio(mesh)  # a meshio.Mesh or a PyVista grid
         elif not isinstance(mesh, Mesh):
-            raise TypeError(f"Model: expected a Mesh, a meshio.Mesh or a path, got {type(mesh).__name__}")
+            raise TypeError(f"Model: expected a Mesh, a meshio.Mesh, a PyVista grid or a path, got {type(mesh).__name__}")
         self.mesh = mesh
         gm = group_material
         if isinstance(gm, dict):
@@ -538,6 +588,9 @@ class Model:
         forces = []
         if isinstance(force, dict):
             for g, v in force.items():
+                if isinstance(v, (str, bytes)) or _np.ndim(v) != 1 or len(v) not in (3, 4):
+                    raise InputError(
+                        f"harmonic: force for group '{g}': give (Fx, Fy, Fz) or (Fx, Fy, Fz, phase_deg), got {v!r}")
                 v = tuple(v)
                 phase = v[3] if len(v) > 3 else 0.0
                 forces.append(f"{g}={_nums(v[:3])}@{_num(phase)}")
@@ -550,7 +603,7 @@ class Model:
             freq=None if freq is None else float(freq),
             sweep=None if sweep is None else _sweep(sweep),
             damping=None if damping is None else float(damping),
-            rayleigh=None if rayleigh is None else (float(rayleigh[0]), float(rayleigh[1])),
+            rayleigh=None if rayleigh is None else _rayleigh(rayleigh),
             method=method,
             modes=modes,
             probe=[] if probe is None else _names(probe),

@@ -180,6 +180,10 @@ def mesh_from_meshio(m: "meshio.Mesh", length_unit: str = "m", source: Optional[
     :func:`read_mesh` names them). Coordinates are scaled from ``length_unit`` to metres."""
     from . import Mesh, _core
 
+    if is_pyvista(m):
+        m = from_pyvista(m)
+    if not (hasattr(m, "points") and hasattr(m, "cells") and hasattr(m, "cell_sets")):
+        raise TypeError(f"from_meshio: expected a meshio.Mesh (or a PyVista grid), got {type(m).__name__}")
     if length_unit not in _SCALE:
         raise _input_error(f"unknown unit '{length_unit}' (m, cm or mm)")
     pts = np.asarray(m.points, dtype=float)
@@ -203,6 +207,22 @@ def mesh_from_meshio(m: "meshio.Mesh", length_unit: str = "m", source: Optional[
         source or "<meshio>",
     )
     return Mesh(core)
+
+
+def is_pyvista(obj: Any) -> bool:
+    """Whether ``obj`` is a PyVista dataset (which has ``points`` and ``cells`` too, with other
+    meanings than meshio's)."""
+    return type(obj).__module__.split(".")[0] == "pyvista"
+
+
+def from_pyvista(grid: Any) -> "meshio.Mesh":
+    """A PyVista grid as a meshio mesh (``pyvista.to_meshio``; its cell data, such as
+    ``gmsh:physical``, comes along, so groups do where the grid carries them)."""
+    import pyvista
+
+    if not hasattr(grid, "celltypes"):
+        grid = grid.cast_to_unstructured_grid()
+    return pyvista.to_meshio(grid)
 
 
 #: meshio cell type → VTK cell type id.
