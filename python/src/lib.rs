@@ -600,8 +600,12 @@ impl PyModel {
             hex8,
             length_unit: "m".into(),
         };
-        // Check the grammar now (a bad option fails at construction, as on the command line).
-        options.spec().map_err(err)?;
+        // Check the grammar and the group names now (a bad option fails at construction, as on
+        // the command line, not at the first analysis).
+        let spec = options.spec().map_err(err)?;
+        for g in spec.group_names() {
+            mesh.mesh.group(g).map_err(err)?;
+        }
         Ok(PyModel {
             mesh: mesh.mesh.clone(),
             source: mesh.source.clone(),

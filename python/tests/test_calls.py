@@ -137,3 +137,15 @@ def test_values_of_the_wrong_length_or_kind_are_refused() -> None:
         model.dofs.index(0, "qq")
     with pytest.raises(vf.InputError, match="m, cm or mm"):
         vf.read_mesh(BAR, length_unit="inch")
+
+
+def test_a_model_reads_a_millimetre_mesh_and_checks_its_groups_at_once() -> None:
+    mm = os.path.join(ROOT, "meshes", "s1_plate_tet10_h30_mm.msh")
+    # The same plate in metres and in millimetres: the same mass (it was 1e9 times too much,
+    # with no way to give the unit to Model).
+    assert vf.Model(mm, length_unit="mm").mass == pytest.approx(vf.Model(TET10).mass, rel=1e-12)
+    with pytest.raises(vf.InputError, match="metres already"):
+        vf.Model(vf.read_mesh(TET10), length_unit="mm")
+    # An unknown group is refused by the constructor, not at the first analysis.
+    with pytest.raises(vf.InputError, match="nope"):
+        vf.Model(vf.read_mesh(BAR), fix=["nope"])

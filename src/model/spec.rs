@@ -78,6 +78,28 @@ pub struct BeamPart {
     pub material: Option<Material>,
 }
 
+impl ModelSpec {
+    /// Every group the spec names (materials, supports, couplings, prescribed motion, point
+    /// masses, springs, parts), in that order, repeats kept: to check them against a mesh before
+    /// any model is built.
+    pub fn group_names(&self) -> Vec<&str> {
+        let mut g: Vec<&str> = Vec::new();
+        g.extend(self.group_materials.iter().map(|(n, _)| n.as_str()));
+        g.extend(self.fixes.iter().map(|(n, _)| n.as_str()));
+        g.extend(self.couplings.iter().map(|c| c.group.as_str()));
+        g.extend(self.prescribed.iter().map(|(n, _)| n.as_str()));
+        g.extend(self.point_masses.iter().map(|p| p.group.as_str()));
+        for (a, b) in self.springs.iter().map(|s| (&s.a, &s.b)).chain(self.spring_matrices.iter().map(|s| (&s.a, &s.b))) {
+            g.push(a);
+            g.extend(b.as_deref());
+        }
+        g.extend(self.shells.iter().map(|p| p.group.as_str()));
+        g.extend(self.beams.iter().map(|p| p.group.as_str()));
+        g.extend(self.solid_groups.iter().flatten().map(String::as_str));
+        g
+    }
+}
+
 impl Default for ModelSpec {
     fn default() -> Self {
         ModelSpec {

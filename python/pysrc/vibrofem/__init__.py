@@ -32,6 +32,8 @@ beam           ``{"coil": "circle:0.006@radial:0,0,0,0,0,1"}`` ``--beam coil=…
 solid          ``["body"]``                                 ``--solid body``
 mass           ``"consistent"`` or ``"lumped"``              ``--mass``
 hex8           ``"standard"`` or ``"incompatible"``          ``--hex8``
+length_unit    ``"m"``, ``"cm"``, ``"mm"`` (a path or a     ``--length-unit``
+               meshio mesh given as ``mesh``)
 ============== ============================================ =====================================
 
 Errors raise :class:`VibrofemError` subclasses (:class:`InputError`, :class:`NumericalError`,
@@ -468,11 +470,15 @@ class Model:
         shell=None,
         beam=None,
         hex8="standard",
+        length_unit="m",
     ):
         if isinstance(mesh, (str, bytes, _os.PathLike)):
-            mesh = read_mesh(mesh)
+            mesh = read_mesh(mesh, length_unit)
+        elif isinstance(mesh, Mesh) and length_unit != "m":
+            raise InputError(f"Model: length_unit='{length_unit}' applies to a mesh read here (a path) or converted "
+                             "(a meshio mesh); a Mesh is in metres already (read_mesh(path, length_unit) scales it)")
         elif not isinstance(mesh, Mesh) and hasattr(mesh, "points") and hasattr(mesh, "cells"):
-            mesh = from_meshio(mesh)  # a meshio.Mesh or a PyVista grid
+            mesh = from_meshio(mesh, length_unit)  # a meshio.Mesh or a PyVista grid
         elif not isinstance(mesh, Mesh):
             raise TypeError(f"Model: expected a Mesh, a meshio.Mesh, a PyVista grid or a path, got {type(mesh).__name__}")
         self.mesh = mesh

@@ -134,6 +134,7 @@ class Model:
         shell: _GroupValues = None,
         beam: _GroupValues = None,
         hex8: str = "standard",
+        length_unit: str = "m",
     ) -> None: ...
     def assemble(self) -> Tuple[scipy.sparse.csr_array, scipy.sparse.csr_array]: ...
     @property
