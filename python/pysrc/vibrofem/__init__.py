@@ -131,7 +131,7 @@ def _fixes(d):
         for g, c in d.items():
             if c is False:
                 continue  # {group: False}: not fixed
-            if c is None or c is True or c == "":
+            if c is None or c is True or (isinstance(c, str) and c == ""):
                 out.append(g)
             elif isinstance(c, str):
                 out.append(f"{g}:{c}")
