@@ -973,7 +973,11 @@ pub fn solve(
 ) -> Result<BucklingRun> {
     let t = Instant::now();
     let (st, fk) = statics::solve_keeping_factor(sys, mesh, &[loads.to_vec()]).map_err(|e| match e {
-        Error::Factorization(m) => Error::Factorization(format!("buckling needs a supported model: {m}")),
+        // Only a model free to move needs that advice (an overflowing load is also a
+        // factorisation error, with its own message).
+        Error::Factorization(m) if m.contains("under-constrained") || m.contains("singular") => {
+            Error::Factorization(format!("buckling needs a supported model: {m}"))
+        }
         e => e,
     })?;
     let case = st

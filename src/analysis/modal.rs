@@ -685,8 +685,8 @@ fn solution_notes(
     notes.extend(free_part_notes(model, parts));
     if !accurate {
         notes.push(format!(
-            "accuracy not guaranteed: largest backward error {max_back:.2e} (tolerance {:.0e}; relative residual {max_res:.2e}), M-orthonormality error {:.2e}",
-            verify_tol, sol.m_orthonormality
+            "accuracy not guaranteed: largest backward error {max_back:.2e} (tolerance {:.0e}; relative residual {max_res:.2e}), M-orthonormality error {:.2e} (tolerance 1e-8), factorisation probe backward error {:.1e} (tolerance 1e-8)",
+            verify_tol, sol.m_orthonormality, sol.factor_backward_error
         ));
     }
     // The backward error accepts what the data allow; how far that is from the exact modes
@@ -703,9 +703,11 @@ fn solution_notes(
              (slender or thin parts; stiffness contrasts: model rigid parts with --couple)"
         ));
     }
-    if sol.factor_backward_error > 1e-8 {
+    // (NaN, a probe that overflowed — stiffnesses near 1e300 — is unstable too.)
+    if !(sol.factor_backward_error <= 1e-8) {
         notes.push(format!(
-            "a factorisation of K − σM is unstable (probe backward error {:.1e}, pivot growth): results may be wrong",
+            "a factorisation of K − σM is unstable (probe backward error {:.1e}, pivot growth or overflow: \
+             stiffnesses of extreme magnitude?): results may be wrong",
             sol.factor_backward_error
         ));
     }

@@ -144,3 +144,23 @@ fn most_of_a_small_models_load_factors_are_solved_densely() {
     assert_eq!(all["complete"], true);
     assert!(all["notes"].to_string().contains("all reported"), "{}", all["notes"]);
 }
+
+/// A spring of 1e300 N/m: the factorisation's probe overflows (NaN), which failed the
+/// verification with a note that quoted only the passing figures (backward error 1e-16). The
+/// notes must name the factorisation.
+#[test]
+fn an_overflowing_factorisation_is_named() {
+    let (code, _, err) = run(&[
+        "modes",
+        "box:0.3,0.05,0.02:6,2,2:hex20",
+        "--couple",
+        "xmax",
+        "--spring",
+        "xmax=1e300,1e300,1e300,1e300,1e300,1e300",
+        "--modes",
+        "3",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("factorisation of K − σM is unstable"), "{err}");
+    assert!(err.contains("factorisation probe backward error"), "{err}");
+}
