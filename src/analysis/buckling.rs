@@ -962,6 +962,17 @@ pub fn run_buckling(
     solve(&sys, mesh, loads, opts, read_time, t_asm)
 }
 
+/// The static solve's error as buckling reports it: a model free to move needs supports (an
+/// overflowing load is a factorisation error too, with its own message).
+fn static_error(e: Error) -> Error {
+    match e {
+        Error::Factorization(m) if m.contains("under-constrained") || m.contains("singular") => {
+            Error::Factorization(format!("buckling needs a supported model: {m}"))
+        }
+        e => e,
+    }
+}
+
 /// [`run_buckling`] on an assembled system (K only; its stiffness is not changed).
 pub fn solve(
     sys: &System,
@@ -972,14 +983,7 @@ pub fn solve(
     t_asm: f64,
 ) -> Result<BucklingRun> {
     let t = Instant::now();
-    let (st, fk) = statics::solve_keeping_factor(sys, mesh, &[loads.to_vec()]).map_err(|e| match e {
-        // Only a model free to move needs that advice (an overflowing load is also a
-        // factorisation error, with its own message).
-        Error::Factorization(m) if m.contains("under-constrained") || m.contains("singular") => {
-            Error::Factorization(format!("buckling needs a supported model: {m}"))
-        }
-        e => e,
-    })?;
+    let (st, fk) = statics::solve_keeping_factor(sys, mesh, &[loads.to_vec()]).map_err(static_error)?;
     let case = st
         .cases
         .into_iter()

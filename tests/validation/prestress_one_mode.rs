@@ -23,10 +23,9 @@ use vibrofem::mesh::CellKind;
 use vibrofem::mesh::generate::box_mesh;
 use vibrofem::model::ModelSpec;
 
-#[test]
-fn prestress_one_mode_is_complete() {
-    let mesh = box_mesh(CellKind::Hex20, [0.5, 0.03, 0.01], [40, 3, 1]);
-    let spec = ModelSpec {
+/// Steel (2.1e11 Pa, 0.3, 7850 kg/m³), every translation of the `xmin` face held.
+fn steel_clamped_at_xmin() -> ModelSpec {
+    ModelSpec {
         material: Material {
             young: 2.1e11,
             poisson: 0.3,
@@ -34,7 +33,13 @@ fn prestress_one_mode_is_complete() {
         },
         fixes: vec![("xmin".into(), 7)],
         ..Default::default()
-    };
+    }
+}
+
+#[test]
+fn prestress_one_mode_is_complete() {
+    let mesh = box_mesh(CellKind::Hex20, [0.5, 0.03, 0.01], [40, 3, 1]);
+    let spec = steel_clamped_at_xmin();
     let unit = vec![Load::Force {
         group: "xmax".into(),
         force: [-1.0, 0.0, 0.0],
@@ -97,15 +102,7 @@ fn prestress_one_mode_is_complete() {
 #[test]
 fn prestress_past_buckling_reports_the_lowest_modes() {
     let mesh = box_mesh(CellKind::Hex20, [0.3, 0.05, 0.01], [12, 2, 1]);
-    let spec = ModelSpec {
-        material: Material {
-            young: 2.1e11,
-            poisson: 0.3,
-            density: 7850.0,
-        },
-        fixes: vec![("xmin".into(), 7)],
-        ..Default::default()
-    };
+    let spec = steel_clamped_at_xmin();
     let loads = vec![Load::Force {
         group: "xmax".into(),
         force: [-1e7, 0.0, 0.0],
@@ -145,10 +142,7 @@ fn prestress_past_buckling_reports_the_lowest_modes() {
 #[test]
 fn a_bar_in_tension_finds_its_positive_load_factors() {
     let mesh = box_mesh(CellKind::Hex20, [0.5, 0.03, 0.01], [10, 2, 1]);
-    let spec = ModelSpec {
-        fixes: vec![("xmin".into(), 7)],
-        ..Default::default()
-    };
+    let spec = steel_clamped_at_xmin();
     let tension = vec![Load::Force {
         group: "xmax".into(),
         force: [1.0, 0.0, 0.0],
