@@ -149,3 +149,12 @@ def test_a_model_reads_a_millimetre_mesh_and_checks_its_groups_at_once() -> None
     # An unknown group is refused by the constructor, not at the first analysis.
     with pytest.raises(vf.InputError, match="nope"):
         vf.Model(vf.read_mesh(BAR), fix=["nope"])
+
+
+def test_modes_refuses_flags_for_counts_and_text_for_a_band() -> None:
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    # True was taken as one mode; '0,500' was read as a tuple of five characters.
+    with pytest.raises(vf.InputError, match="whole numbers"):
+        model.modes(True)
+    with pytest.raises(vf.InputError, match="band takes"):
+        model.modes(band="0,500")  # type: ignore[arg-type]

@@ -553,6 +553,10 @@ class Model:
         line then exits 2); check them. ``prestress=dict(force=..., pressure=..., gravity=...,
         displace=...)`` (as :meth:`static`) gives the modes of the structure preloaded by that
         static case, (K + K_σ)x = λMx (native engine)."""
+        if isinstance(n, bool) or isinstance(block, bool) or isinstance(ranks, bool):
+            raise InputError("modes: n, block and ranks are whole numbers, not True/False")
+        if isinstance(band, (str, bytes)):
+            raise InputError(f"modes: band takes (f_lo, f_hi) in Hz, got {band!r}")
         pre = None
         if prestress is not None:
             if not isinstance(prestress, dict):

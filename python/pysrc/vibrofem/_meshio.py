@@ -65,7 +65,8 @@ def _require_meshio() -> Any:
 def mesh_to_meshio(mesh: "Mesh") -> "meshio.Mesh":
     """The mesh as a ``meshio.Mesh``: one cell block per kind (VTK node order), the groups as
     ``cell_sets`` and as gmsh's ``gmsh:physical`` cell data with ``field_data`` {name: [tag, dim]}
-    (so ``meshio.write("x.msh", …)`` keeps them)."""
+    (so ``meshio.write("x.msh", m, file_format="gmsh22")`` keeps them; for ``.msh`` meshio
+    otherwise picks ANSYS, and its MSH 4.1 writer asks for ``gmsh:dim_tags``)."""
     meshio = _require_meshio()
     kinds = list(mesh.cell_kinds)
     cells = []
