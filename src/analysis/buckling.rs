@@ -962,6 +962,27 @@ pub fn run_buckling(
     solve(&sys, mesh, loads, opts, read_time, t_asm)
 }
 
+/// The factor c by which a static case's displacements `u` are scaled before K_σ is formed:
+/// 1 for ordinary loads (largest |u| within 1e-100…1e100 of the model's size, the results
+/// then unchanged to the bit), else what brings the largest |u| to 1e-6 of the size.
+fn load_scale(model: &Model, u: &[f64]) -> f64 {
+    let umax = u.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for x in model.nodes.iter() {
+        for d in 0..3 {
+            lo[d] = lo[d].min(x[d]);
+            hi[d] = hi[d].max(x[d]);
+        }
+    }
+    let size = (0..3).map(|d| (hi[d] - lo[d]).powi(2)).sum::<f64>().sqrt();
+    let c = 1e-6 * size / umax;
+    if (1e-100..=1e100).contains(&(umax / size)) || !(c.is_finite() && c > 0.0) {
+        1.0
+    } else {
+        c
+    }
+}
+
 /// The static solve's error as buckling reports it: a model free to move needs supports (an
 /// overflowing load is a factorisation error too, with its own message).
 fn static_error(e: Error) -> Error {
@@ -991,7 +1012,15 @@ pub fn solve(
         .ok_or_else(|| Error::param("loads", "no static case was solved"))?;
     let t_static = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let pre = InitialStress::from_displacements(sys.model(), &st.u[0])?;
+    // Linear buckling is scale-free (K_σ is linear in u: λ·K_σ(u) = (λ/c)·K_σ(c·u)): a load
+    // near the ends of the floating-point range (1e-200 N) is analysed as c times itself and
+    // its load factors scaled back, so that K_σ and its shifted factors neither under- nor
+    // overflow (1e-200 N ended in "zero pivot"). Ordinary loads are left as they are.
+    let c = load_scale(sys.model(), &st.u[0]);
+    let u: Vec<f64> = st.u[0].iter().map(|x| c * x).collect();
+    let mut pre = InitialStress::from_displacements(sys.model(), &u)?;
+    pre.tension.value /= c;
+    pre.compression.value /= c;
     let kg = pre.geometric_stiffness(sys)?;
     let t_geo = t.elapsed().as_secs_f64();
     let n = sys.k().n();
@@ -1014,7 +1043,7 @@ pub fn solve(
             )
         }
     });
-    let sol = match dense {
+    let mut sol = match dense {
         Some(d) => d,
         None => solve_pencil(
             sys.k(),
@@ -1026,6 +1055,8 @@ pub fn solve(
         )
         .map_err(|e| e.locate(|eq| sys.describe_equation(eq)))?,
     };
+    sol.lambda.iter_mut().for_each(|l| *l *= c);
+    sol.sturm.point *= c;
     let model = sys.model();
     let shapes = node_shapes(model, &sol.vectors);
     let max_res = sol.rel_residual.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -1220,5 +1251,6 @@ fn node_shapes(model: &Model, x: &Mat<f64>) -> Vec<Vec<f64>> {
 }
 
 fn norm3(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    // hypot: no under- or overflow of the squares (a force of 1e-200 N read 0).
+    v[0].hypot(v[1]).hypot(v[2])
 }

@@ -483,5 +483,6 @@ pub(crate) fn beam_geometric_note(model: &Model) -> String {
 }
 
 fn norm3(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+    // hypot: no under- or overflow of the squares (a force of 1e-200 N read 0).
+    v[0].hypot(v[1]).hypot(v[2])
 }

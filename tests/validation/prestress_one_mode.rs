@@ -164,3 +164,32 @@ fn a_bar_in_tension_finds_its_positive_load_factors() {
     let huge = run(1usize << 62); // 4 × 2⁶² wrapped to 0 and took the iteration
     assert!(huge.complete && huge.load_factors == all.load_factors, "{:?}", huge.sturm);
 }
+
+/// Linear buckling is scale-free: a load of 1e-200 N buckles the column at 1e200 times the
+/// factor of a 1 N load (it ended in "zero pivot": K_σ of stresses near 1e-200 Pa under- and
+/// overflowed in the shifted factorisations). Reference: the 1 N run, the factor scaled by
+/// 1e200 (exact in exact arithmetic). Tolerance 1e-7: the scaled analysis is another rounding
+/// of the same pencil, and this slender column's factor has a relative residual of ~1e-4, so
+/// two roundings agree to about its square, 1e-8 (measured 2.7e-9).
+#[test]
+fn a_tiny_load_buckles_at_the_scaled_factor() {
+    let mesh = box_mesh(CellKind::Hex20, [0.5, 0.03, 0.01], [10, 2, 1]);
+    let run = |p: f64| {
+        let opts = BucklingOptions {
+            spec: steel_clamped_at_xmin(),
+            modes: 1,
+            ..Default::default()
+        };
+        let load = vec![Load::Force {
+            group: "xmax".into(),
+            force: [-p, 0.0, 0.0],
+        }];
+        run_buckling(&mesh, "column", &opts, &load, 0.0).unwrap().report
+    };
+    let (unit, tiny) = (run(1.0), run(1e-200));
+    assert!(tiny.complete && tiny.accurate, "{:?} {:?}", tiny.sturm, tiny.notes);
+    let (a, b) = (unit.load_factors[0] * 1e200, tiny.load_factors[0]);
+    assert!((a - b).abs() <= 1e-7 * a, "{a:e} against {b:e}");
+    // The stresses reported are the load's own.
+    assert!(tiny.compression.value < 0.0 && tiny.compression.value.abs() < 1e-190, "{:?}", tiny.compression);
+}
