@@ -962,6 +962,20 @@ pub fn run_buckling(
     solve(&sys, mesh, loads, opts, read_time, t_asm)
 }
 
+/// The stress state K_σ is formed from: that of `c·u` ([`load_scale`]), with the extremes
+/// reported as those of `u`. Linear buckling is scale-free (K_σ is linear in u: λ·K_σ(u) =
+/// (λ/c)·K_σ(c·u)): a load near the ends of the floating-point range (1e-200 N) is analysed
+/// as c times itself and its load factors are scaled back by c, so that K_σ and its shifted
+/// factors neither under- nor overflow (1e-200 N ended in "zero pivot").
+fn scaled_stress(model: &Model, u: &[f64]) -> Result<(f64, InitialStress)> {
+    let c = load_scale(model, u);
+    let scaled: Vec<f64> = u.iter().map(|x| c * x).collect();
+    let mut pre = InitialStress::from_displacements(model, &scaled)?;
+    pre.tension.value /= c;
+    pre.compression.value /= c;
+    Ok((c, pre))
+}
+
 /// The factor c by which a static case's displacements `u` are scaled before K_σ is formed:
 /// 1 for ordinary loads (largest |u| within 1e-100…1e100 of the model's size, the results
 /// then unchanged to the bit), else what brings the largest |u| to 1e-6 of the size.
@@ -1012,15 +1026,7 @@ pub fn solve(
         .ok_or_else(|| Error::param("loads", "no static case was solved"))?;
     let t_static = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    // Linear buckling is scale-free (K_σ is linear in u: λ·K_σ(u) = (λ/c)·K_σ(c·u)): a load
-    // near the ends of the floating-point range (1e-200 N) is analysed as c times itself and
-    // its load factors scaled back, so that K_σ and its shifted factors neither under- nor
-    // overflow (1e-200 N ended in "zero pivot"). Ordinary loads are left as they are.
-    let c = load_scale(sys.model(), &st.u[0]);
-    let u: Vec<f64> = st.u[0].iter().map(|x| c * x).collect();
-    let mut pre = InitialStress::from_displacements(sys.model(), &u)?;
-    pre.tension.value /= c;
-    pre.compression.value /= c;
+    let (c, pre) = scaled_stress(sys.model(), &st.u[0])?;
     let kg = pre.geometric_stiffness(sys)?;
     let t_geo = t.elapsed().as_secs_f64();
     let n = sys.k().n();
