@@ -189,7 +189,10 @@ pub(crate) fn shell_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Resul
     let mut shells = Vec::new();
     for sp in &spec.shells {
         sp.section.validate(&format!("shell '{}'", sp.group))?;
-        let mat = sp.material.or_else(|| group_material(spec, &sp.group)).unwrap_or(spec.material);
+        let mat = sp
+            .material
+            .or_else(|| group_material(spec, &sp.group))
+            .unwrap_or(spec.material);
         mat.validate(&format!("for shell '{}'", sp.group))?;
         let grp = mesh.group_of_dim(&sp.group, 2)?;
         let mut set = ShellSet {
@@ -251,7 +254,10 @@ pub(crate) fn beam_parts(mesh: &Mesh, spec: &ModelSpec, nodes: &Nodes) -> Result
     let mut beams = Vec::new();
     for bp in &spec.beams {
         bp.section.validate(&format!("beam '{}'", bp.group))?;
-        let mat = bp.material.or_else(|| group_material(spec, &bp.group)).unwrap_or(spec.material);
+        let mat = bp
+            .material
+            .or_else(|| group_material(spec, &bp.group))
+            .unwrap_or(spec.material);
         mat.validate(&format!("for beam '{}'", bp.group))?;
         let grp = mesh.group_of_dim(&bp.group, 1)?;
         let mut set = BeamSet {

@@ -89,7 +89,12 @@ impl ModelSpec {
         g.extend(self.couplings.iter().map(|c| c.group.as_str()));
         g.extend(self.prescribed.iter().map(|(n, _)| n.as_str()));
         g.extend(self.point_masses.iter().map(|p| p.group.as_str()));
-        for (a, b) in self.springs.iter().map(|s| (&s.a, &s.b)).chain(self.spring_matrices.iter().map(|s| (&s.a, &s.b))) {
+        for (a, b) in self
+            .springs
+            .iter()
+            .map(|s| (&s.a, &s.b))
+            .chain(self.spring_matrices.iter().map(|s| (&s.a, &s.b)))
+        {
             g.push(a);
             g.extend(b.as_deref());
         }

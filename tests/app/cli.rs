@@ -485,11 +485,23 @@ fn short_records_are_named_at_their_line() {
         l.join("\n") + "\n"
     };
     let p = tmp("node_short41.msh", &edit(48, "0 0"));
-    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 48", "node 1", "before its z coordinate"]);
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["line 48", "node 1", "before its z coordinate"],
+    );
     let p = tmp("elem_short41.msh", &edit(3786, "2 1 10 171 19 177"));
-    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 3786", "element 2", "after 5 of the 6"]);
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["line 3786", "element 2", "after 5 of the 6"],
+    );
     let p = tmp("elem_long41.msh", &edit(3785, "1 2 1 171 9 175 176 7"));
-    expect_error(&["modes", p.to_str().unwrap()], 1, &["line 3785", "element 1", "starting at '7'"]);
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["line 3785", "element 1", "starting at '7'"],
+    );
 }
 
 /// A physical name with one quote is a damaged line, not a name with a quote in it.
@@ -503,7 +515,11 @@ fn a_half_quoted_group_name_is_refused() {
 /// Counts that must be at least one are refused by name, not run as nothing.
 #[test]
 fn zero_jobs_and_zero_levels_are_refused() {
-    expect_error(&["batch", "--scene", "x.toml", "--jobs", "0"], 1, &["--jobs", "at least 1"]);
+    expect_error(
+        &["batch", "--scene", "x.toml", "--jobs", "0"],
+        1,
+        &["--jobs", "at least 1"],
+    );
     expect_error(&["sweep", "x.toml", "--jobs", "0"], 1, &["--jobs", "at least 1"]);
     expect_error(&["converge", "s1", "--levels", "0"], 1, &["--levels", "at least 1"]);
 }
@@ -533,7 +549,10 @@ fn a_shift_on_an_eigenvalue_is_solved() {
     assert_eq!(w["complete"], true);
     // The same three modes (the nearest the shift are the lowest here), to 1e-9.
     for i in 0..3 {
-        let (a, b) = (v["frequencies_hz"][i].as_f64().unwrap(), w["frequencies_hz"][i].as_f64().unwrap());
+        let (a, b) = (
+            v["frequencies_hz"][i].as_f64().unwrap(),
+            w["frequencies_hz"][i].as_f64().unwrap(),
+        );
         assert!((a - b).abs() <= 1e-9 * a, "mode {i}: {a} against {b}");
     }
 }
@@ -544,10 +563,21 @@ fn a_shift_on_an_eigenvalue_is_solved() {
 fn group_materials_reach_shells_or_are_refused() {
     let g = "box:1,1,0.1:2,2,1:hex8";
     let (code, out, err) = run(&[
-        "modes", g, "--shell", "zmin=0.01", "--group-material", "zmin=7e10,0.3,2700", "--modes", "1",
+        "modes",
+        g,
+        "--shell",
+        "zmin=0.01",
+        "--group-material",
+        "zmin=7e10,0.3,2700",
+        "--modes",
+        "1",
     ]);
     assert_eq!(code, 0, "{err}");
     // 1 m × 1 m × 10 mm at 2700 kg/m³.
     assert!(out.contains("mass     27.000000 kg"), "{out}");
-    expect_error(&["modes", g, "--group-material", "zmin=7e10,0.3,2700"], 1, &["zmin", "no volume cells"]);
+    expect_error(
+        &["modes", g, "--group-material", "zmin=7e10,0.3,2700"],
+        1,
+        &["zmin", "no volume cells"],
+    );
 }

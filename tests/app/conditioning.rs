@@ -94,7 +94,10 @@ fn a_static_solve_that_misses_equilibrium_fails() {
     // rigid motions named free; the error must say ill-conditioned instead.
     let (code, _, err) = static_at("1e6");
     assert_eq!(code, 2, "{err}");
-    assert!(err.contains("ill-conditioned") && !err.contains("under-constrained"), "{err}");
+    assert!(
+        err.contains("ill-conditioned") && !err.contains("under-constrained"),
+        "{err}"
+    );
 }
 
 #[test]

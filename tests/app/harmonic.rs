@@ -62,7 +62,11 @@ fn harmonic_sweep_peaks_at_the_first_mode_and_both_methods_agree() {
         assert!(d < 1e-5, "{} Hz: modal vs direct {d:e}", p["freq_hz"]);
     }
     assert!(
-        !r["notes"].as_array().unwrap().iter().any(|n| n.as_str().unwrap().contains("differ by")),
+        !r["notes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("differ by")),
         "{}",
         r["notes"]
     );
@@ -309,10 +313,20 @@ fn both_methods_far_apart_get_a_note() {
     let r = json(&out);
     let d = r["points"][0]["modal_vs_direct"].as_f64().unwrap();
     assert!(d > 0.5, "{d}");
-    let notes: Vec<&str> = r["notes"].as_array().unwrap().iter().map(|n| n.as_str().unwrap()).collect();
+    let notes: Vec<&str> = r["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap())
+        .collect();
     assert!(
-        notes.iter().any(|n| n.contains("differ by up to") && n.contains("--method direct")),
+        notes
+            .iter()
+            .any(|n| n.contains("differ by up to") && n.contains("--method direct")),
         "{notes:?}"
     );
-    assert!(!notes.iter().any(|n| n.contains("check with --method both")), "{notes:?}");
+    assert!(
+        !notes.iter().any(|n| n.contains("check with --method both")),
+        "{notes:?}"
+    );
 }

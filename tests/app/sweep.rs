@@ -319,15 +319,24 @@ fn a_failing_design_is_reported_and_the_study_goes_on() {
         out.to_str().unwrap(),
     ]);
     assert_eq!(code, 3, "{stdout}\n{stderr}");
-    assert!(stderr.contains("[") && stderr.contains("failed: verification failed"), "{stderr}");
+    assert!(
+        stderr.contains("[") && stderr.contains("failed: verification failed"),
+        "{stderr}"
+    );
     assert!(stdout.contains("1 failed (the study went on past them)"), "{stdout}");
-    assert!(stdout.contains("case 1 (table.length=1e-6): verification failed"), "{stdout}");
+    assert!(
+        stdout.contains("case 1 (table.length=1e-6): verification failed"),
+        "{stdout}"
+    );
     assert!(stdout.contains("of 1 designs meet the constraints"), "{stdout}");
     let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 3, "{csv}");
     assert!(lines[0].ends_with(",feasible,pareto,error"), "{csv}");
-    assert!(lines[1].starts_with("1,1e-6,,,,,,,false,false,\"verification failed"), "{csv}");
+    assert!(
+        lines[1].starts_with("1,1e-6,,,,,,,false,false,\"verification failed"),
+        "{csv}"
+    );
     // The analysed design: its numbers and an empty error.
     let f: Vec<&str> = lines[2].split(',').collect();
     assert_eq!(f[0], "2");

@@ -113,15 +113,31 @@ fn prestress_past_buckling_reports_the_lowest_modes() {
             target: ModalTarget::Modes(n),
             ..Default::default()
         };
-        run_prestressed_modes(&mesh, "bar", &opts, &loads, 0.0).unwrap().modal.report
+        run_prestressed_modes(&mesh, "bar", &opts, &loads, 0.0)
+            .unwrap()
+            .modal
+            .report
     };
     let (four, many) = (run(4), run(25));
-    assert!(many.complete && many.accurate && many.sturm.lower.1 == 0, "{:?}", many.sturm);
+    assert!(
+        many.complete && many.accurate && many.sturm.lower.1 == 0,
+        "{:?}",
+        many.sturm
+    );
     assert!(four.complete && four.accurate, "{:?} {:?}", four.sturm, four.notes);
-    assert_eq!(four.sturm.lower.1, 0, "eigenvalues below the lowest found: {:?}", four.sturm);
+    assert_eq!(
+        four.sturm.lower.1, 0,
+        "eigenvalues below the lowest found: {:?}",
+        four.sturm
+    );
     assert!(many.frequencies_hz[3] < 0.0, "{:?}", many.frequencies_hz);
     for (a, b) in four.frequencies_hz.iter().zip(&many.frequencies_hz) {
-        assert!((a - b).abs() <= 1e-9 * b.abs(), "{:?} against {:?}", four.frequencies_hz, many.frequencies_hz);
+        assert!(
+            (a - b).abs() <= 1e-9 * b.abs(),
+            "{:?} against {:?}",
+            four.frequencies_hz,
+            many.frequencies_hz
+        );
     }
     assert_eq!(four.n_rigid, 0);
     assert!(
@@ -156,13 +172,27 @@ fn a_bar_in_tension_finds_its_positive_load_factors() {
         run_buckling(&mesh, "bar", &opts, &tension, 0.0).unwrap().report
     };
     let (one, all) = (run(1), run(300));
-    assert!(all.complete && !all.load_factors.is_empty(), "{:?} {:?}", all.sturm, all.notes);
-    assert!(one.complete && one.accurate && !one.no_buckling, "{:?} {:?}", one.sturm, one.notes);
+    assert!(
+        all.complete && !all.load_factors.is_empty(),
+        "{:?} {:?}",
+        all.sturm,
+        all.notes
+    );
+    assert!(
+        one.complete && one.accurate && !one.no_buckling,
+        "{:?} {:?}",
+        one.sturm,
+        one.notes
+    );
     let (a, b) = (one.load_factors[0], all.load_factors[0]);
     assert!((a - b).abs() <= 1e-8 * b, "iterative {a:e}, dense {b:e}");
     // A request beyond any model's size is the whole spectrum, not an overflow.
     let huge = run(1usize << 62); // 4 × 2⁶² wrapped to 0 and took the iteration
-    assert!(huge.complete && huge.load_factors == all.load_factors, "{:?}", huge.sturm);
+    assert!(
+        huge.complete && huge.load_factors == all.load_factors,
+        "{:?}",
+        huge.sturm
+    );
 }
 
 /// Linear buckling is scale-free: a load of 1e-200 N buckles the column at 1e200 times the
@@ -191,5 +221,9 @@ fn a_tiny_load_buckles_at_the_scaled_factor() {
     let (a, b) = (unit.load_factors[0] * 1e200, tiny.load_factors[0]);
     assert!((a - b).abs() <= 1e-7 * a, "{a:e} against {b:e}");
     // The stresses reported are the load's own.
-    assert!(tiny.compression.value < 0.0 && tiny.compression.value.abs() < 1e-190, "{:?}", tiny.compression);
+    assert!(
+        tiny.compression.value < 0.0 && tiny.compression.value.abs() < 1e-190,
+        "{:?}",
+        tiny.compression
+    );
 }

@@ -1072,7 +1072,12 @@ pub fn table_text(o: &SweepOutcome) -> String {
         s.push_str(&format!("{} failed (the study went on past them):\n", o.failed.len()));
         for f in &o.failed {
             let what = if f.stage == "check" { "check of case" } else { "case" };
-            s.push_str(&format!("  {what} {} ({}): {}\n", f.case, describe(&o.study, &f.values), f.error));
+            s.push_str(&format!(
+                "  {what} {} ({}): {}\n",
+                f.case,
+                describe(&o.study, &f.values),
+                f.error
+            ));
         }
     }
     if !o.checks.is_empty() {

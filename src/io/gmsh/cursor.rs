@@ -151,7 +151,10 @@ impl<'a> Cursor<'a> {
             return Ok(());
         }
         let extra = self.next_token().map(shown).unwrap_or_default();
-        Err(self.err(format!("{}: more values on its line than expected, starting at '{extra}'", what())))
+        Err(self.err(format!(
+            "{}: more values on its line than expected, starting at '{extra}'",
+            what()
+        )))
     }
 
     /// The next whitespace-separated ASCII token, or `None` at the end of the file.

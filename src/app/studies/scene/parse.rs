@@ -790,11 +790,17 @@ impl Reader<'_> {
         for (i, lc) in raw.load_case.iter().enumerate() {
             // Names are for the reader of the file: two cases with one name would be confused.
             if let Some(name) = &lc.get_ref().name
-                && let Some(j) = raw.load_case[..i].iter().position(|o| o.get_ref().name.as_ref() == Some(name))
+                && let Some(j) = raw.load_case[..i]
+                    .iter()
+                    .position(|o| o.get_ref().name.as_ref() == Some(name))
             {
                 return self.ctx.err(
                     lc.span(),
-                    format!("load case name '{name}' is given to cases {} and {}: give each its own", j + 1, i + 1),
+                    format!(
+                        "load case name '{name}' is given to cases {} and {}: give each its own",
+                        j + 1,
+                        i + 1
+                    ),
                 );
             }
             let c = lc
