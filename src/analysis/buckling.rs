@@ -981,13 +981,7 @@ fn scaled_stress(model: &Model, u: &[f64]) -> Result<(f64, InitialStress)> {
 /// then unchanged to the bit), else what brings the largest |u| to 1e-6 of the size.
 fn load_scale(model: &Model, u: &[f64]) -> f64 {
     let umax = u.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for x in model.nodes.iter() {
-        for d in 0..3 {
-            lo[d] = lo[d].min(x[d]);
-            hi[d] = hi[d].max(x[d]);
-        }
-    }
+    let (lo, hi) = crate::mesh::bounding_box(&model.nodes);
     let size = (0..3).map(|d| (hi[d] - lo[d]).powi(2)).sum::<f64>().sqrt();
     let c = 1e-6 * size / umax;
     if (1e-100..=1e100).contains(&(umax / size)) || !(c.is_finite() && c > 0.0) {

@@ -725,8 +725,7 @@ pub fn factor_stiffness(sys: &System) -> Result<Factor> {
     }
     if fa.negative_pivots > 0 || ratio <= 1e-13 {
         return Err(singular(format!(
-            "pivot ratio {:.1e}, {} negative pivots",
-            fa.pivot_range.0 / fa.pivot_range.1.max(f64::MIN_POSITIVE),
+            "pivot ratio {ratio:.1e}, {} negative pivots",
             fa.negative_pivots
         )));
     }

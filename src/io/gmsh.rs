@@ -256,7 +256,7 @@ fn node_coords(cur: &mut Cursor, tag: u64, n_param: usize, after_tag: bool) -> R
         cur.more_on_line(|| format!("node {tag}: its line ends before its parametric coordinates"))?;
         cur.float("parametric coordinate")?;
     }
-    cur.line_done(|| format!("node {tag}"))?;
+    cur.line_done(|extra| format!("node {tag}: more values on its line than expected, starting at '{extra}'"))?;
     Ok(x)
 }
 

@@ -244,7 +244,9 @@ impl MemoryBudget {
     }
 }
 
-fn csv_field(s: &str) -> String {
+/// A CSV field: quoted (quotes doubled, newlines as spaces) when it holds a comma, a quote or a
+/// newline.
+pub(crate) fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n']) {
         format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
     } else {

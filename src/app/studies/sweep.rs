@@ -1103,7 +1103,7 @@ pub fn table_text(o: &SweepOutcome) -> String {
 
 /// The rows as CSV, in case order:
 /// `case,<keys…>,mass_kg,model_mass_kg,f1_hz,f2_hz,dofs,time_s,feasible,pareto,error`; a design
-/// whose analysis failed has its values, empty results and the error (quoted).
+/// whose analysis failed has its values, empty results and the error.
 pub fn sweep_csv(o: &SweepOutcome) -> String {
     let mut s = String::from("case");
     for (k, _) in &o.study.sweep {
@@ -1122,7 +1122,7 @@ pub fn sweep_csv(o: &SweepOutcome) -> String {
             (r.case, csv_values(&r.values) + &res)
         })
         .chain(failed.map(|f| {
-            let err = format!(",,,,,,,false,false,\"{}\"", f.error.replace('"', "\"\""));
+            let err = format!(",,,,,,,false,false,{}", super::batch::csv_field(&f.error));
             (f.case, csv_values(&f.values) + &err)
         }))
         .collect();

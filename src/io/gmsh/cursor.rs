@@ -144,17 +144,14 @@ impl<'a> Cursor<'a> {
         Err(self.err(what()))
     }
 
-    /// In ASCII data, an error unless the current line ends here (`what`: the record, for a
-    /// message on the extra values).
-    pub fn line_done(&mut self, what: impl FnOnce() -> String) -> crate::Result<()> {
+    /// In ASCII data, an error unless the current line ends here: `msg` makes its message from
+    /// the first extra value.
+    pub fn line_done(&mut self, msg: impl FnOnce(&str) -> String) -> crate::Result<()> {
         if self.bin.is_some() || self.file_binary || self.line_ends() {
             return Ok(());
         }
         let extra = self.next_token().map(shown).unwrap_or_default();
-        Err(self.err(format!(
-            "{}: more values on its line than expected, starting at '{extra}'",
-            what()
-        )))
+        Err(self.err(msg(&extra)))
     }
 
     /// The next whitespace-separated ASCII token, or `None` at the end of the file.

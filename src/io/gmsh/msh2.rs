@@ -103,14 +103,12 @@ fn read_elements(cur: &mut Cursor, header: &Header, b: &mut Builder) -> Result<(
             record(cur, b, &mut st, tag, gmsh_type, true)?;
             // One element a line: a node too many is named here rather than read as the next
             // element's tag (which reported the line after, "expected $EndElements").
-            if !cur.line_ends() {
-                let extra = cur.token("node tag")?;
-                return Err(cur.err(format!(
+            cur.line_done(|extra| {
+                format!(
                     "element {tag}: more node tags on its line than its type (gmsh type {gmsh_type}) has, \
-                     starting at '{}'",
-                    String::from_utf8_lossy(extra)
-                )));
-            }
+                     starting at '{extra}'"
+                )
+            })?;
         }
     } else {
         let mut read = 0usize;
@@ -175,12 +173,14 @@ fn record(
     };
     st.nodes.clear();
     for k in 0..kind.n_nodes() {
-        if one_line && cur.line_ends() {
-            return Err(cur.err(format!(
-                "element {tag}: its line ends after {k} of the {} node tags of a {} (gmsh type {gmsh_type})",
-                kind.n_nodes(),
-                kind.name()
-            )));
+        if one_line {
+            cur.more_on_line(|| {
+                format!(
+                    "element {tag}: its line ends after {k} of the {} node tags of a {} (gmsh type {gmsh_type})",
+                    kind.n_nodes(),
+                    kind.name()
+                )
+            })?;
         }
         let node = cur.int_tag("node tag")?;
         st.nodes.push(b.node(cur, tag, node)?);

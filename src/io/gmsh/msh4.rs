@@ -214,7 +214,12 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
                 let node = cur.size("node tag")?;
                 nodes.push(b.node(cur, tag, node)?);
             }
-            cur.line_done(|| format!("element {tag} (a {} of {nn} nodes)", kind.name()))?;
+            cur.line_done(|extra| {
+                format!(
+                    "element {tag} (a {} of {nn} nodes): more values on its line than expected, starting at '{extra}'",
+                    kind.name()
+                )
+            })?;
             // Within 4.1 an element in several groups is written once (its entity carries the
             // groups): any repeat is a duplicate, counted once, with a note.
             let (cell, merged) = b.add_cell(cur, kind, tag, &nodes)?;
