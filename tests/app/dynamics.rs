@@ -505,6 +505,19 @@ fn dopri5_nonautonomous_with_breakpoints() {
         assert!((ya[0] - e).abs() < 1e-8 * e, "t = {t}: {} vs {e}", ya[0]);
         assert!((yb[0] - e).abs() < 1e-8 * e);
     }
+    // Breakpoints an ulp from the end, from t0 and from each other (a period's multiple that
+    // rounds to just below the end): merged, not a segment too short for any step ("step size
+    // underflow" at t_end, as a 1000 Hz design's start-up met it).
+    let t_end = *t_out.last().unwrap();
+    let near = [
+        f64::from_bits(t_end.to_bits() - 1),
+        1e-300,
+        2.5,
+        f64::from_bits(2.5f64.to_bits() + 1),
+    ];
+    let c = integrate(f, 0.0, &[1.0], &t_out, &near, &opts).unwrap();
+    let e = t_end.sin().exp();
+    assert!((c.y.last().unwrap()[0] - e).abs() < 1e-8 * e);
 }
 
 #[test]

@@ -286,13 +286,24 @@ impl Stages {
 
 /// The segment ends: the breakpoints strictly inside (t0, t_end), sorted, then t_end.
 fn segment_ends(breakpoints: &[f64], t0: f64, t_end: f64) -> Vec<f64> {
-    let mut segs: Vec<f64> = breakpoints
+    let mut cuts: Vec<f64> = breakpoints
         .iter()
         .copied()
         .filter(|b| b.is_finite() && *b > t0 && *b < t_end)
         .collect();
-    segs.sort_by(f64::total_cmp);
-    segs.dedup();
+    cuts.sort_by(f64::total_cmp);
+    // A breakpoint within a few ulps of another, of t0 or of t_end (a period's multiple that
+    // rounds to just below the end) would leave a segment shorter than any step can be: it is
+    // merged with its neighbour (the right-hand side cannot change over so short a time).
+    let tiny = 64.0 * f64::EPSILON * t0.abs().max(t_end.abs()).max(f64::MIN_POSITIVE);
+    let mut segs = Vec::with_capacity(cuts.len() + 1);
+    let mut last = t0;
+    for b in cuts {
+        if b - last > tiny && t_end - b > tiny {
+            segs.push(b);
+            last = b;
+        }
+    }
     segs.push(t_end);
     segs
 }
