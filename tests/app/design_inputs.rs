@@ -124,6 +124,49 @@ fn damping_must_not_be_negative() {
     refused("mu12.toml", "version = 1\n[damping]\nmu12 = nan\n", "damping.mu12", 3);
 }
 
+/// Values far outside any machine of the family (a unit slip) are refused on reading, naming the
+/// key and printed with an exponent: they failed after the FE work as a reference node "not
+/// free", an "undamped resonance" (a dashpot of 1e300 N·s/m) or a helix of 300-digit cells.
+#[test]
+fn absurd_values_are_refused_on_reading() {
+    for (name, text, key) in [
+        ("pull.toml", "[drive]\npull = 1e300\n", "drive.pull"),
+        ("mu.toml", "[damping]\nmu1 = 1e300\n", "damping.mu1"),
+        ("m2.toml", "[masses]\nreactive = 1e300\n", "masses.reactive"),
+        ("m2tiny.toml", "[masses]\nreactive = 1e-300\n", "masses.reactive"),
+        ("load.toml", "[masses]\nload = 1e300\n", "masses.load"),
+        ("turns.toml", "[coil]\nturns = 1e7\n", "coil.turns"),
+        ("turns0.toml", "[coil]\nturns = 1e-300\n", "coil.turns"),
+        ("g.toml", "[coil]\nshear_modulus = 1e300\n", "coil.shear_modulus"),
+        ("h.toml", "[leaf]\nthickness = 1e-6\n", "leaf.thickness"),
+    ] {
+        let m = refused(name, &format!("version = 1\n{text}"), key, 3);
+        assert!(m.contains("check the units"), "{m}");
+        assert!(!m.contains("00000000000"), "{name}: a value printed in full: {m}");
+    }
+}
+
+/// A design at the highest excitation the files allow runs its start-up: a breakpoint of the
+/// rectified force that rounded to just below the transient's end left a segment shorter than
+/// any step ("ode: step size underflow at t = 0.6").
+#[test]
+fn the_highest_excitation_runs_its_start_up() {
+    let dir = std::env::temp_dir().join(format!("vibrofem-design-inputs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("f1000.toml");
+    let text = "version = 1\nexcitation_hz = 1000.0\n[search]\nenabled = false\n[envelope]\nenabled = false\n";
+    std::fs::write(&p, text).unwrap();
+    let d = Design::from_toml(&p).unwrap();
+    let r = vibrofem::app::design::run_design(&d, None, &|_| {}).unwrap();
+    let x1 = r
+        .quantities
+        .iter()
+        .find(|q| q.id == "transient_x1")
+        .expect("a transient row")
+        .value;
+    assert!(x1.is_finite() && x1 > 0.0, "{x1}");
+}
+
 #[test]
 fn efficiency_is_a_fraction() {
     // Both failed after the FE work, in eq. (6), without file or key.

@@ -878,7 +878,6 @@ pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
         e.memo_misses,
         reduced_words(e)
     )));
-    let pct = |value: f64| Cell::Pct { value, decimals: 1 };
     env.blocks.push(Block::Table(Table {
         id: "envelope".into(),
         caption: None,
@@ -902,7 +901,7 @@ pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
                     Cell::num(c.nominal),
                     Cell::num(c.max),
                     Cell::num(c.limit),
-                    pct(c.worst_margin),
+                    worst_margin_cell(c),
                     Cell::text(c.worst_run.clone()),
                     Cell::text(if c.ok { "ok" } else { "FAILS" }),
                 ]
@@ -917,6 +916,17 @@ pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
             .into(),
     }));
     vec![env, sensitivity_section(e)]
+}
+
+/// A check's worst margin as the nominal table prints its margin: `+12.3 %` of the limit, and for
+/// a check in percent (`… [%]`) the difference in percentage points (the fraction times the
+/// limit), so that one check reads alike in both tables.
+fn worst_margin_cell(c: &CheckEnvelope) -> Cell {
+    if c.name.ends_with("[%]") {
+        Cell::text(format!("{:+.1} points", c.worst_margin * c.limit.abs()))
+    } else {
+        Cell::text(format!("{:+.1} %", 100.0 * c.worst_margin))
+    }
 }
 
 /// The bands and the sensitivity of every check to each.

@@ -7,6 +7,7 @@
 //! The `[machine]` layout ([`MachineDesign`]) and the `[search]` lists ([`SearchDesign`]) are
 //! part of the file and are read and checked here too.
 
+use crate::io::fmt_plain;
 use crate::material::Material;
 use crate::mesh::CellKind;
 use crate::mesh::parametric::{MAX_TABLE_DIVISIONS, SandwichParams};
@@ -335,6 +336,28 @@ pub const MAX_TRANSIENT_PERIODS: f64 = 3000.0;
 /// which holds well below their own first mode (about 1.7 kHz for the paper's leaves).
 pub const MAX_EXCITATION_HZ: f64 = 1000.0;
 
+/// Plausibility bounds of a design's values, far outside any machine of this family but inside
+/// what the chain computes with: beyond them a unit slip (1e300, 1e-300) surfaced late, as a
+/// support "not free", an "undamped resonance" or a non-finite stiffness, with no key named.
+/// Masses, kg (the paper's reactive mass is 161.8 kg).
+const MAX_MASS: f64 = 1e6;
+/// The smallest reactive mass, kg.
+const MIN_MASS: f64 = 1e-3;
+/// Lengths of a part, m.
+const MAX_LENGTH: f64 = 100.0;
+/// The thinnest leaf, m (0.1 mm; the paper's are 9 mm).
+const MIN_THICKNESS: f64 = 1e-4;
+/// Coil turns (the paper's coil has 6).
+const MIN_TURNS: f64 = 0.5;
+/// The most coil turns.
+const MAX_TURNS: f64 = 1000.0;
+/// A shear modulus, Pa (steel 7.7e10).
+const MAX_MODULUS: f64 = 1e13;
+/// A magnet's pull, N (the paper's 370 N).
+const MAX_FORCE: f64 = 1e8;
+/// A dashpot, N·s/m (the paper's 2400).
+const MAX_DAMPING: f64 = 1e9;
+
 /// Range of the target detuning z = Ω/ω0: a resonant machine works near resonance; z a decade
 /// away asks for leaves far outside their design (thinner than a foil, or blocks).
 pub const MIN_DETUNING: f64 = 0.1;
@@ -366,10 +389,15 @@ impl Range {
         let want = match self {
             Range::Positive => "positive".to_string(),
             Range::NonNegative => "zero or positive".to_string(),
-            Range::Between(lo, hi, true) => format!("between {lo} and {hi}"),
-            Range::Between(lo, hi, false) => format!("above {lo} and at most {hi}"),
+            Range::Between(lo, hi, true) => format!("between {} and {}", fmt_plain(lo), fmt_plain(hi)),
+            Range::Between(lo, hi, false) => format!("above {} and at most {}", fmt_plain(lo), fmt_plain(hi)),
         };
-        Err(bad(key, format!("must be {want}, got {v}")))
+        let hint = if v.is_finite() && v != 0.0 {
+            " (check the units: kg, m, N, Pa, N·s/m)"
+        } else {
+            ""
+        };
+        Err(bad(key, format!("must be {want}, got {}{hint}", fmt_plain(v))))
     }
 }
 
@@ -452,22 +480,22 @@ impl Design {
                 self.target_detuning,
                 Between(MIN_DETUNING, MAX_DETUNING, true),
             ),
-            ("masses.load", m.load, NonNegative),
+            ("masses.load", m.load, Between(0.0, MAX_MASS, true)),
             ("masses.load_share", m.load_share, Between(0.0, 1.0, true)),
-            ("masses.active_extra", m.active_extra, NonNegative),
-            ("masses.reactive", m.reactive, Positive),
-            ("leaf.thickness", l.thickness, Positive),
-            ("leaf.length", l.length, Positive),
-            ("leaf.width", l.width, Positive),
+            ("masses.active_extra", m.active_extra, Between(0.0, MAX_MASS, true)),
+            ("masses.reactive", m.reactive, Between(MIN_MASS, MAX_MASS, true)),
+            ("leaf.thickness", l.thickness, Between(MIN_THICKNESS, MAX_LENGTH, true)),
+            ("leaf.length", l.length, Between(0.0, MAX_LENGTH, false)),
+            ("leaf.width", l.width, Between(0.0, MAX_LENGTH, false)),
             ("leaf.clamping", l.clamping, Between(0.0, 1.0, false)),
             ("leaf.allowable", l.allowable, Positive),
-            ("coil.wire", c.wire, Positive),
-            ("coil.mean_diameter", c.mean_diameter, Positive),
-            ("coil.turns", c.turns, Positive),
-            ("coil.pitch", c.pitch, Positive),
-            ("coil.shear_modulus", c.shear_modulus, Positive),
+            ("coil.wire", c.wire, Between(0.0, MAX_LENGTH, false)),
+            ("coil.mean_diameter", c.mean_diameter, Between(0.0, MAX_LENGTH, false)),
+            ("coil.turns", c.turns, Between(MIN_TURNS, MAX_TURNS, true)),
+            ("coil.pitch", c.pitch, Between(0.0, MAX_LENGTH, false)),
+            ("coil.shear_modulus", c.shear_modulus, Between(0.0, MAX_MODULUS, false)),
             ("coil.allowable_shear", c.allowable_shear, Positive),
-            ("drive.pull", dr.pull, Positive),
+            ("drive.pull", dr.pull, Between(0.0, MAX_FORCE, false)),
             ("drive.efficiency", dr.efficiency, Between(0.0, 1.0, false)),
             ("drive.installed_power", dr.installed_power, Positive),
             ("drive.transient_s", dr.transient_s, Positive),
@@ -480,9 +508,9 @@ impl Design {
             ),
             ("drive.gap", dr.gap, Positive),
             ("drive.gap_margin", dr.gap_margin, NonNegative),
-            ("damping.mu1", dp.mu1, NonNegative),
-            ("damping.mu12", dp.mu12, NonNegative),
-            ("damping.mu13", dp.mu13, NonNegative),
+            ("damping.mu1", dp.mu1, Between(0.0, MAX_DAMPING, true)),
+            ("damping.mu12", dp.mu12, Between(0.0, MAX_DAMPING, true)),
+            ("damping.mu13", dp.mu13, Between(0.0, MAX_DAMPING, true)),
         ]
     }
 

@@ -73,6 +73,20 @@ const fn row_of(
     }
 }
 
+/// The start-up rows' source: the paper's chain (its force law, the leaves tuned on the
+/// two-mass model, no magnet stiffness) on this design's masses; for a user's design that is not
+/// the model of record, whose start-up the report's start-up section gives.
+fn transient_note(d: &Design, v: &ChainValues) -> String {
+    let _ = d;
+    if v.builtin {
+        "Fig. 22".into()
+    } else {
+        "the paper's chain on this design's masses (paper force law, leaves tuned on the two-mass model, \
+         no magnet stiffness); this design's own start-up: section 'Start-up and run-down'"
+            .into()
+    }
+}
+
 /// The paper's coil stiffness (S5, N/m).
 const K_COIL_PAPER: f64 = 60266.0;
 
@@ -98,7 +112,8 @@ pub const TABLE: &[Reference] = &[
     row("c13", "c13 = n · k_coil", "N/m", |v| v.c13, Some(8.0 * K_COIL_PAPER), ""),
     row("f_n1", "natural frequency 1 (isolation, masses without the load)", "Hz", |v| v.lumped().w1, None,
         "the paper's 5 Hz is the loaded machine's: see f_isolation"),
-    row("f_n2", "natural frequency 2 (resonant)", "Hz", |v| v.lumped().w2, Some(103.09), "ω0 = Ω/z"),
+    row("f_n2", "natural frequency 2 (resonant)", "Hz", |v| v.lumped().w2, Some(103.09),
+        "the two-mass eigenfrequency (with c13); the paper gives ω0 = Ω/z"),
     row_of("drive_force", "drive force amplitude at Ω", "N", |v| v.lumped().force, Some(1256.0),
         |_, v| format!("{} law; paper: 4/(3π)·n·P_em, eq. (11)", v.lumped().law)),
     row_of("constant_pull", "constant pull (mean)", "N", |v| v.lumped().constant_pull, Some(1884.0),
@@ -126,9 +141,10 @@ pub const TABLE: &[Reference] = &[
     }),
     row("dissipated_power", "power dissipated by the two-mass dashpots Ω²/2·Σμ|X|² (a power balance)", "W",
         |v| v.lumped().dissipated, None, "mechanical power the drive supplies in steady state"),
-    row("transient_x1", "transient (paper law, two-mass): steady X1", "mm", |v| v.transient.amplitude1 * 1e3, Some(0.2), "Fig. 22"),
-    row("transient_offset", "transient: static offset of x1 − x2", "mm", |v| v.transient.relative_mean * 1e3,
-        Some(-0.05), "Fig. 22"),
+    row_of("transient_x1", "transient (paper law, two-mass): steady X1", "mm", |v| v.transient.amplitude1 * 1e3, Some(0.2),
+        transient_note),
+    row_of("transient_offset", "transient: static offset of x1 − x2", "mm", |v| v.transient.relative_mean * 1e3,
+        Some(-0.05), transient_note),
     row("transient_settling_time", "transient: settling time of x1 (2 %)", "s",
         |v| v.transient.settling_time1.unwrap_or(f64::NAN), None, ""),
     row("f_isolation", "isolation frequency (whole loaded mass on the isolators)", "Hz", |v| v.f_iso, Some(5.0), ""),
@@ -223,14 +239,14 @@ impl Reference {
 /// value, and the reactive mass for the target z when the design tunes by mass.
 pub fn quantities(d: &Design, v: &ChainValues) -> Vec<Quantity> {
     let mut q: Vec<Quantity> = TABLE.iter().map(|r| r.quantity(d, v)).collect();
+    if matches!(v.m2_for_target, Some(Ok(_))) {
+        q.push(M2_FOR_TARGET.quantity(d, v));
+    }
     if !v.builtin {
         // A user's own design is not the paper's machine: no published values beside it.
         q.iter_mut().for_each(|x| x.published = None);
     }
     q.retain(|x| x.value.is_finite() || x.published.is_some());
-    if matches!(v.m2_for_target, Some(Ok(_))) {
-        q.push(M2_FOR_TARGET.quantity(d, v));
-    }
     q
 }
 
