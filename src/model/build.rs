@@ -424,6 +424,21 @@ pub(crate) fn point_masses(
                 ),
             ));
         }
+        // As for a density: beyond 1e30 the products of M overflow or swamp K (1e300 kg ended in
+        // "zero pivot"); no machine part weighs that much in any unit.
+        let big = crate::material::MATERIAL_RANGE.1;
+        if pm.mass > big || pm.inertia.iter().any(|v| v.abs() > big) {
+            return Err(Error::group(
+                pm.group.as_str(),
+                format!(
+                    "point mass on '{}': mass {} kg, inertia up to {} kg·m²: at most {} each (check the units)",
+                    pm.group,
+                    crate::io::fmt_plain(pm.mass),
+                    crate::io::fmt_plain(pm.inertia.iter().fold(0.0f64, |a, v| a.max(v.abs()))),
+                    crate::io::fmt_plain(big)
+                ),
+            ));
+        }
         let rotary = pm.inertia.iter().any(|&v| v != 0.0);
         if rotary {
             // The inertia tensor must be positive semi-definite (every principal minor ≥ 0, to
@@ -480,7 +495,7 @@ pub(crate) fn point_masses(
                 &[a as u32],
                 vec![0.0; 36],
                 me,
-                format!("point mass {} kg on '{}'", pm.mass, pm.group),
+                format!("point mass {} kg on '{}'", crate::io::fmt_plain(pm.mass), pm.group),
             );
         } else {
             if rotary {
@@ -503,7 +518,8 @@ pub(crate) fn point_masses(
             }
             notes.push(format!(
                 "point mass {} kg on '{}' spread equally over its nodes",
-                pm.mass, pm.group
+                crate::io::fmt_plain(pm.mass),
+                pm.group
             ));
         }
     }
@@ -533,6 +549,20 @@ pub(crate) fn springs(mesh: &Mesh, spec: &ModelSpec, references: &[ReferenceNode
             return Err(Error::group(
                 sp.a.as_str(),
                 format!("spring on '{}': stiffnesses must be non-negative", sp.a),
+            ));
+        }
+        // Beyond 1e30 (N/m, N·m/rad) a spring swamps K's rounding: 1e300 was reported as a free
+        // rigid-body motion of a supported model.
+        let big = crate::material::MATERIAL_RANGE.1;
+        if let Some(k) = sp.k.iter().find(|&&v| v > big) {
+            return Err(Error::group(
+                sp.a.as_str(),
+                format!(
+                    "spring on '{}': stiffness {}: at most {} (check the units)",
+                    sp.a,
+                    crate::io::fmt_plain(*k),
+                    crate::io::fmt_plain(big)
+                ),
             ));
         }
         not_to_itself(&sp.a, sp.b.as_ref(), &format!("spring on '{}'", sp.a))?;

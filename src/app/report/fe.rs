@@ -2,6 +2,7 @@
 
 use crate::analysis::modal::ModalReport;
 use crate::element::solid;
+use crate::io::{fmt_fixed, fmt_plain};
 use crate::material::Material;
 use crate::mesh::Mesh;
 use crate::{Error, Result};
@@ -21,7 +22,12 @@ pub fn modal_table(r: &ModalReport) -> String {
         r.dofs,
         r.mass_matrix
     );
-    let _ = writeln!(s, "mass     {:.6} kg   volume {:.6e} m³", r.mass_kg, r.volume_m3);
+    let _ = writeln!(
+        s,
+        "mass     {} kg   volume {:.6e} m³",
+        fmt_fixed(r.mass_kg, 6),
+        r.volume_m3
+    );
     let _ = writeln!(s);
     let _ = writeln!(
         s,
@@ -31,9 +37,9 @@ pub fn modal_table(r: &ModalReport) -> String {
     for m in &r.modes {
         let _ = writeln!(
             s,
-            "{:>5} {:>16.6} {:>8} {:>10.2e}   {:>7.4} {:>7.4} {:>7.4}",
+            "{:>5} {:>16} {:>8} {:>10.2e}   {:>7.4} {:>7.4} {:>7.4}",
             m.mode,
-            m.frequency_hz,
+            fmt_fixed(m.frequency_hz, 6),
             m.kind,
             m.rel_residual,
             m.cumulative_ratio[0],
@@ -50,10 +56,10 @@ pub fn modal_table(r: &ModalReport) -> String {
     );
     let _ = writeln!(
         s,
-        "complete: {}  (Sturm count {} eigenvalues below {:.6} Hz, {} found between the check points)",
+        "complete: {}  (Sturm count {} eigenvalues below {} Hz, {} found between the check points)",
         if r.complete { "yes" } else { "NO" },
         r.sturm.upper.1,
-        crate::post::modal::hz(r.sturm.upper.0),
+        fmt_fixed(crate::post::modal::hz(r.sturm.upper.0), 6),
         r.sturm.found
     );
     let _ = writeln!(
@@ -223,18 +229,25 @@ pub fn mesh_info_text(i: &MeshInfo) -> String {
     }
     let _ = writeln!(
         s,
-        "bbox    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}] m",
-        i.bbox_min[0], i.bbox_min[1], i.bbox_min[2], i.bbox_max[0], i.bbox_max[1], i.bbox_max[2]
+        "bbox    [{}] .. [{}] m",
+        fixed3(i.bbox_min, 6),
+        fixed3(i.bbox_max, 6)
     );
     let _ = writeln!(
         s,
-        "size    {:.6} x {:.6} x {:.6} m",
-        i.bbox_max[0] - i.bbox_min[0],
-        i.bbox_max[1] - i.bbox_min[1],
-        i.bbox_max[2] - i.bbox_min[2]
+        "size    {} m",
+        (0..3)
+            .map(|k| fmt_fixed(i.bbox_max[k] - i.bbox_min[k], 6))
+            .collect::<Vec<_>>()
+            .join(" x ")
     );
     let _ = writeln!(s, "volume  {:.6e} m³", i.volume_m3);
-    let _ = writeln!(s, "mass    {:.6} kg (density {} kg/m³)", i.mass_kg, i.density);
+    let _ = writeln!(
+        s,
+        "mass    {} kg (density {} kg/m³)",
+        fmt_fixed(i.mass_kg, 6),
+        fmt_plain(i.density)
+    );
     s
 }
 
@@ -308,6 +321,11 @@ pub fn static_report(mesh: &Mesh, source: &str, run: &crate::analysis::statics::
     })
 }
 
+/// A point's three coordinates with `decimals` decimals each ([`fmt_fixed`]), comma-separated.
+fn fixed3(p: [f64; 3], decimals: usize) -> String {
+    p.iter().map(|&x| fmt_fixed(x, decimals)).collect::<Vec<_>>().join(", ")
+}
+
 /// Text form of a static report.
 pub fn static_text(r: &StaticReport) -> String {
     let mut s = String::new();
@@ -359,20 +377,18 @@ pub fn static_text(r: &StaticReport) -> String {
             for g in &st.von_mises {
                 let _ = writeln!(
                     s,
-                    "  von Mises max {:<16} {:>10.3} MPa at node {} ({:.4}, {:.4}, {:.4}) m",
+                    "  von Mises max {:<16} {:>10} MPa at node {} ({}) m",
                     g.group,
-                    g.value / 1e6,
+                    fmt_fixed(g.value / 1e6, 3),
                     g.node.unwrap_or(0),
-                    g.coords[0],
-                    g.coords[1],
-                    g.coords[2]
+                    fixed3(g.coords, 4)
                 );
             }
             for g in st.max_shear.iter().filter(|g| g.group == "(all)") {
                 let _ = writeln!(
                     s,
-                    "  max shear stress             {:>10.3} MPa at node {}",
-                    g.value / 1e6,
+                    "  max shear stress             {:>10} MPa at node {}",
+                    fmt_fixed(g.value / 1e6, 3),
                     g.node.unwrap_or(0)
                 );
             }

@@ -1009,22 +1009,12 @@ pub fn best(rows: &[SweepRow], n: usize) -> Vec<&SweepRow> {
     feas
 }
 
-/// A swept value as written: plain decimals, or with an exponent where they would run long
-/// (1e-6, 1e308).
-fn value_text(v: f64) -> String {
-    if v != 0.0 && !(1e-4..1e9).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
-}
-
 fn describe(study: &Study, vals: &[f64]) -> String {
     study
         .sweep
         .iter()
         .zip(vals)
-        .map(|((k, _), v)| format!("{k}={}", value_text(*v)))
+        .map(|((k, _), v)| format!("{k}={}", crate::io::fmt_plain(*v)))
         .collect::<Vec<_>>()
         .join(" ")
 }
@@ -1134,7 +1124,7 @@ pub fn sweep_csv(o: &SweepOutcome) -> String {
 }
 
 fn csv_values(v: &[f64]) -> String {
-    v.iter().map(|v| format!(",{}", value_text(*v))).collect()
+    v.iter().map(|v| format!(",{}", crate::io::fmt_plain(*v))).collect()
 }
 
 /// Write `sweep.csv`, `sweep.json` and `pareto.svg` to `dir` (created).
