@@ -47,11 +47,21 @@ pub fn parse<T: DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
 
 /// [`parse`] for a text named `file` in messages (a built-in file, a generated scene).
 pub fn parse_named<T: DeserializeOwned>(file: &str, text: &str) -> Result<T> {
-    toml::from_str(text).map_err(|e| Error::Input {
-        file: file.to_string(),
-        line: e.span().map(|s| line_of(text, s.start)),
-        key: None,
-        msg: e.message().trim().to_string(),
+    toml::from_str(text).map_err(|e| {
+        let mut msg = e.message().trim().to_string();
+        // The parser says "duplicate key" alone; its span is the key as written.
+        let written = e.span().and_then(|s| text.get(s)).map(str::trim);
+        if let Some(k) = written.filter(|k| !k.is_empty() && k.len() <= 200 && !k.contains('\n')) {
+            if msg.starts_with("duplicate") && !msg.contains(k) {
+                msg = format!("{msg} '{k}'");
+            }
+        }
+        Error::Input {
+            file: file.to_string(),
+            line: e.span().map(|s| line_of(text, s.start)),
+            key: None,
+            msg,
+        }
     })
 }
 

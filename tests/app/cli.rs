@@ -504,6 +504,45 @@ fn short_records_are_named_at_their_line() {
     );
 }
 
+/// A block announcing more records than its section's header leaves is named at its own header
+/// line (MSH 4.1, the S1 plate: node block 1 on line 46, element block 1 on line 3784); a huge
+/// element count was reported at the next block's header as a short element.
+#[test]
+fn oversized_block_counts_are_named_at_their_header() {
+    let full = std::fs::read_to_string(plate()).unwrap();
+    let edit = |line: usize, text: &str| -> String {
+        let mut l: Vec<&str> = full.lines().collect();
+        l[line - 1] = text;
+        l.join("\n") + "\n"
+    };
+    let p = tmp("elem_block_huge41.msh", &edit(3784, "2 1 9 400000000000"));
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["line 3784", "400000000000 elements in the block", "more than the 1523"],
+    );
+    let p = tmp("node_block_big41.msh", &edit(46, "0 1 0 1855"));
+    expect_error(
+        &["modes", p.to_str().unwrap()],
+        1,
+        &["line 46", "1855 nodes in the block", "more than the 1854"],
+    );
+}
+
+/// A key given twice in a scene (or any TOML input) is named, not only its line.
+#[test]
+fn a_duplicate_key_is_named() {
+    let scene = "[scene]\nversion = 1\nname = \"leaf\"\n[mesh]\ngenerator = \"box:0.2,0.1,0.01:4,2,1:hex20\"\n\
+                 [[material]]\nname = \"steel\"\nyoung = 2.1e11\npoisson = 0.3\npoisson = 0.3\ndensity = 7850.0\n\
+                 [modal]\nmodes = 3\n";
+    let p = tmp("dup_key.toml", scene);
+    expect_error(
+        &["run", p.to_str().unwrap()],
+        1,
+        &["dup_key.toml", "line 10", "duplicate key 'poisson'"],
+    );
+}
+
 /// A physical name with one quote is a damaged line, not a name with a quote in it.
 #[test]
 fn a_half_quoted_group_name_is_refused() {

@@ -139,6 +139,13 @@ fn read_nodes(cur: &mut Cursor, b: &mut Builder) -> Result<()> {
             p => return Err(cur.err(format!("parametric flag must be 0 or 1, found {p}"))),
         };
         let n = cur.count("nodes in the block", s + (3 + n_param) * f)?;
+        if n > n_nodes - read {
+            return Err(cur.err(format!(
+                "{n} nodes in the block: more than the {} of the {n_nodes} in the section's header that the \
+                 blocks before it leave",
+                n_nodes - read
+            )));
+        }
         tags.clear();
         tags.reserve(cur.cap(n, s + (3 + n_param) * f));
         for _ in 0..n {
@@ -200,6 +207,13 @@ fn read_elements(cur: &mut Cursor, b: &mut Builder, entities: &EntityGroups) -> 
             return Err(b.unsupported(cur.path(), gmsh_type, group));
         };
         let nn = kind.n_nodes();
+        if n > (n_elements - read) as u64 {
+            return Err(cur.err(format!(
+                "{n} elements in the block of entity {dim}:{entity}: more than the {} of the {n_elements} \
+                 in the section's header that the blocks before it leave",
+                n_elements - read
+            )));
+        }
         let n = cur.check_count(n, "elements in the block", (1 + nn) * s)?;
         for _ in 0..n {
             let tag = cur.size("element tag")?;

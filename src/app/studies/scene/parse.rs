@@ -394,6 +394,9 @@ impl Reader<'_> {
             (Some(_), Some(_)) => {
                 return ctx.err(m.span(), "[mesh] takes either 'file' or 'generator', not both");
             }
+            (Some(f), None) if f.trim().is_empty() => {
+                return ctx.err(m.span(), "[mesh] 'file' is empty: give the mesh file's path");
+            }
             (Some(f), None) => MeshSource::File(base.join(f)),
             (None, Some(g)) => MeshSource::Generator(g.clone()),
             (None, None) => MeshSource::Missing,
@@ -962,6 +965,19 @@ impl Reader<'_> {
         };
         if let Some(s) = r.shift_hz {
             ctx.finite(m.span(), "'shift_hz'", &[s])?;
+        }
+        // As `modes --band/--shift` check them, but named by this file's keys.
+        let usable = |f: f64| crate::post::modal::lambda_of_hz(f).is_finite();
+        let far = r.band.iter().flatten().chain(&r.shift_hz).find(|&&f| !usable(f));
+        if let Some(f) = far {
+            let key = if r.shift_hz == Some(*f) { "shift_hz" } else { "band" };
+            return ctx.err(
+                m.span(),
+                format!(
+                    "'{key}': {} Hz is not a usable frequency ((2πf)² overflows double precision)",
+                    crate::io::fmt_plain(*f)
+                ),
+            );
         }
         if let Some(mass) = &r.mass {
             self.spec.lumping = MassLumping::parse(mass).map_err(|e| ctx.error(m.span(), e))?;
