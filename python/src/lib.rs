@@ -61,9 +61,54 @@ create_exception!(
     "An external engine (SLEPc, MPI) is missing or failed (exit code 5)."
 );
 
-/// The exception of a vibrofem error, with the command line's message.
+/// The command line's option names in the library's messages and the keywords they are in
+/// Python (`--band` is `band=`): longest first, so that a prefix never takes a longer name.
+const KEYWORDS: &[(&str, &str)] = &[
+    ("--group-material", "group_material"),
+    ("--length-unit", "length_unit"),
+    ("--point-mass", "point_mass"),
+    ("--rayleigh", "rayleigh"),
+    ("--displace", "displace"),
+    ("--pressure", "pressure"),
+    ("--damping", "damping"),
+    ("--gravity", "gravity"),
+    ("--couple", "couple"),
+    ("--spring", "spring"),
+    ("--shell", "shell"),
+    ("--shift", "shift_hz"),
+    ("--modes", "n"),
+    ("--force", "force"),
+    ("--band", "band"),
+    ("--beam", "beam"),
+    ("--fix", "fix"),
+];
+
+/// `msg` with each command-line option named by its Python keyword.
+fn python_keywords(msg: &str) -> String {
+    let mut out = String::with_capacity(msg.len());
+    let mut rest = msg;
+    'scan: while let Some(i) = rest.find("--") {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i..];
+        for (cli, py) in KEYWORDS {
+            let after = tail.as_bytes().get(cli.len()).copied();
+            if tail.starts_with(cli) && !after.is_some_and(|c| c.is_ascii_alphanumeric() || c == b'-' || c == b'_') {
+                out.push_str(py);
+                rest = &tail[cli.len()..];
+                continue 'scan;
+            }
+        }
+        out.push_str("--");
+        rest = &tail[2..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The exception of a vibrofem error, with the command line's message (its option names as
+/// Python keywords).
 fn err(e: vibrofem::Error) -> PyErr {
-    let msg = e.to_string();
+    let msg = python_keywords(&e.to_string());
     match e.exit_code() {
         1 => InputError::new_err(msg),
         2 => NumericalError::new_err(msg),

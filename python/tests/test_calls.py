@@ -158,3 +158,31 @@ def test_modes_refuses_flags_for_counts_and_text_for_a_band() -> None:
         model.modes(True)
     with pytest.raises(vf.InputError, match="band takes"):
         model.modes(band="0,500")  # type: ignore[arg-type]
+
+
+def test_a_meshs_arrays_and_a_models_mesh_cannot_be_changed_unnoticed() -> None:
+    # Each access hands out a fresh copy: a write to it changed nothing and said nothing.
+    mesh = vf.read_mesh(BAR)
+    for arr in (mesh.nodes, mesh.node_tags, mesh.cells("hex20"), mesh.cell_tags("hex20"),
+                mesh.group_nodes("xmin")):
+        with pytest.raises(ValueError, match="read-only"):
+            arr[0] = 0
+    model = vf.Model(mesh, fix=["xmin"])
+    with pytest.raises(AttributeError):
+        model.mesh = vf.read_mesh(TET10)  # type: ignore[misc]
+    assert model.mesh is mesh
+    # A changed copy makes a new mesh.
+    pts = mesh.nodes.copy()
+    pts[:, 0] *= 2.0
+    longer = vf.Mesh.from_arrays(pts, {"hex20": mesh.cells("hex20")})
+    assert np.ptp(longer.nodes[:, 0]) == pytest.approx(0.6)
+
+
+def test_messages_name_python_keywords_not_command_line_options() -> None:
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    with pytest.raises(vf.InputError) as e:
+        model.modes(band=(0.0, 1e300))
+    assert "band" in str(e.value) and "--" not in str(e.value), e.value
+    with pytest.raises(vf.InputError) as e:
+        model.modes(4, shift_hz=1e300)
+    assert "shift_hz" in str(e.value) and "--shift" not in str(e.value), e.value

@@ -228,8 +228,16 @@ def _names(d):
     return list(d)
 
 
+def _frozen(a):
+    """``a`` read-only: each call hands out a fresh copy of the mesh's arrays, so a write to
+    one would change nothing and say nothing (:meth:`Mesh.from_arrays` makes a changed mesh)."""
+    a.flags.writeable = False
+    return a
+
+
 class Mesh:
-    """A mesh in metres: nodes, cells per kind, physical groups. Made by :func:`read_mesh`."""
+    """A mesh in metres: nodes, cells per kind, physical groups. Made by :func:`read_mesh`.
+    Its arrays are read-only; :meth:`from_arrays` makes a mesh from changed copies."""
 
     def __init__(self, core):
         self._core = core
@@ -240,13 +248,13 @@ class Mesh:
 
     @property
     def nodes(self):
-        """Node coordinates, m (n × 3 ndarray)."""
-        return self._core.nodes
+        """Node coordinates, m (n × 3 ndarray, read-only)."""
+        return _frozen(self._core.nodes)
 
     @property
     def node_tags(self):
-        """The file's tag of each node."""
-        return self._core.node_tags
+        """The file's tag of each node (read-only)."""
+        return _frozen(self._core.node_tags)
 
     @property
     def groups(self):
@@ -262,15 +270,16 @@ class Mesh:
         return dict(self._core.cell_kinds)
 
     def cells(self, kind):
-        """Connectivity of the cells of one kind (0-based node indices, gmsh order), c × k."""
-        return self._core.cells(kind)
+        """Connectivity of the cells of one kind (0-based node indices, gmsh order), c × k, read-only."""
+        return _frozen(self._core.cells(kind))
 
     def cell_tags(self, kind):
-        return self._core.cell_tags(kind)
+        """The file's tag of each cell of one kind (read-only)."""
+        return _frozen(self._core.cell_tags(kind))
 
     def group_nodes(self, name):
-        """0-based indices of a group's nodes, sorted."""
-        return self._core.group_nodes(name)
+        """0-based indices of a group's nodes, sorted (read-only)."""
+        return _frozen(self._core.group_nodes(name))
 
     def group_cells(self, name):
         """{kind: 0-based indices into :meth:`cells` of that kind} of a group's cells."""
@@ -454,8 +463,6 @@ class Model:
     """A mesh bound to materials, supports, couplings and parts (see the module's table of
     keywords). K and M are assembled once, on first use, and shared by every analysis."""
 
-    mesh: "Mesh"
-
     def __init__(
         self,
         mesh,
@@ -481,7 +488,7 @@ class Model:
             mesh = from_meshio(mesh, length_unit)  # a meshio.Mesh or a PyVista grid
         elif not isinstance(mesh, Mesh):
             raise TypeError(f"Model: expected a Mesh, a meshio.Mesh, a PyVista grid or a path, got {type(mesh).__name__}")
-        self.mesh = mesh
+        self._mesh = mesh
         gm = group_material
         if isinstance(gm, dict):
             gm = [f"{g}={_material(m)}" for g, m in gm.items()]
@@ -688,6 +695,11 @@ class Model:
     def export(self, dir, format="both"):
         """Write K, M (PETSc binary, Matrix Market), dofs.csv and model.json into ``dir``."""
         return self._core.export(_path(dir, "export"), format)
+
+    @property
+    def mesh(self):
+        """The model's mesh (read-only: K and M are built on it; a new mesh needs a new Model)."""
+        return self._mesh
 
     def __repr__(self):
         return f"<vibrofem Model of {self.mesh.source!r}>"

@@ -119,7 +119,8 @@ class Harmonic:
     def _repr_html_(self) -> str: ...
 
 class Model:
-    mesh: Mesh
+    @property
+    def mesh(self) -> Mesh: ...
     def __init__(
         self,
         mesh: Union[Mesh, _PathArg, Any],

@@ -71,7 +71,7 @@ def mesh_to_meshio(mesh: "Mesh") -> "meshio.Mesh":
     kinds = list(mesh.cell_kinds)
     cells = []
     for kind in kinds:
-        conn = np.asarray(mesh.cells(kind), dtype=np.int64)
+        conn = np.array(mesh.cells(kind), dtype=np.int64)
         if kind in GMSH_TO_VTK:
             conn = conn[:, GMSH_TO_VTK[kind]]
         cells.append((KIND_TO_MESHIO[kind], conn))
@@ -88,7 +88,7 @@ def mesh_to_meshio(mesh: "Mesh") -> "meshio.Mesh":
         cell_sets[key] = per_block
         field_data[key] = np.array([tag, dim])
     return meshio.Mesh(
-        np.asarray(mesh.nodes, dtype=float),
+        np.array(mesh.nodes, dtype=float),  # the caller's own (writeable) copy
         cells,
         # No geometrical entities: each group's tag stands for its entity (meshio's gmsh writer
         # wants both).
