@@ -478,30 +478,34 @@ fn short_records_are_named_at_their_line() {
     );
     // MSH 4.1 (the S1 plate): node 1's coordinates (line 48) lose z; tri6 element 2 (line 3786)
     // its last node; tri6 element 1 (line 3785) gets a seventh.
-    let full = std::fs::read_to_string(plate()).unwrap();
-    let edit = |line: usize, text: &str| -> String {
-        let mut l: Vec<&str> = full.lines().collect();
-        l[line - 1] = text;
-        l.join("\n") + "\n"
-    };
-    let p = tmp("node_short41.msh", &edit(48, "0 0"));
-    expect_error(
-        &["modes", p.to_str().unwrap()],
-        1,
+    plate_line_refused(
+        "node_short41.msh",
+        48,
+        "0 0",
         &["line 48", "node 1", "before its z coordinate"],
     );
-    let p = tmp("elem_short41.msh", &edit(3786, "2 1 10 171 19 177"));
-    expect_error(
-        &["modes", p.to_str().unwrap()],
-        1,
+    plate_line_refused(
+        "elem_short41.msh",
+        3786,
+        "2 1 10 171 19 177",
         &["line 3786", "element 2", "after 5 of the 6"],
     );
-    let p = tmp("elem_long41.msh", &edit(3785, "1 2 1 171 9 175 176 7"));
-    expect_error(
-        &["modes", p.to_str().unwrap()],
-        1,
+    plate_line_refused(
+        "elem_long41.msh",
+        3785,
+        "1 2 1 171 9 175 176 7",
         &["line 3785", "element 1", "starting at '7'"],
     );
+}
+
+/// The S1 plate (MSH 4.1) with its line `line` replaced by `text`, written as `name`: refused
+/// (exit 1), the error line holding every needle.
+fn plate_line_refused(name: &str, line: usize, text: &str, needles: &[&str]) {
+    let full = std::fs::read_to_string(plate()).unwrap();
+    let mut l: Vec<&str> = full.lines().collect();
+    l[line - 1] = text;
+    let p = tmp(name, &(l.join("\n") + "\n"));
+    expect_error(&["modes", p.to_str().unwrap()], 1, needles);
 }
 
 /// A block announcing more records than its section's header leaves is named at its own header
@@ -509,22 +513,16 @@ fn short_records_are_named_at_their_line() {
 /// element count was reported at the next block's header as a short element.
 #[test]
 fn oversized_block_counts_are_named_at_their_header() {
-    let full = std::fs::read_to_string(plate()).unwrap();
-    let edit = |line: usize, text: &str| -> String {
-        let mut l: Vec<&str> = full.lines().collect();
-        l[line - 1] = text;
-        l.join("\n") + "\n"
-    };
-    let p = tmp("elem_block_huge41.msh", &edit(3784, "2 1 9 400000000000"));
-    expect_error(
-        &["modes", p.to_str().unwrap()],
-        1,
+    plate_line_refused(
+        "elem_block_huge41.msh",
+        3784,
+        "2 1 9 400000000000",
         &["line 3784", "400000000000 elements in the block", "more than the 1523"],
     );
-    let p = tmp("node_block_big41.msh", &edit(46, "0 1 0 1855"));
-    expect_error(
-        &["modes", p.to_str().unwrap()],
-        1,
+    plate_line_refused(
+        "node_block_big41.msh",
+        46,
+        "0 1 0 1855",
         &["line 46", "1855 nodes in the block", "more than the 1854"],
     );
 }
