@@ -300,6 +300,16 @@ pub fn run_with(sys: &System, mesh: &Mesh, req: &HarmonicRequest, keep: Fields) 
         check_field_memory(sys, req.freqs_hz.len())?;
     }
     let mut notes = Vec::new();
+    if let Damping::Ratio(z) = req.damping
+        && z >= 1.0
+    {
+        // A percentage typed as the ratio (2 for 2 %) damps every mode critically or more.
+        notes.push(format!(
+            "damping ratio ζ = {}: every mode is critically damped or more (no resonance); ζ is a ratio \
+             (0.02 for 2 %)",
+            crate::io::fmt_plain(z)
+        ));
+    }
     let (load, scale) = scaled_load(sys, mesh, &req.forces, &mut notes)?;
     let probe_nodes = probe_nodes(sys, mesh, &probes, &mut notes)?;
     let mut tm = HarmonicTimings::default();

@@ -330,3 +330,28 @@ fn both_methods_far_apart_get_a_note() {
         "{notes:?}"
     );
 }
+
+/// A damping ratio of 2 (a percentage typed as the ratio) damps every mode past critical: the
+/// run says so; 0.02 says nothing of it.
+#[test]
+fn a_damping_ratio_of_one_or_more_gets_a_note() {
+    let notes = |zeta: &str| -> String {
+        let (code, out, err) = run(&[
+            "harmonic",
+            "box:1,0.1,0.1:10,2,2:hex20",
+            "--fix",
+            "xmin",
+            "--force",
+            "xmax=0,0,1",
+            "--freq",
+            "100",
+            "--damping",
+            zeta,
+            "--json",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        json(&out)["notes"].to_string()
+    };
+    assert!(notes("2").contains("critically damped or more"), "{}", notes("2"));
+    assert!(!notes("0.02").contains("critically damped"), "{}", notes("0.02"));
+}
