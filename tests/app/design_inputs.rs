@@ -139,6 +139,8 @@ fn absurd_values_are_refused_on_reading() {
         ("turns0.toml", "[coil]\nturns = 1e-300\n", "coil.turns"),
         ("g.toml", "[coil]\nshear_modulus = 1e300\n", "coil.shear_modulus"),
         ("h.toml", "[leaf]\nthickness = 1e-6\n", "leaf.thickness"),
+        // Given alone it sets the excitation, whose error named 'excitation_hz'.
+        ("mains.toml", "[drive]\nmains_hz = 1e300\n", "drive.mains_hz"),
     ] {
         let m = refused(name, &format!("version = 1\n{text}"), key, 3);
         assert!(m.contains("check the units"), "{m}");

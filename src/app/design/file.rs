@@ -437,9 +437,12 @@ impl Design {
         let text = toml_file::read(path)?;
         let mut d: Design = toml_file::parse(path, &text)?;
         toml_file::check_version(path, &text, "design", d.version as i64)?;
-        // The mains frequency given alone sets the excitation (twice it, under both laws).
+        // The mains frequency given alone sets the excitation (twice it, under both laws); one
+        // out of its range is left to its own check, which names it (not the excitation).
         if let (Some(f), Ok(raw)) = (d.drive.mains_hz, text.parse::<toml::Table>())
             && !raw.contains_key("excitation_hz")
+            && f > 0.0
+            && f <= 0.5 * MAX_EXCITATION_HZ
         {
             d.excitation_hz = 2.0 * f;
         }
