@@ -882,11 +882,21 @@ impl MachineDesign {
                 return Err(bad(key, format!("lists {n} positions but '{other}' is {want}")));
             }
         }
+        // Positions within the plausible part length of the origin (an isolator at 1e300 m
+        // surfaced as a non-finite spring stiffness).
         let finite = |key: &str, v: &[f64]| -> Result<()> {
-            if v.iter().all(|x| x.is_finite()) {
+            if v.iter().all(|x| x.is_finite() && x.abs() <= MAX_LENGTH) {
                 Ok(())
             } else {
-                Err(bad(key, format!("must be finite, got {v:?}")))
+                let shown: Vec<String> = v.iter().map(|&x| fmt_plain(x)).collect();
+                Err(bad(
+                    key,
+                    format!(
+                        "must be finite and within {} m, got [{}]",
+                        fmt_plain(MAX_LENGTH),
+                        shown.join(", ")
+                    ),
+                ))
             }
         };
         for l in &self.leaves {
