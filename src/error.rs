@@ -268,6 +268,26 @@ impl Error {
         }
     }
 
+    /// This error with `prefix: ` before its message (which case of a study it is), keeping its
+    /// class: a numerical failure stays one (exit 2), a write or an engine failure stays as it
+    /// is; any other becomes an input error naming the case.
+    pub fn with_prefix(self, prefix: &str) -> Self {
+        match self {
+            Error::EigenNotConverged(m) => Error::EigenNotConverged(format!("{prefix}: {m}")),
+            Error::Verification(m) => Error::Verification(format!("{prefix}: {m}")),
+            Error::Factorization(m) => Error::Factorization(format!("{prefix}: {m}")),
+            e @ Error::Singular { .. } => {
+                let s = e.to_string();
+                Error::Factorization(format!(
+                    "{prefix}: {}",
+                    s.strip_prefix("factorization failed: ").unwrap_or(&s)
+                ))
+            }
+            e @ (Error::Output { .. } | Error::Engine { .. }) => e,
+            e => Error::InvalidInput(format!("{prefix}: {e}")),
+        }
+    }
+
     /// An allocation of `bytes` for `what` failed: a model too large for the memory this
     /// process may use (an input error, exit 1, like a refusal by the memory estimate).
     pub fn out_of_memory(what: &str, bytes: u64) -> Self {

@@ -160,10 +160,14 @@ fn converge_names_the_size_where_gmsh_fails() {
         "1",
         "--gmsh",
         &g,
+        // No limit in effect (it panicked converting 1e300 s to a duration).
+        "--mesh-timeout",
+        "1e300",
         "-o",
         out.join("o").to_str().unwrap(),
     ]);
     assert_ne!(code, 0, "{stdout}{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
     for needle in [
         "size 0.5 (order 1)",
         "size 0.25 (order 1)",

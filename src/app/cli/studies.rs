@@ -91,7 +91,7 @@ pub fn batch_cmd(a: &BatchArgs) -> Result<i32> {
     for r in &s.rows {
         let key = r
             .first_elastic_hz
-            .map(|f| format!("{f:.4} Hz"))
+            .map(|f| format!("{} Hz", crate::io::fmt_fixed(f, 4)))
             .or(r.stiffness.map(|k| format!("{k:.4e}")))
             .unwrap_or_default();
         outln!(
@@ -205,9 +205,9 @@ pub struct ConvergeArgs {
     /// Folder for converge.md, converge.json and converge.svg (and the meshes of a .geo).
     #[arg(short, long, default_value = "vibrofem-converge")]
     out: PathBuf,
-    /// Refinement levels of a scene (each halves the element size).
-    #[arg(long, default_value_t = 3, value_parser = super::args::at_least_one)]
-    levels: usize,
+    /// Refinement levels of a scene (each halves the element size; default 3).
+    #[arg(long, value_parser = super::args::at_least_one)]
+    levels: Option<usize>,
     /// Element sizes of a .geo (gmsh's Mesh.MeshSizeMax, in the geometry's units), e.g. 20,10,5.
     #[arg(long, value_name = "H1,H2,…")]
     sizes: Option<String>,
@@ -291,8 +291,11 @@ pub fn converge_cmd(a: &ConvergeArgs) -> Result<i32> {
         ));
     }
     let case = if std::path::Path::new(&a.case).is_file() {
-        converge::from_scene(std::path::Path::new(&a.case), a.levels)?
+        converge::from_scene(std::path::Path::new(&a.case), a.levels.unwrap_or(3))?
     } else {
+        if a.levels.is_some() {
+            return Err(levels_not_here(&a.case));
+        }
         converge::builtin(&a.case)?
     };
     check_outputs(
@@ -335,8 +338,23 @@ fn parse_tolerance(text: &str) -> Result<f64> {
     }
 }
 
+/// `--levels` given where the study's levels are fixed (a built-in case, a .geo's --sizes, a set
+/// of meshes): refused rather than ignored.
+fn levels_not_here(case: &str) -> Error {
+    Error::option(
+        "--levels",
+        format!(
+            "--levels applies to a scene with a generator; '{case}' has its own levels (a built-in case's, a .geo's \
+             --sizes, or the meshes matched)"
+        ),
+    )
+}
+
 /// `vibrofem converge PART.geo` and `vibrofem converge 'part_h*.msh'`.
 fn converge_user_cmd(a: &ConvergeArgs) -> Result<i32> {
+    if a.levels.is_some() {
+        return Err(levels_not_here(&a.case));
+    }
     use crate::app::studies::converge::{self, UserLevels, UserStudy};
     use crate::app::studies::geo::Gmsh;
     let path = std::path::Path::new(&a.case);
@@ -348,7 +366,8 @@ fn converge_user_cmd(a: &ConvergeArgs) -> Result<i32> {
     if frequencies == 0 && !has_loads {
         return Err(Error::option(
             "--frequencies",
-            "--frequencies 0 leaves nothing to measure: give a load (--force with a --couple GROUP:guided=AXIS for              a stiffness)",
+            "--frequencies 0 leaves nothing to measure: give a load (--force with a --couple GROUP:guided=AXIS for \
+             a stiffness)",
         ));
     }
     let tolerance = a.tolerance.as_deref().map(parse_tolerance).transpose()?.unwrap_or(0.01);
@@ -389,7 +408,8 @@ fn converge_user_cmd(a: &ConvergeArgs) -> Result<i32> {
             sizes,
             orders,
             gmsh: Gmsh::find(a.gmsh.as_deref())?,
-            timeout: std::time::Duration::from_secs_f64(timeout),
+            // Beyond 1e9 s (31 years) no limit in effect; Duration holds no more than ~1.8e19 s.
+            timeout: std::time::Duration::from_secs_f64(timeout.min(1e9)),
             work: a.out.join("meshes"),
         }
     } else {
@@ -464,6 +484,13 @@ pub fn merge_cmd(a: &MergeArgs) -> Result<i32> {
     let inputs: Vec<(&str, &std::path::Path)> = a.dirs.iter().map(|d| ("batch folder merged", d.as_path())).collect();
     check_outputs(&[], Some(("--out", &a.out)), &inputs)?;
     let s = crate::app::studies::merge::merge(&a.dirs, Some(&a.out))?;
+    let missing = crate::app::studies::merge::missing_shards(&s);
+    if !missing.is_empty() {
+        eprintln!(
+            "note: shard(s) {} of the batch are not among the folders merged: the summary is incomplete",
+            missing.join(", ")
+        );
+    }
     outln!(
         "{} cases ({} failed) merged from {} folders into {}",
         s.rows.len(),

@@ -591,7 +591,7 @@ pub fn run_case(case: &Case, progress: &dyn Fn(&str)) -> Result<Convergence> {
     let mut level_modes = Vec::new();
     for l in &case.levels {
         let (value, dofs, time_s, mem, modes) =
-            run_level_modes(l).map_err(|e| Error::InvalidInput(format!("{} {}: {e}", l.formulation, l.mesh)))?;
+            run_level_modes(l).map_err(|e| e.with_prefix(&format!("{} {}", l.formulation, l.mesh)))?;
         level_modes.push(modes);
         progress(&format!(
             "{} {}: {value:.6e} {} ({dofs} DOFs, {time_s:.2} s)",
@@ -1272,8 +1272,8 @@ fn analyse_levels(
             study.length_unit,
             mesh.n_nodes()
         ));
-        let o = analyse_user_level(study, &mesh, &source)
-            .map_err(|e| Error::InvalidInput(format!("converge: {}: {e}", p.label)))?;
+        let o =
+            analyse_user_level(study, &mesh, &source).map_err(|e| e.with_prefix(&format!("converge: {}", p.label)))?;
         let time_s = t.elapsed().as_secs_f64();
         let mem = if reset {
             crate::analysis::modal::peak_memory()
@@ -1359,7 +1359,12 @@ fn fill_values(study: &UserStudy, rows: &mut [UserRow], outcomes: &[LevelOutcome
 fn fit(rows: &[UserRow], form: &str, idx: &[usize], q: usize, name: &str, unit: &str, size_unit: &str) -> Result<Fit> {
     let levels: Vec<(String, f64)> = idx
         .iter()
-        .map(|&i| (format!("size {} {size_unit}", rows[i].size), rows[i].values[q]))
+        .map(|&i| {
+            (
+                format!("size {} {size_unit}", crate::io::fmt_short(rows[i].size, 6)),
+                rows[i].values[q],
+            )
+        })
         .collect();
     check_monotone(form, name, unit, &levels)?;
     let n = idx.len();
@@ -1498,7 +1503,7 @@ pub fn user_markdown(c: &UserConvergence) -> String {
             s.push_str(&format!(
                 "| {} | {} | {:.4} | {} | {:.6e}{} | {:+.3} % | {} | {:.3} |\n",
                 r.formulation,
-                r.size,
+                crate::io::fmt_short(r.size, 6),
                 r.mean_edge,
                 r.dofs,
                 r.values[q],
@@ -1589,7 +1594,7 @@ pub fn write_user_outputs(c: &UserConvergence, dir: &Path) -> Result<Vec<PathBuf
                 .iter()
                 .map(|r| LevelResult {
                     formulation: r.formulation.clone(),
-                    mesh: format!("{}", r.size),
+                    mesh: crate::io::fmt_short(r.size, 6),
                     value: r.values[q],
                     error: r.errors[q],
                     dofs: r.dofs,
