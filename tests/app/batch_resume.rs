@@ -58,3 +58,37 @@ fn batch_resume_is_keyed_by_content_and_path() {
     let dofs = |csv: &str| csv.lines().nth(1).unwrap().split(',').nth(3).unwrap().to_string();
     assert_ne!(dofs(&first), dofs(&second), "{first}\n{second}");
 }
+
+/// Names that still collide after taking whole file names (`m.msh` beside `m.msh2`, and
+/// `m.msh.msh` whose stem is `m.msh`), and a mesh called `summary`, get their own result files:
+/// one report was overwritten and rerun on every resume, and `summary.json` overwrote a case.
+#[test]
+fn colliding_result_names_and_summary_get_their_own_files() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let d = tmp("collide");
+    std::fs::create_dir_all(d.join("a")).unwrap();
+    let mesh = root.join("meshes/s1_plate_tet4_h30.msh");
+    for name in ["m.msh", "m.msh2", "m.msh.msh", "summary.msh"] {
+        std::fs::copy(&mesh, d.join("a").join(name)).unwrap();
+    }
+    let tpl = std::fs::read_to_string(root.join("scenes/s1_plate_solid.toml")).unwrap();
+    std::fs::write(d.join("t.toml"), &tpl).unwrap();
+    let batch = || {
+        let o = bin()
+            .current_dir(&d)
+            .args(["batch", "a/*", "--scene", "t.toml", "-o", "out"])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+        statuses(&d.join("out"))
+    };
+    assert_eq!(batch(), ["ok", "ok", "ok", "ok"]);
+    assert_eq!(batch(), ["resumed", "resumed", "resumed", "resumed"]);
+    let mut cases: Vec<String> = std::fs::read_dir(d.join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".json") && n != "summary.json")
+        .collect();
+    cases.sort();
+    assert_eq!(cases.len(), 4, "{cases:?}");
+}

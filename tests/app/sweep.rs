@@ -221,6 +221,20 @@ fn merge_of_shards_equals_the_unsharded_batch() {
     assert_eq!(strip_time(&m.rows), strip_time(&all));
     assert_eq!(m.failed, 1);
     assert!(d.join("merged/summary.csv").is_file());
+    assert_eq!(m.shards, [[1, 2], [2, 2]]);
+    assert!(vibrofem::app::studies::merge::missing_shards(&m).is_empty());
+    // One shard alone: merged, the other named as missing.
+    let one = sweep::merge(&[d.join("s1")], None).unwrap();
+    assert_eq!(vibrofem::app::studies::merge::missing_shards(&one), ["2/2"]);
+    // A shard of another template is refused (its rows mixed 7 and 3 frequencies silently).
+    let tpl = std::fs::read_to_string(d.join("template.toml")).unwrap();
+    std::fs::write(d.join("template.toml"), tpl.replace("modes = 7", "modes = 3")).unwrap();
+    run(&d, "s2_other", Some((2, 2)));
+    std::fs::write(d.join("template.toml"), &tpl).unwrap();
+    let e = sweep::merge(&[d.join("s1"), d.join("s2_other")], None)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("different template scenes"), "{e}");
     // The same shard twice is fine; a case with different results is an error naming it.
     assert_eq!(
         sweep::merge(&[d.join("s1"), d.join("s1")], None).unwrap().rows.len(),

@@ -192,6 +192,13 @@ pub struct BatchSummary {
     pub resumed: usize,
     /// Concurrent cases allowed.
     pub jobs: usize,
+    /// Hash of the template scene's text and the program version (`merge` refuses shards of
+    /// different templates); absent in a merged summary of such shards' predecessors.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub template: Option<String>,
+    /// `[I, N]`: shard I of N of the sorted file list (`batch --shard`), or the shards merged.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub shards: Vec<[usize; 2]>,
 }
 
 impl BatchSummary {
@@ -202,8 +209,16 @@ impl BatchSummary {
             resumed: rows.iter().filter(|r| r.status == "resumed").count(),
             rows,
             jobs,
+            template: None,
+            shards: Vec::new(),
         }
     }
+}
+
+/// The template's identity in a summary: a hash of its text and the program version.
+pub fn template_hash(template_text: &[u8]) -> String {
+    let h = fnv1a(0xcbf2_9ce4_8422_2325, env!("CARGO_PKG_VERSION").as_bytes());
+    format!("{:016x}", fnv1a(h, template_text))
 }
 
 /// Memory available to new processes (bytes), from /proc/meminfo.
@@ -313,8 +328,27 @@ fn case_key(template_text: &[u8], file: &Path) -> serde_json::Value {
 }
 
 /// Result-file names of the cases: the file stem, or the whole file name where two meshes of
-/// the batch share a stem (`m.msh` and `m.msh2`), so no case overwrites or resumes another.
+/// the batch share a stem (`m.msh` and `m.msh2`), so no case overwrites or resumes another;
+/// a name still taken (`m.msh.msh`'s stem is `m.msh` too) or the batch's own `summary` gets
+/// `-2`, `-3`, … (in the glob's order, the same on every run).
 fn case_names(files: &[PathBuf]) -> Vec<String> {
+    let mut used = std::collections::HashSet::new();
+    first_names(files)
+        .into_iter()
+        .map(|n| {
+            let mut name = n.clone();
+            let mut k = 2;
+            while name == "summary" || !used.insert(name.clone()) {
+                name = format!("{n}-{k}");
+                k += 1;
+            }
+            name
+        })
+        .collect()
+}
+
+/// The names [`case_names`] starts from: stems, file names where stems repeat.
+fn first_names(files: &[PathBuf]) -> Vec<String> {
     let stem = |f: &PathBuf| {
         f.file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -468,7 +502,9 @@ pub fn run_batch(opts: &BatchOptions) -> Result<BatchSummary> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let summary = BatchSummary::new(rows, jobs);
+    let mut summary = BatchSummary::new(rows, jobs);
+    summary.template = Some(template_hash(&template_text));
+    summary.shards = opts.shard.map(|(i, n)| vec![[i, n]]).unwrap_or_default();
     write_summary(&summary, &opts.out)?;
     Ok(summary)
 }

@@ -35,6 +35,8 @@ pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
     }
     let mut rows: Vec<(BatchRow, PathBuf)> = Vec::new();
     let mut jobs = 1;
+    let mut template: Option<(String, &PathBuf)> = None;
+    let mut shards: Vec<[usize; 2]> = Vec::new();
     for d in dirs {
         let p = d.join("summary.json");
         let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
@@ -46,6 +48,29 @@ pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
             .ok_or_else(|| bad("no 'rows' (not a batch summary)".into()))?;
         let r: Vec<BatchRow> = serde_json::from_value(rows_json).map_err(|e| bad(e.to_string()))?;
         jobs = jobs.max(v.get("jobs").and_then(|j| j.as_u64()).unwrap_or(1) as usize);
+        // Shards of one batch come from one template (summaries from before this field have
+        // none and are taken as they are).
+        if let Some(t) = v.get("template").and_then(|t| t.as_str()) {
+            match &template {
+                Some((first, fd)) if first != t => {
+                    return Err(Error::param(
+                        "dirs",
+                        format!(
+                            "merge: {} and {} were run with different template scenes (or program versions): \
+                             their rows are not one study",
+                            fd.display(),
+                            d.display()
+                        ),
+                    ));
+                }
+                Some(_) => {}
+                None => template = Some((t.to_string(), d)),
+            }
+        }
+        if let Some(list) = v.get("shards") {
+            let s: Vec<[usize; 2]> = serde_json::from_value(list.clone()).map_err(|e| bad(e.to_string()))?;
+            shards.extend(s);
+        }
         rows.extend(r.into_iter().map(|r| (r, d.clone())));
     }
     rows.sort_by(|a, b| a.0.file.cmp(&b.0.file));
@@ -69,10 +94,31 @@ pub fn merge(dirs: &[PathBuf], out: Option<&Path>) -> Result<BatchSummary> {
         }
         merged.push((r, d));
     }
-    let summary = BatchSummary::new(merged.into_iter().map(|(r, _)| r).collect(), jobs);
+    let mut summary = BatchSummary::new(merged.into_iter().map(|(r, _)| r).collect(), jobs);
+    summary.template = template.map(|t| t.0);
+    shards.sort_unstable();
+    shards.dedup();
+    summary.shards = shards;
     if let Some(out) = out {
         crate::io::create_dir(out)?;
         write_summary(&summary, out)?;
     }
     Ok(summary)
+}
+
+/// The shards of `summary.shards` missing from a complete set, as `I/N` (empty: complete, or
+/// no shard information). Shards of different counts N are listed as they are.
+pub fn missing_shards(summary: &BatchSummary) -> Vec<String> {
+    let mut ns: Vec<usize> = summary.shards.iter().map(|s| s[1]).collect();
+    ns.sort_unstable();
+    ns.dedup();
+    let mut out = Vec::new();
+    for n in ns {
+        for i in 1..=n {
+            if !summary.shards.contains(&[i, n]) {
+                out.push(format!("{i}/{n}"));
+            }
+        }
+    }
+    out
 }
