@@ -110,6 +110,34 @@ fn export_refuses_a_bad_format_and_an_unknown_group() {
     let (code, _, err) = run(bin().args(["export", PLATE, "--fix", "base", "-o"]).arg(&dir));
     assert_eq!(code, 1);
     assert!(err.contains("unknown group 'base'"), "{err}");
+    // The SLEPc job's values are checked whatever the format, and with Matrix Market alone
+    // (no job written) a band or shift is refused rather than passed over.
+    let (code, _, err) = run(bin()
+        .args(["export", PLATE, "--format", "mtx", "--shift", "nan", "-o"])
+        .arg(&dir));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--shift"), "{err}");
+    let (code, _, err) = run(bin()
+        .args(["export", PLATE, "--format", "mtx", "--band", "1", "500", "-o"])
+        .arg(&dir));
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("--format mtx writes none"), "{err}");
+}
+
+/// model.json lists every file the export wrote, the SLEPc job's too.
+#[test]
+fn the_summary_lists_the_slepc_job() {
+    let dir = tmp("job");
+    let (code, _, err) = run(bin().args(["export", PLATE, "--format", "petsc", "-o"]).arg(&dir));
+    assert_eq!(code, 0, "{err}");
+    let json = std::fs::read_to_string(dir.join("model.json")).unwrap();
+    for f in ["K.petsc", "M.petsc", "dofs.csv", "params.json", "slepc_modes.py"] {
+        assert!(
+            json.contains(&format!("\"{f}\"")) && dir.join(f).is_file(),
+            "{f}: {json}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

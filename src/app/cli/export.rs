@@ -35,22 +35,34 @@ pub struct ExportArgs {
 pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
     use crate::app::engines::{export, slepc};
     let formats = export::Formats::parse(&a.format)?;
-    // The SLEPc job beside the PETSc matrices, its numbers checked before any work.
-    let job = (formats != export::Formats::MatrixMarket)
-        .then(|| -> Result<_> {
-            let target = match &a.band {
-                Some(b) => ModalTarget::Band(b[0], b[1]),
-                None => ModalTarget::Modes(a.modes),
-            };
-            let params = crate::analysis::modal::ModalParams {
-                target,
-                shift_hz: a.shift,
-                ..Default::default()
-            };
-            crate::analysis::modal::check_params(&params)?;
-            Ok(params)
-        })
-        .transpose()?;
+    // The SLEPc job beside the PETSc matrices, its numbers checked before any work (whatever
+    // the format: a bad value is not passed over silently).
+    let target = match &a.band {
+        Some(b) => ModalTarget::Band(b[0], b[1]),
+        None => ModalTarget::Modes(a.modes),
+    };
+    let params = crate::analysis::modal::ModalParams {
+        target,
+        shift_hz: a.shift,
+        ..Default::default()
+    };
+    crate::analysis::modal::check_params(&params)?;
+    if formats == export::Formats::MatrixMarket {
+        if let Some(o) = [("--band", a.band.is_some()), ("--shift", a.shift.is_some())]
+            .iter()
+            .find(|o| o.1)
+        {
+            return Err(Error::option(
+                o.0,
+                format!(
+                    "{} sets the SLEPc job written beside the PETSc matrices; --format mtx writes none \
+                     (give --format petsc or both)",
+                    o.0
+                ),
+            ));
+        }
+    }
+    let job = (formats != export::Formats::MatrixMarket).then_some(params);
     let spec = a.model.spec()?;
     super::check_outputs(
         &[],
@@ -60,12 +72,21 @@ pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let model = crate::model::Model::build(&mesh, &spec, &a.mesh)?;
     let sys = crate::system::System::assemble_only(model, &a.mesh)?;
-    let (summary, mut files) = export::export(&sys, &a.out, formats)?;
+    let (mut summary, mut files) = export::export(&sys, &a.out, formats)?;
     if let Some(params) = &job {
-        // The SLEPc job beside the PETSc matrices: `mpirun -n N python3 DIR/slepc_modes.py DIR`.
+        // The SLEPc job beside the PETSc matrices: `mpirun -n N python3 DIR/slepc_modes.py DIR`,
+        // listed in model.json with the rest.
         slepc::write_job(&sys, params, &a.out, false)?;
         files.push(a.out.join("params.json"));
         files.push(a.out.join("slepc_modes.py"));
+        summary
+            .files
+            .push(("SLEPc job parameters".into(), "params.json".into()));
+        summary.files.push((
+            "SLEPc job (mpirun -n N python3 slepc_modes.py DIR)".into(),
+            "slepc_modes.py".into(),
+        ));
+        export::write_summary(&a.out, &summary)?;
     }
     if a.json {
         outln!(

@@ -126,9 +126,14 @@ pub fn export(sys: &System, dir: &Path, formats: Formats) -> Result<(ExportSumma
         ],
         notes: model.notes.clone(),
     };
-    let p = dir.join("model.json");
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| Error::output(p.display(), e))?;
-    std::fs::write(&p, json).map_err(|e| Error::io(&p, e))?;
-    written.push(p);
+    written.push(write_summary(dir, &summary)?);
     Ok((summary, written))
+}
+
+/// Write `summary` as `dir/model.json`; returns its path.
+pub fn write_summary(dir: &Path, summary: &ExportSummary) -> Result<PathBuf> {
+    let p = dir.join("model.json");
+    let json = serde_json::to_string_pretty(summary).map_err(|e| Error::output(p.display(), e))?;
+    std::fs::write(&p, json).map_err(|e| Error::io(&p, e))?;
+    Ok(p)
 }
