@@ -48,7 +48,7 @@ pub struct ModelOptions {
     /// `custom:A,Iy,Iz,J,ky,kz,Cw` (m, m², m⁴, m⁶), with `+warping` for a 7th (warping) DOF.
     /// ORIENT: the local y axis `x,y,z`, or `radial:cx,cy,cz,ax,ay,az` (from an axis).
     pub beam: Vec<String>,
-    /// Length unit of the mesh coordinates: m (default) or mm.
+    /// Length unit of the mesh coordinates: m (default), cm or mm.
     pub length_unit: String,
 }
 

@@ -9,7 +9,7 @@ pub mod matrix;
 pub mod msh_out;
 pub mod vtk;
 
-pub use crate::util::fmt::{fmt_bytes, fmt_fixed, fmt_plain, fmt_sig};
+pub use crate::util::fmt::{fmt_bytes, fmt_fixed, fmt_plain, fmt_short, fmt_sig};
 
 /// A float in the shortest form that reads back exactly: plain decimals for ordinary
 /// magnitudes, exponent form for very small or large ones (Rust's plain form of `1e-300`

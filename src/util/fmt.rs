@@ -26,6 +26,32 @@ pub fn fmt_plain(v: f64) -> String {
     }
 }
 
+/// `x` to `sig` significant digits, written as short as it goes: trailing zeros dropped
+/// (`90`, `0.0233333` for 0.023333333333333667, `1.5e-7`); for a figure typed by a user or
+/// measured, where the full binary expansion is noise.
+pub fn fmt_short(x: f64, sig: usize) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let e = x.abs().log10().floor() as i32;
+    if !(-4..9).contains(&e) {
+        let m = format!("{x:.prec$e}", prec = sig.saturating_sub(1));
+        return match m.split_once('e') {
+            Some((mant, exp)) if mant.contains('.') => {
+                format!("{}e{exp}", mant.trim_end_matches('0').trim_end_matches('.'))
+            }
+            _ => m,
+        };
+    }
+    let decimals = (sig as i32 - 1 - e).max(0) as usize;
+    let t = format!("{x:.decimals$}");
+    if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    }
+}
+
 /// `x` with `decimals` decimals, the fixed layout of a report's columns (`27.000000`,
 /// `184.25`), while that shows at least three significant digits and stays shorter than a
 /// dozen integer digits; outside that, in exponent form with as many decimals (`7.850000e-6`,
@@ -76,5 +102,9 @@ mod tests {
         assert_eq!(fmt_plain(1e20), "1e20");
         assert_eq!(fmt_plain(7850.0), "7850");
         assert_eq!(fmt_plain(-2.5e-7), "-2.5e-7");
+        assert_eq!(fmt_short(90.0, 6), "90");
+        assert_eq!(fmt_short(0.023333333333333667, 6), "0.0233333");
+        assert_eq!(fmt_short(1.5e-7, 6), "1.5e-7");
+        assert_eq!(fmt_short(-12.5, 6), "-12.5");
     }
 }

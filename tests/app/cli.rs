@@ -527,6 +527,35 @@ fn oversized_block_counts_are_named_at_their_header() {
     );
 }
 
+/// A study's numerical failure keeps its exit code (2; every level's error was made an input
+/// error, 1); `--levels` where the study has its own levels is refused (it was ignored).
+#[test]
+fn converge_keeps_exit_codes_and_refuses_what_does_not_apply() {
+    let scene = tmp(
+        "free_static.toml",
+        "[scene]\nversion = 1\n[mesh]\ngenerator = \"box:0.3,0.3,0.02:2,2,1:hex20\"\n[[part]]\ngroup = \"volume\"\n\
+         formulation = \"solid\"\n[[load]]\ngroup = \"xmax\"\nforce = [0.0, 0.0, 1.0]\n",
+    );
+    let out = scene.with_file_name("free_static_out");
+    let (code, _, err) = run(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--levels",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("under-constrained"), "{err}");
+    expect_error(
+        &["converge", "tiny", "--levels", "5"],
+        1,
+        &["--levels", "'tiny' has its own levels"],
+    );
+    let geo = format!("{ROOT}/meshes/s2_plate.geo");
+    expect_error(&["converge", &geo, "--sizes", "90", "--levels", "2"], 1, &["--levels"]);
+}
+
 /// A key given twice in a scene (or any TOML input) is named, not only its line.
 #[test]
 fn a_duplicate_key_is_named() {

@@ -61,7 +61,7 @@ pub fn static_cmd(a: &StaticArgs) -> Result<i32> {
 pub struct MeshInfoArgs {
     /// gmsh mesh file, or a generated box `box:LX,LY,LZ:NX,NY,NZ:KIND`.
     mesh: String,
-    /// Length unit of the mesh coordinates: m (default) or mm.
+    /// Length unit of the mesh coordinates: m (default), cm or mm.
     #[arg(long = "length-unit", default_value = "m")]
     length_unit: String,
     /// Material for the mass: `steel` or `E,NU,RHO`.
