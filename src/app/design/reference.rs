@@ -76,8 +76,7 @@ const fn row_of(
 /// The start-up rows' source: the paper's chain (its force law, the leaves tuned on the
 /// two-mass model, no magnet stiffness) on this design's masses; for a user's design that is not
 /// the model of record, whose start-up the report's start-up section gives.
-fn transient_note(d: &Design, v: &ChainValues) -> String {
-    let _ = d;
+fn transient_note(_: &Design, v: &ChainValues) -> String {
     if v.builtin {
         "Fig. 22".into()
     } else {
