@@ -288,6 +288,18 @@ fn tempfile_dir(tag: &str) -> std::path::PathBuf {
     d
 }
 
+/// A 1 m steel cantilever (hex20) loaded at its tip, at 100 Hz.
+const CANTILEVER_AT_100: [&str; 8] = [
+    "harmonic",
+    "box:1,0.1,0.1:10,2,2:hex20",
+    "--fix",
+    "xmin",
+    "--force",
+    "xmax=0,0,1",
+    "--freq",
+    "100",
+];
+
 /// Two modes of a 1 m cantilever under mass-proportional damping of α = 1e5 1/s (every mode far
 /// overdamped) at 100 Hz: the superposition misses most of the response (350 % from the direct
 /// solve, which is exact for the model). The modal response is the one tabulated, so a note must
@@ -295,20 +307,10 @@ fn tempfile_dir(tag: &str) -> std::path::PathBuf {
 #[test]
 fn both_methods_far_apart_get_a_note() {
     let (code, out, err) = run(&[
-        "harmonic",
-        "box:1,0.1,0.1:10,2,2:hex20",
-        "--fix",
-        "xmin",
-        "--force",
-        "xmax=0,0,1",
-        "--freq",
-        "100",
-        "--rayleigh",
-        "1e5,0",
-        "--method",
-        "both",
-        "--json",
-    ]);
+        &CANTILEVER_AT_100[..],
+        &["--rayleigh", "1e5,0", "--method", "both", "--json"],
+    ]
+    .concat());
     assert_eq!(code, 0, "{err}");
     let r = json(&out);
     let d = r["points"][0]["modal_vs_direct"].as_f64().unwrap();
@@ -336,19 +338,7 @@ fn both_methods_far_apart_get_a_note() {
 #[test]
 fn a_damping_ratio_of_one_or_more_gets_a_note() {
     let notes = |zeta: &str| -> String {
-        let (code, out, err) = run(&[
-            "harmonic",
-            "box:1,0.1,0.1:10,2,2:hex20",
-            "--fix",
-            "xmin",
-            "--force",
-            "xmax=0,0,1",
-            "--freq",
-            "100",
-            "--damping",
-            zeta,
-            "--json",
-        ]);
+        let (code, out, err) = run(&[&CANTILEVER_AT_100[..], &["--damping", zeta, "--json"]].concat());
         assert_eq!(code, 0, "{err}");
         json(&out)["notes"].to_string()
     };
