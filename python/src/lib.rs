@@ -921,7 +921,7 @@ impl PyModel {
     fn export(&self, py: Python<'_>, dir: PathBuf, format: &str) -> PyResult<Vec<String>> {
         let formats = engines::export::Formats::parse(format).map_err(err)?;
         let system = self.system_task(Engine::Native);
-        let (_, files) = interruptible(py, move || engines::export::export(&*system()?, &dir, formats))?;
+        let (_, files) = interruptible(py, move || engines::export::export(&*system()?, &dir, formats, None))?;
         Ok(files.iter().map(|p| p.display().to_string()).collect())
     }
 }

@@ -400,18 +400,18 @@ pub(crate) fn rigid_candidates(model: &crate::model::Model) -> eigen::NullCandid
     )))
 }
 
+/// Whether `f` Hz can be a shift or a band end: finite, with its eigenvalue (2πf)² finite.
+pub fn usable_hz(f: f64) -> bool {
+    f.is_finite() && lambda_of_hz(f).is_finite()
+}
+
 /// Check the numbers of a modal request before any work: a shift and a band whose eigenvalues
-/// (2πf)² are finite, a band from low to high, at least one mode. Errors name the option.
+/// (2πf)² are finite ([`usable_hz`]), a band from low to high, at least one mode. Errors name
+/// the option.
 pub fn check_params(params: &ModalParams) -> Result<()> {
-    let usable = |f: f64| f.is_finite() && lambda_of_hz(f).is_finite();
+    let usable = usable_hz;
     // As typed for ordinary values; 1e300 as 1e300, not as 301 digits.
-    let show = |f: f64| {
-        if f.abs() >= 1e9 {
-            format!("{f:e}")
-        } else {
-            format!("{f}")
-        }
-    };
+    let show = crate::io::fmt_plain;
     if let Some(f) = params.shift_hz {
         if !usable(f) {
             return Err(Error::option(

@@ -153,29 +153,26 @@ fn most_of_a_small_models_load_factors_are_solved_densely() {
 /// is refused now, naming its group; 1e30 N/m, the bound, is solved.
 #[test]
 fn an_absurd_spring_is_refused_by_name() {
-    let args = |k: &str| -> Vec<String> {
-        [
+    let modes = |k: &str| {
+        let spring = format!("xmax={k},{k},{k},{k},{k},{k}");
+        run(&[
             "modes",
             "box:0.3,0.05,0.02:6,2,2:hex20",
             "--couple",
             "xmax",
             "--spring",
-            &format!("xmax={k},{k},{k},{k},{k},{k}"),
+            &spring,
             "--modes",
             "3",
-        ]
-        .map(String::from)
-        .to_vec()
+        ])
     };
-    let a = args("1e300");
-    let (code, _, err) = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, _, err) = modes("1e300");
     assert_eq!(code, 1, "{err}");
     assert!(
         err.contains("'xmax'") && err.contains("stiffness 1e300") && err.contains("at most 1e30"),
         "{err}"
     );
-    let a = args("1e30");
-    let (code, _, err) = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let (code, _, err) = modes("1e30");
     assert!(code == 0 || code == 2, "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }

@@ -121,53 +121,47 @@ def _group_values(d, opt):
     return out
 
 
-def _fixes(d):
+def _group_entries(d, entry):
+    """``fix=``/``couple=`` as the command line's entries: a string or a list of them as they
+    are, a dict {group: value} with ``True``/``None``/``""`` the bare group, ``False`` left out
+    and any other value written by ``entry(group, value)``."""
     if d is None:
         return []
     if isinstance(d, str):
         return [d]
     if isinstance(d, dict):
-        out = []
-        for g, c in d.items():
-            if c is False:
-                continue  # {group: False}: not fixed
-            if c is None or c is True or (isinstance(c, str) and c == ""):
-                out.append(g)
-            elif isinstance(c, str):
-                out.append(f"{g}:{c}")
-            elif _np.ndim(c) == 1 and all(isinstance(x, str) for x in c):
-                out.append(f"{g}:{','.join(c)}")
-            else:
-                raise InputError(f"fix: group '{g}': give True, components such as 'ux,uz' or ['ux', 'uz'], got {c!r}")
-        return out
+        return [g if v is None or v is True or (isinstance(v, str) and v == "") else entry(g, v)
+                for g, v in d.items() if v is not False]
     return list(d)
+
+
+def _fix_entry(g, c):
+    if isinstance(c, str):
+        return f"{g}:{c}"
+    if _np.ndim(c) == 1 and all(isinstance(x, str) for x in c):
+        return f"{g}:{','.join(c)}"
+    raise InputError(f"fix: group '{g}': give True, components such as 'ux,uz' or ['ux', 'uz'], got {c!r}")
+
+
+def _couple_entry(g, v):
+    if isinstance(v, (bool, int, float)) and not isinstance(v, str):
+        raise InputError(f"couple: group '{g}': give True, a guided axis 'x'/'y'/'z', '@X,Y,Z' or a point "
+                         f"(x, y, z), got {v!r}")
+    if v in ("x", "y", "z"):
+        return f"{g}:guided={v}"
+    if isinstance(v, str) and v.startswith(("@", ":")):
+        return f"{g}{v}"
+    if isinstance(v, str):
+        return f"{g}:{v}"
+    return f"{g}@{_nums(v)}"  # a point: the reference node's position
+
+
+def _fixes(d):
+    return _group_entries(d, _fix_entry)
 
 
 def _couplings(d):
-    if d is None:
-        return []
-    if isinstance(d, str):
-        return [d]
-    if isinstance(d, dict):
-        out = []
-        for g, v in d.items():
-            if v is False:
-                continue  # {group: False}: not coupled
-            if v is None or v is True or (isinstance(v, str) and v == ""):
-                out.append(g)
-            elif isinstance(v, (bool, int, float)) and not isinstance(v, str):
-                raise InputError(f"couple: group '{g}': give True, a guided axis 'x'/'y'/'z', '@X,Y,Z' or a point "
-                                 f"(x, y, z), got {v!r}")
-            elif v in ("x", "y", "z"):
-                out.append(f"{g}:guided={v}")
-            elif isinstance(v, str) and v.startswith(("@", ":")):
-                out.append(f"{g}{v}")
-            elif isinstance(v, str):
-                out.append(f"{g}:{v}")
-            else:  # a point: the reference node's position
-                out.append(f"{g}@{_nums(v)}")
-        return out
-    return list(d)
+    return _group_entries(d, _couple_entry)
 
 
 def _path(p, what):

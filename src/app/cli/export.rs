@@ -33,7 +33,7 @@ pub struct ExportArgs {
 }
 
 pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
-    use crate::app::engines::{export, slepc};
+    use crate::app::engines::export;
     let formats = export::Formats::parse(&a.format)?;
     // The SLEPc job beside the PETSc matrices, its numbers checked before any work (whatever
     // the format: a bad value is not passed over silently).
@@ -72,22 +72,7 @@ pub fn export_cmd(a: &ExportArgs) -> Result<i32> {
     let mesh = crate::input::source::load(&a.mesh, length_scale(&a.model.length_unit)?)?;
     let model = crate::model::Model::build(&mesh, &spec, &a.mesh)?;
     let sys = crate::system::System::assemble_only(model, &a.mesh)?;
-    let (mut summary, mut files) = export::export(&sys, &a.out, formats)?;
-    if let Some(params) = &job {
-        // The SLEPc job beside the PETSc matrices: `mpirun -n N python3 DIR/slepc_modes.py DIR`,
-        // listed in model.json with the rest.
-        slepc::write_job(&sys, params, &a.out, false)?;
-        files.push(a.out.join("params.json"));
-        files.push(a.out.join("slepc_modes.py"));
-        summary
-            .files
-            .push(("SLEPc job parameters".into(), "params.json".into()));
-        summary.files.push((
-            "SLEPc job (mpirun -n N python3 slepc_modes.py DIR)".into(),
-            "slepc_modes.py".into(),
-        ));
-        export::write_summary(&a.out, &summary)?;
-    }
+    let (summary, files) = export::export(&sys, &a.out, formats, job.as_ref())?;
     if a.json {
         outln!(
             "{}",

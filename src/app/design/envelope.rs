@@ -922,11 +922,13 @@ pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
 /// a check in percent (`… [%]`) the difference in percentage points (the fraction times the
 /// limit), so that one check reads alike in both tables.
 fn worst_margin_cell(c: &CheckEnvelope) -> Cell {
-    if c.name.ends_with("[%]") {
-        Cell::text(format!("{:+.1} points", c.worst_margin * c.limit.abs()))
+    let points = super::report::name_and_unit(&c.name).1 == "%";
+    let m = if points {
+        c.worst_margin * c.limit.abs()
     } else {
-        Cell::text(format!("{:+.1} %", 100.0 * c.worst_margin))
-    }
+        c.worst_margin
+    };
+    Cell::text(crate::app::report::render::margin_text(m, points))
 }
 
 /// The bands and the sensitivity of every check to each.

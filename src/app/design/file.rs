@@ -336,6 +336,9 @@ pub const MAX_TRANSIENT_PERIODS: f64 = 3000.0;
 /// which holds well below their own first mode (about 1.7 kHz for the paper's leaves).
 pub const MAX_EXCITATION_HZ: f64 = 1000.0;
 
+/// The highest mains frequency (Hz): the force repeats at twice it.
+const MAX_MAINS_HZ: f64 = 0.5 * MAX_EXCITATION_HZ;
+
 /// Plausibility bounds of a design's values, far outside any machine of this family but inside
 /// what the chain computes with: beyond them a unit slip (1e300, 1e-300) surfaced late, as a
 /// support "not free", an "undamped resonance" or a non-finite stiffness, with no key named.
@@ -442,7 +445,7 @@ impl Design {
         if let (Some(f), Ok(raw)) = (d.drive.mains_hz, text.parse::<toml::Table>())
             && !raw.contains_key("excitation_hz")
             && f > 0.0
-            && f <= 0.5 * MAX_EXCITATION_HZ
+            && f <= MAX_MAINS_HZ
         {
             d.excitation_hz = 2.0 * f;
         }
@@ -507,7 +510,7 @@ impl Design {
             (
                 "drive.mains_hz",
                 dr.mains_hz.unwrap_or(0.5 * self.excitation_hz),
-                Between(0.0, 0.5 * MAX_EXCITATION_HZ, false),
+                Between(0.0, MAX_MAINS_HZ, false),
             ),
             ("drive.gap", dr.gap, Positive),
             ("drive.gap_margin", dr.gap_margin, NonNegative),

@@ -47,12 +47,17 @@ pub fn report(r: &DesignReport) -> Report {
     rep
 }
 
+/// A check's name without its unit, and the unit given in it as `[unit]` (empty: none).
+pub(super) fn name_and_unit(name: &str) -> (&str, &str) {
+    match name.rsplit_once(" [") {
+        Some((n, u)) if u.ends_with(']') => (n, u.trim_end_matches(']')),
+        _ => (name, ""),
+    }
+}
+
 /// A check as a report row: the unit, given in the name as `[unit]`, goes to its column.
 fn check_row(c: &Check) -> CheckRow {
-    let (name, unit) = match c.name.rsplit_once(" [") {
-        Some((n, u)) if u.ends_with(']') => (n, u.trim_end_matches(']')),
-        _ => (c.name.as_str(), ""),
-    };
+    let (name, unit) = name_and_unit(&c.name);
     let row = if c.upper {
         CheckRow::upper(&c.id, name, unit, c.value, c.limit)
     } else {

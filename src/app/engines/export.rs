@@ -66,9 +66,15 @@ pub struct ExportSummary {
     pub notes: Vec<String>,
 }
 
-/// Write K and M (in `formats`), `dofs.csv` and `model.json` into `dir` (created). Returns
-/// the summary (also written as `model.json`) and the paths written.
-pub fn export(sys: &System, dir: &Path, formats: Formats) -> Result<(ExportSummary, Vec<PathBuf>)> {
+/// Write K and M (in `formats`), `dofs.csv`, the SLEPc job for `job` if given (`params.json`,
+/// `slepc_modes.py`: `mpirun -n N python3 DIR/slepc_modes.py DIR`) and `model.json`, which lists
+/// them all, into `dir` (created). Returns the summary (as in `model.json`) and the paths written.
+pub fn export(
+    sys: &System,
+    dir: &Path,
+    formats: Formats,
+    job: Option<&crate::analysis::modal::ModalParams>,
+) -> Result<(ExportSummary, Vec<PathBuf>)> {
     crate::io::create_dir(dir)?;
     let model = sys.model();
     let k = sys.k();
@@ -100,6 +106,15 @@ pub fn export(sys: &System, dir: &Path, formats: Formats) -> Result<(ExportSumma
     matrix::write_dof_map(&p, &model.dofs, &model.nodes, &model.node_tags)?;
     files.push(("DOF map".into(), "dofs.csv".into()));
     written.push(p);
+    if let Some(params) = job {
+        super::slepc::write_job(sys, params, dir, false)?;
+        files.push(("SLEPc job parameters".into(), "params.json".into()));
+        files.push((
+            "SLEPc job (mpirun -n N python3 slepc_modes.py DIR)".into(),
+            "slepc_modes.py".into(),
+        ));
+        written.extend([dir.join("params.json"), dir.join("slepc_modes.py")]);
+    }
     let (volume, solid_mass) = model.volume_and_mass()?;
     let summary = ExportSummary {
         version: 1,
@@ -126,14 +141,9 @@ pub fn export(sys: &System, dir: &Path, formats: Formats) -> Result<(ExportSumma
         ],
         notes: model.notes.clone(),
     };
-    written.push(write_summary(dir, &summary)?);
-    Ok((summary, written))
-}
-
-/// Write `summary` as `dir/model.json`; returns its path.
-pub fn write_summary(dir: &Path, summary: &ExportSummary) -> Result<PathBuf> {
     let p = dir.join("model.json");
-    let json = serde_json::to_string_pretty(summary).map_err(|e| Error::output(p.display(), e))?;
+    let json = serde_json::to_string_pretty(&summary).map_err(|e| Error::output(p.display(), e))?;
     std::fs::write(&p, json).map_err(|e| Error::io(&p, e))?;
-    Ok(p)
+    written.push(p);
+    Ok((summary, written))
 }

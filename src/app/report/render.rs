@@ -34,12 +34,18 @@ fn heading(s: &Section) -> String {
     format!("{}: {verdict}", s.title)
 }
 
-/// A check's margin as printed: `+12.3 %` of the limit, or `+1.2 points` for percentages.
+/// A check's margin as printed ([`margin_text`]).
 fn margin(c: &CheckRow) -> String {
-    if c.points {
-        format!("{:+.1} points", c.margin)
+    margin_text(c.margin, c.points)
+}
+
+/// A margin as every table prints it: a fraction of the limit as `+12.3 %`, or a difference in
+/// percentage points (`points`) as `+1.2 points`.
+pub fn margin_text(margin: f64, points: bool) -> String {
+    if points {
+        format!("{margin:+.1} points")
     } else {
-        format!("{:+.1} %", 100.0 * c.margin)
+        format!("{:+.1} %", 100.0 * margin)
     }
 }
 

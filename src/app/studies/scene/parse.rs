@@ -967,8 +967,12 @@ impl Reader<'_> {
             ctx.finite(m.span(), "'shift_hz'", &[s])?;
         }
         // As `modes --band/--shift` check them, but named by this file's keys.
-        let usable = |f: f64| crate::post::modal::lambda_of_hz(f).is_finite();
-        let far = r.band.iter().flatten().chain(&r.shift_hz).find(|&&f| !usable(f));
+        let far = r
+            .band
+            .iter()
+            .flatten()
+            .chain(&r.shift_hz)
+            .find(|&&f| !crate::analysis::modal::usable_hz(f));
         if let Some(f) = far {
             let key = if r.shift_hz == Some(*f) { "shift_hz" } else { "band" };
             return ctx.err(
