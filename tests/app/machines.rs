@@ -213,6 +213,60 @@ fn baranov_against_the_adaptive_energy_form() {
     assert!(rel(a2.omega_mean, am.omega_mean) < 1e-8);
 }
 
+/// A drive that stalls in its steady-state run: the energy form's stall time was the time
+/// integrated past the stall with ω held at a floor (79.6 s for a stop after half a second).
+/// The reference is an independent integration in time, not in φ: RK4 on
+/// I(φ) ω̇ = M_d(ω) − M_r(φ) − ½ ω² I'(φ), φ̇ = ω (the equation of motion, Kozhevnikov's form of
+/// the reduced machine), with a step of 1e-5 s until ω crosses 0 (linear interpolation there).
+/// The energy form extrapolates from its last 0.5° sample by a uniform deceleration: within 1 %
+/// of the time and 0.2° of the angle; Baranov's first-order step lands within 5 % and 1.5°.
+#[test]
+fn a_stall_is_placed_where_the_drive_stops() {
+    let mut d = CrankDrive::paper_two_carts();
+    d.mechanism.cart_resistance = 12_000.0;
+    let (mut phi, mut w, mut t, h) = (0.0f64, 10.5f64, 0.0f64, 1e-5);
+    let f = |phi: f64, w: f64| {
+        let (i, di) = d.reduced_inertia(phi);
+        (
+            w,
+            (d.driving_moment(w) - d.mechanism.resisting_moment(phi) - 0.5 * w * w * di) / i,
+        )
+    };
+    loop {
+        let k1 = f(phi, w);
+        let k2 = f(phi + 0.5 * h * k1.0, w + 0.5 * h * k1.1);
+        let k3 = f(phi + 0.5 * h * k2.0, w + 0.5 * h * k2.1);
+        let k4 = f(phi + h * k3.0, w + h * k3.1);
+        let phi_n = phi + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
+        let w_n = w + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+        if w_n <= 0.0 {
+            let s = w / (w - w_n);
+            t += s * h;
+            phi += s * (phi_n - phi);
+            break;
+        }
+        (phi, w, t) = (phi_n, w_n, t + h);
+        assert!(t < 10.0, "the reference drive should stall");
+    }
+    let a = crank::energy_form(&d, &steady_opts(0.5))
+        .unwrap()
+        .stall
+        .expect("a stall");
+    assert!(rel(a.t, t) < 1e-2, "energy form: stall at {} s, reference {t} s", a.t);
+    assert!(
+        (a.phi - phi).abs().to_degrees() < 0.2,
+        "{} against {}°",
+        a.phi.to_degrees(),
+        phi.to_degrees()
+    );
+    let b = crank::baranov(&d, &steady_opts(0.5)).unwrap().stall.expect("a stall");
+    assert!(
+        rel(b.t, t) < 5e-2 && (b.phi - phi).abs().to_degrees() < 1.5,
+        "Baranov {} s",
+        b.t
+    );
+}
+
 /// From rest: the plain Kloss law gives 351 N·m at the crank against 650–1277 N·m of resistance
 /// (spec, derived: "≈ 350"), so the drive never starts — an honest stall, not a failure. The
 /// starting-torque-corrected law and a frequency ramp both run up, and they settle on the same
@@ -330,6 +384,56 @@ fn crank_file_errors_name_file_line_and_key() {
     // Missing key.
     let t = good.replace("cart_mass = 1000.0 ", "");
     assert_invalid(CrankCase::parse("x.toml", &t), &["x.toml", "cart_mass"]);
+    // Values no drive of the family has (a start speed 1e5 × the synchronous one passed for a
+    // steady run while the drive coasted; a recording step of 100 s gave δ = 1.03 instead of
+    // 0.085), named by key with the bound.
+    for (from, to, key, said) in [
+        (
+            "start_speed = 10.5 ",
+            "start_speed = 1e6 ",
+            "run.start_speed",
+            "synchronous speed",
+        ),
+        ("dt = 0.002", "dt = 100.0", "startup.dt", "36 samples a revolution"),
+        ("dt = 0.002", "dt = 0.1", "startup.dt", "at most 0.0163 s"),
+        (
+            "nominal_speed = 102.1 ",
+            "nominal_speed = 200.0 ",
+            "motor.nominal_speed",
+            "between critical_speed",
+        ),
+        (
+            "nominal_speed = 102.1 ",
+            "nominal_speed = 10.0 ",
+            "motor.nominal_speed",
+            "between critical_speed",
+        ),
+        (
+            "phase_shift_deg = 90.0 ",
+            "phase_shift_deg = 1e300 ",
+            "mechanism.phase_shift_deg",
+            "1e300",
+        ),
+        (
+            "crank_radius = 0.2 ",
+            "crank_radius = 1e300 ",
+            "mechanism.crank_radius",
+            "check the units",
+        ),
+    ] {
+        let t = good.replacen(from, to, 1);
+        let l = line_of(&t, to.trim());
+        assert_invalid(CrankCase::parse("x.toml", &t), &[&format!("line {l}"), key, said]);
+    }
+    // "power" scaling of the setups' motors needs a resisting moment to scale by.
+    let t = good.replace("cart_resistance = 3562.0", "cart_resistance = 0.0");
+    assert_invalid(
+        CrankCase::parse("x.toml", &t),
+        &["[[setup]] #1", "motor_scale", "cart_resistance = 0"],
+    );
+    let mut m = CrankDrive::paper_two_carts().mechanism;
+    m.cart_resistance = 0.0;
+    assert_eq!(m.mean_resisting_moment(), 0.0, "rod weights average to zero exactly");
     // Law needing the starting torque.
     let t = good
         .replace("law = \"kloss\" ", "law = \"kloss-corrected\" ")
@@ -552,6 +656,53 @@ fn autobalancer_file_errors_name_file_line_and_key() {
     );
     let t = good.replace("kind = \"autobalancer\"", "kind = \"crank-drive\"");
     assert_invalid(AutobalancerCase::parse("g.toml", &t), &["kind", "autobalancer"]);
+    // A frequency that sets an infinite hinge stiffness is named by its own key (the message
+    // named `stiffness`, a key not in the file); a cutting moment turning the rocker by 88 rad
+    // and a recording step of 10 s (a peak of 2.5e-10 µm for 599 µm) are refused.
+    for (from, to, key, said) in [
+        (
+            "natural_frequency_hz = ",
+            "natural_frequency_hz = 1e300 #",
+            "rocker.natural_frequency_hz",
+            "stiffness",
+        ),
+        ("moment = 4.5 ", "moment = 1e6 ", "cutting.moment", "small"),
+        ("dt = 2e-4 ", "dt = 10.0 ", "runup.dt", "20 samples a revolution"),
+    ] {
+        let t = good.replacen(from, to, 1);
+        let l = line_of(&t, to.trim());
+        assert_invalid(
+            AutobalancerCase::parse("g.toml", &t),
+            &["g.toml", &format!("line {l}"), key, said],
+        );
+    }
+}
+
+/// Whether balls can cancel the imbalance at all: their vectors m_i R_i and m_0 R_0 must close
+/// a polygon (two balls: |m₁R₁ − m₂R₂| ≤ m₀R₀ ≤ m₁R₁ + m₂R₂). The plausible grinder's two equal
+/// balls (capacity 2.52) can; no balls cannot; a ball of 60 g·mm beside one of 5 against the
+/// disc's 50 cannot (|60 − 5| > 50) although their capacity is 1.3. A contact angle of 180°
+/// adds no hinge stiffness (sin θ = 0): no bound on c_r (it was 1.5e22 N/m, sin 180° in
+/// floating point being 1.2e-16).
+#[test]
+fn balls_that_cannot_cancel_the_imbalance_do_not_balance() {
+    let g = Grinder::plausible();
+    assert!(g.balls_can_cancel());
+    let mut none = g.clone();
+    none.balls.clear();
+    assert!(!none.balls_can_cancel());
+    assert_eq!(none.capacity().to_bits(), 0.0f64.to_bits(), "+0, not -0");
+    let m0r0 = g.imbalance_mass * g.imbalance_radius;
+    let mut uneven = g.clone();
+    uneven.balls[0].mass = 1.2 * m0r0 / uneven.balls[0].radius;
+    uneven.balls[1].mass = 0.1 * m0r0 / uneven.balls[1].radius;
+    assert!(!uneven.balls_can_cancel());
+    uneven.balls[1].mass = 0.3 * m0r0 / uneven.balls[1].radius;
+    assert!(uneven.balls_can_cancel(), "|1.2 − 0.3| ≤ 1 ≤ 1.5");
+    let mut c = Grinder::plausible_cutting();
+    c.contact_angle = PI;
+    assert_eq!(g.cutting_factor(&c), 0.0);
+    assert_eq!(g.cr_bound(g.speed, &c), f64::INFINITY);
 }
 
 // =============================================================================================

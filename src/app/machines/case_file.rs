@@ -160,7 +160,7 @@ impl<'a, 'b> Checks<'a, 'b> {
         if v.is_finite() && ok {
             Ok(v)
         } else {
-            Err(self.err(key, format!("must be {want}, got {v}")))
+            Err(self.err(key, format!("must be {want}, got {}", crate::io::fmt_plain(v))))
         }
     }
 

@@ -98,7 +98,11 @@ pub fn run_command(command: &str, a: &CommandArgs) -> Result<i32> {
     let inputs: Vec<(&str, &Path)> = a.file.iter().map(|f| ("case file", *f)).collect();
     check_outputs(&[], Some(("--out", a.out)), &inputs)?;
     crate::io::create_dir(a.out)?;
-    let o = (m.run)(a.file, Some(a.out))?;
+    // A failure in the run (a simulation's) names the case file, as reading errors do.
+    let o = (m.run)(a.file, Some(a.out)).map_err(|e| match a.file.map(|f| f.display().to_string()) {
+        Some(f) if !e.to_string().contains(&f) => e.with_prefix(&f),
+        _ => e,
+    })?;
     render::write_all(&o.report, a.out)?;
     if a.json {
         emit(&(render::json(&o.report)? + "\n"))?;

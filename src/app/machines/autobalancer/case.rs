@@ -257,8 +257,23 @@ fn grinder(src: &Source, raw: &RawAb) -> Result<Grinder> {
         }
         (None, None) => return Err(cr.err("damping", "missing (or give damping_ratio)")),
     }
+    // A frequency or a damping ratio sets the hinge's stiffness or damping: one beyond any
+    // grinder is named by the key the file gave. Checked before the model's own validation,
+    // which knows only the stiffness.
+    let keys = [
+        if r.natural_frequency_hz.is_some() {
+            "natural_frequency_hz"
+        } else {
+            "stiffness"
+        },
+        if r.damping_ratio.is_some() {
+            "damping_ratio"
+        } else {
+            "damping"
+        },
+    ];
+    check_scales(src, &g, keys)?;
     g.validate().map_err(|e| src.whole(e))?;
-    check_scales(src, &g)?;
     Ok(g)
 }
 
@@ -269,7 +284,9 @@ pub const MAX_MAGNITUDE: f64 = 1e12;
 
 /// The model's figures must be finite and its masses must not drown each other: a ball or an
 /// imbalance of 1e300 kg makes the inertia, ω_0 or the residual overflow or lose every digit.
-fn check_scales(src: &Source, g: &Grinder) -> Result<()> {
+/// The hinge's stiffness and damping are named by the keys that set them (`stiffness` or
+/// `natural_frequency_hz`, `damping` or `damping_ratio`).
+fn check_scales(src: &Source, g: &Grinder, [stiffness_key, damping_key]: [&str; 2]) -> Result<()> {
     let big = |table: &str, index: Option<usize>, key: &str, v: f64| -> Result<()> {
         if v.abs() <= MAX_MAGNITUDE {
             Ok(())
@@ -278,7 +295,14 @@ fn check_scales(src: &Source, g: &Grinder) -> Result<()> {
                 table,
                 index,
                 key,
-                format!("{v:e} is beyond any grinder (at most {MAX_MAGNITUDE:e} in SI units): check the units"),
+                format!(
+                    "{} beyond any grinder (at most {MAX_MAGNITUDE:e} in SI units): check the units",
+                    match key {
+                        "natural_frequency_hz" => format!("gives a hinge stiffness of {v:e} N/m,"),
+                        "damping_ratio" => format!("gives a hinge damping of {v:e} N·s/m,"),
+                        _ => format!("{v:e} is"),
+                    }
+                ),
             ))
         }
     };
@@ -301,8 +325,8 @@ fn check_scales(src: &Source, g: &Grinder) -> Result<()> {
     for (key, v) in [
         ("arm", g.arm),
         ("inertia", g.rocker_inertia),
-        ("stiffness", g.stiffness),
-        ("damping", g.damping),
+        (stiffness_key, g.stiffness),
+        (damping_key, g.damping),
     ] {
         big("rocker", None, key, v)?;
     }
@@ -340,6 +364,10 @@ fn check_scales(src: &Source, g: &Grinder) -> Result<()> {
     Ok(())
 }
 
+/// Largest static rocker angle of the cutting moment, rad (5.7°; sin φ and φ then differ by
+/// 0.17 %).
+pub const MAX_STATIC_TURN: f64 = 0.1;
+
 /// `[cutting]`.
 fn cutting(src: &Source, g: &Grinder, c: &RawCutting) -> Result<Cutting> {
     let ch = Checks::table(src, "cutting");
@@ -360,6 +388,18 @@ fn cutting(src: &Source, g: &Grinder, c: &RawCutting) -> Result<Cutting> {
         return Err(ch.err(
             "surface_stiffness",
             "makes the hinge stiffness while cutting non-positive",
+        ));
+    }
+    // The rocker's equations are those of small angles: the moment's static turn must be one.
+    let turn = cut.moment / (g.effective_stiffness(Some(&cut)) * g.arm * g.arm);
+    if turn.abs() > MAX_STATIC_TURN {
+        return Err(ch.err(
+            "moment",
+            format!(
+                "turns the rocker by {} rad statically against the hinge (c' l²): the model holds for small \
+                 angles, at most {MAX_STATIC_TURN} rad (check the units)",
+                crate::io::fmt_short(turn, 3)
+            ),
         ));
     }
     Ok(cut)
@@ -435,7 +475,18 @@ fn runup_settings(src: &Source, u: &RawRunup, g: &Grinder) -> Result<RunupSettin
         ));
     }
     check_revolutions(&Checks::table(src, "disc"), "speed_rpm", g.speed, rdur, "the run-up")?;
-    let dt = cu.pos("dt", u.dt.unwrap_or(2e-4))?;
+    // The vibration's amplitude is read from the samples: at least 20 a revolution at the
+    // operating speed (a sinusoid's peak then within 1.3 %).
+    let dt_max = TAU / g.speed / 20.0;
+    let dt = cu.test(
+        "dt",
+        u.dt.unwrap_or(2e-4),
+        u.dt.is_none_or(|v| v > 0.0 && v <= dt_max),
+        &format!(
+            "> 0 and at most {} s (20 samples a revolution at the operating speed)",
+            crate::io::fmt_short(dt_max, 3)
+        ),
+    )?;
     if rdur / dt > 2e6 {
         return Err(cu.err("dt", format!("too small: {} samples", rdur / dt)));
     }

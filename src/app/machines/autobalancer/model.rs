@@ -46,7 +46,7 @@ fn check(name: &str, v: f64, ok: bool, want: &str) -> Result<()> {
     } else {
         Err(Error::param(
             name,
-            format!("autobalancer: {name} must be {want}, got {v}"),
+            format!("autobalancer: {name} must be {want}, got {}", crate::io::fmt_plain(v)),
         ))
     }
 }
@@ -256,6 +256,8 @@ impl Grinder {
     /// Added hinge stiffness factor of cutting g(θ) = [sin θ + f_r (R/l − cos θ)] sin θ.
     pub fn cutting_factor(&self, c: &Cutting) -> f64 {
         let (s, co) = c.contact_angle.sin_cos();
+        // sin 180° is 1.2e-16 in floating point, not 0: a bound of 1e22 N/m where there is none.
+        let s = if s.abs() < 1e-12 { 0.0 } else { s };
         (s + c.friction * (self.disc_radius / self.arm - co)) * s
     }
 
@@ -323,7 +325,20 @@ impl Grinder {
 
     /// Largest imbalance the balls can cancel, Σ m_i R_i, kg·m.
     pub fn capacity(&self) -> f64 {
-        self.balls.iter().map(|b| b.mass * b.radius).sum()
+        // + 0.0: an empty sum is −0.0, which would print as "-0".
+        self.balls.iter().map(|b| b.mass * b.radius).sum::<f64>() + 0.0
+    }
+
+    /// Whether some placement of the balls cancels the imbalance: their vectors m_i R_i and
+    /// m_0 R_0 close a polygon, i.e. m_0 R_0 lies between the largest m_i R_i less the others and
+    /// their sum (two balls: |m_1 R_1 − m_2 R_2| ≤ m_0 R_0 ≤ m_1 R_1 + m_2 R_2). No balls cancel
+    /// nothing.
+    pub fn balls_can_cancel(&self) -> bool {
+        let s = self.capacity();
+        let largest = self.balls.iter().map(|b| b.mass * b.radius).fold(0.0, f64::max);
+        let m0r0 = self.imbalance_mass * self.imbalance_radius;
+        let slack = 1e-12 * s;
+        !self.balls.is_empty() && m0r0 <= s + slack && 2.0 * largest - s <= m0r0 + slack
     }
 }
 
@@ -720,7 +735,7 @@ pub fn sweep(g: &Grinder, speeds: &[f64], duration: f64, cutting: Option<Cutting
                 residual: with.end.residual,
                 drift_deg_s: with.end.drift_deg_s,
                 balanced: with.end.residual < BALANCED_RESIDUAL,
-                predicted: w > w0,
+                predicted: w > w0 && g.balls_can_cancel(),
             })
         })
         .collect()
@@ -874,9 +889,11 @@ pub struct AutobalancerFigures {
     pub n_factor: f64,
     /// First-order mean projection of the disc centre on the imbalance l ε N/2 (balls fixed), m.
     pub mean_projection: f64,
-    /// Linear criterion at idle: ω > ω_0.
+    /// Whether the balls can cancel the imbalance at all ([`Grinder::balls_can_cancel`]).
+    pub balls_can_cancel: bool,
+    /// Linear criterion at idle: ω > ω_0, and balls that can cancel the imbalance.
     pub balances_idle: bool,
-    /// Linear criterion while cutting: ω > ω_0 (cutting).
+    /// Linear criterion while cutting: ω > ω_0 (cutting), and balls that can cancel it.
     pub balances_cutting: Option<bool>,
     /// c_r bound at the file's contact angle, N/m.
     pub cr_bound: Option<f64>,

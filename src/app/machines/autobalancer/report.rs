@@ -139,39 +139,65 @@ fn criterion(rep: &mut Report, r: &AutobalancerReport) {
             3,
         ),
     ];
+    // Why no speed balances, when the balls cannot cancel the imbalance in any placement.
+    let cannot = (!f.balls_can_cancel).then(|| {
+        if r.grinder.balls.is_empty() {
+            "no balls".to_string()
+        } else {
+            format!(
+                "the balls cannot cancel the imbalance in any placement: capacity Σ m R = {} m_0 R_0, and no ball may outweigh the others by more than m_0 R_0",
+                fmt_sig(f.capacity_ratio, 3)
+            )
+        }
+    });
+    let verdict = |balances: bool, below: &str| match (&cannot, balances) {
+        (_, true) => "balances".to_string(),
+        (Some(why), false) => format!("does not balance ({why})"),
+        (None, false) => format!("does not balance ({below})"),
+    };
     let mut verdicts = vec![format!(
         "idle: {}",
         if f.balances_idle {
-            "balances (ω > ω_0)"
+            "balances (ω > ω_0)".to_string()
         } else {
-            "does not balance (ω ≤ ω_0)"
+            verdict(false, "ω ≤ ω_0")
         }
     )];
     if let (Some(w0c), Some(b), Some(cr), Some(crp)) =
         (f.omega0_cutting, f.balances_cutting, f.cr_bound, f.cr_bound_paper)
     {
         rows.push(q("omega0_cutting", "ω_0' while cutting", "rad/s", w0c, 4));
-        rows.push(q(
-            "cr_bound",
-            "surface stiffness bound c_r at the given θ",
-            "N/m",
-            cr,
-            4,
-        ));
-        rows.push(
-            q(
-                "cr_bound_paper",
-                "surface stiffness bound c_r, seed's closed form",
+        // A bound only where one exists: none is needed when cutting does not raise ω_0 (at
+        // this contact angle), and none helps when the grinder does not balance even at idle.
+        if cr.is_finite() && cr > 0.0 {
+            rows.push(q(
+                "cr_bound",
+                "surface stiffness bound c_r at the given θ",
                 "N/m",
-                crp,
+                cr,
                 4,
-            )
-            .note("worst θ, cos θ = −f_r/2"),
-        );
-        verdicts.push(format!("cutting: {}", if b { "balances" } else { "does not balance" }));
+            ));
+        } else if cr > 0.0 {
+            verdicts.push("surface stiffness: no bound (at this contact angle cutting does not raise ω_0)".into());
+        } else {
+            verdicts.push("surface stiffness: no c_r balances (the grinder does not balance even at idle)".into());
+        }
+        if crp.is_finite() && crp > 0.0 {
+            rows.push(
+                q(
+                    "cr_bound_paper",
+                    "surface stiffness bound c_r, seed's closed form",
+                    "N/m",
+                    crp,
+                    4,
+                )
+                .note("worst θ, cos θ = −f_r/2"),
+            );
+        }
+        verdicts.push(format!("cutting: {}", verdict(b, "ω ≤ ω_0'")));
     }
+    rows.push(q("capacity", "ball capacity Σ m R / m_0 R_0", "", f.capacity_ratio, 3));
     if let Some(a) = f.balanced_angles_deg {
-        rows.push(q("capacity", "ball capacity Σ m R / m_0 R_0", "", f.capacity_ratio, 3));
         rows.push(q("balanced_angle_1", "balanced ball angle 1", "deg", a[0], 4));
         rows.push(q("balanced_angle_2", "balanced ball angle 2", "deg", a[1], 4));
     }
@@ -203,8 +229,16 @@ fn operating(rep: &mut Report, r: &AutobalancerReport) {
         Column::new("residual", None),
         Column::new("balanced", None),
     ];
-    rep.section("operating", "Nonlinear model at the operating speed")
-        .push(table("operating", columns, rows));
+    let sec = rep.section("operating", "Nonlinear model at the operating speed");
+    if r.figures.h_tilde == 0.0 {
+        // Nothing damps the rocker's free vibration from the start: it stays in the amplitudes.
+        sec.push(Block::Text(
+            "The hinge has no damping: the rocker's free vibration from the start never decays and is in both \
+             amplitudes; whether the balls balance is read from the residual imbalance."
+                .into(),
+        ));
+    }
+    sec.push(table("operating", columns, rows));
 }
 
 fn cutting_scan(rep: &mut Report, r: &AutobalancerReport) {
@@ -316,14 +350,22 @@ fn runup(rep: &mut Report, r: &AutobalancerReport) {
             3,
         ),
         q("peak_without_time", "at the time", "s", u.peak_without_balls.1, 3),
-        q(
-            "max_residual",
-            "largest residual imbalance",
-            "× m_0 R_0",
-            u.max_residual,
-            3,
-        )
-        .note("balls bunched with the imbalance while passing ω_0"),
+        {
+            let row = q(
+                "max_residual",
+                "largest residual imbalance",
+                "× m_0 R_0",
+                u.max_residual,
+                3,
+            );
+            // The balls bunch with the imbalance below ω_0: the largest residual is met while
+            // passing it, or all along when the disc never gets past it.
+            match (r.grinder.balls.is_empty(), r.figures.ratio > 1.0) {
+                (true, _) => row.note("no balls: the disc's imbalance alone"),
+                (false, true) => row.note("balls bunched with the imbalance while passing ω_0"),
+                (false, false) => row.note("balls bunched with the imbalance: the disc stays below ω_0"),
+            }
+        },
     ];
     if let Some(t) = u.balanced_from {
         rows.push(q("balanced_from", "balanced from", "s", t, 3));
@@ -335,17 +377,24 @@ fn runup(rep: &mut Report, r: &AutobalancerReport) {
         u.end.amplitude * 1e6,
         3,
     ));
-    let mut text = vec![format!(
-        "The disc accelerates linearly to the operating speed in {} s; the balls start at rest on the disc. \
-         At the end the balls are at {}°.",
-        fmt_sig(u.ramp_time, 3),
-        u.end
-            .ball_angles_deg
-            .iter()
-            .map(|a| fmt_sig(*a, 4))
-            .collect::<Vec<_>>()
-            .join("°, ")
-    )];
+    let mut text = vec![if r.grinder.balls.is_empty() {
+        format!(
+            "The disc accelerates linearly to the operating speed in {} s; there are no balls.",
+            fmt_sig(u.ramp_time, 3)
+        )
+    } else {
+        format!(
+            "The disc accelerates linearly to the operating speed in {} s; the balls start at rest on the disc. \
+             At the end the balls are at {}°.",
+            fmt_sig(u.ramp_time, 3),
+            u.end
+                .ball_angles_deg
+                .iter()
+                .map(|a| fmt_sig(*a, 4))
+                .collect::<Vec<_>>()
+                .join("°, ")
+        )
+    }];
     if u.balanced_from.is_none() {
         text.push("Not balanced within the run.".into());
     }

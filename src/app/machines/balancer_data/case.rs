@@ -262,7 +262,10 @@ fn record(row: &Row, d: &mut StandData) -> Result<()> {
             }
             let v = row.num(2, "the correction radius (m)")?;
             if v <= 0.0 {
-                return Err(row.err(format!("the correction radius must be > 0, got {v}")));
+                return Err(row.err(format!(
+                    "the correction radius must be > 0, got {}",
+                    crate::io::fmt_plain(v)
+                )));
             }
             row.none_after(3)?;
             d.cut_radius = Some((v, line));
@@ -270,7 +273,10 @@ fn record(row: &Row, d: &mut StandData) -> Result<()> {
         "spread" => {
             let v = row.num(2, "the ball spread α0 (deg)")?;
             if !(0.0..=360.0).contains(&v) {
-                return Err(row.err(format!("the ball spread must be in [0, 360] degrees, got {v}")));
+                return Err(row.err(format!(
+                    "the ball spread must be in [0, 360] degrees, got {}",
+                    crate::io::fmt_plain(v)
+                )));
             }
             row.none_after(3)?;
             d.spreads.push(Labelled { label, value: v, line });
@@ -280,7 +286,10 @@ fn record(row: &Row, d: &mut StandData) -> Result<()> {
             let b = row.num(3, "ball angle β (deg)")?;
             // A reading on the race: within a turn either way (1e300° has no angle left in it).
             if let Some(v) = [a, b].into_iter().find(|v| v.abs() > 360.0) {
-                return Err(row.err(format!("a ball angle must lie within ±360°, got {v}")));
+                return Err(row.err(format!(
+                    "a ball angle must lie within ±360°, got {}",
+                    crate::io::fmt_plain(v)
+                )));
             }
             d.mounts.push(Mount {
                 label,
@@ -295,7 +304,10 @@ fn record(row: &Row, d: &mut StandData) -> Result<()> {
             }
             let v = row.num(2, "the acceleration amplitude (m/s²)")?;
             if v < 0.0 {
-                return Err(row.err(format!("an acceleration amplitude must be ≥ 0, got {v}")));
+                return Err(row.err(format!(
+                    "an acceleration amplitude must be ≥ 0, got {}",
+                    crate::io::fmt_plain(v)
+                )));
             }
             row.none_after(3)?;
             d.accels.push(Labelled { label, value: v, line });
@@ -310,7 +322,7 @@ fn record(row: &Row, d: &mut StandData) -> Result<()> {
 fn test_mass(row: &Row, d: &mut StandData) -> Result<()> {
     let v = row.num(2, "the test mass (kg)")?;
     if v <= 0.0 {
-        return Err(row.err(format!("a test mass must be > 0, got {v}")));
+        return Err(row.err(format!("a test mass must be > 0, got {}", crate::io::fmt_plain(v))));
     }
     row.none_after(3)?;
     let label = &row.label;

@@ -4,6 +4,7 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use std::f64::consts::TAU;
 use std::path::Path;
 
 use serde::Deserialize;
@@ -217,7 +218,7 @@ fn phases(
                 ));
             }
             for v in l {
-                c.finite("phases_deg", *v)?;
+                c.test("phases_deg", *v, v.abs() <= 360.0, "within ±360°")?;
             }
             Ok(l.iter().map(|d| d.to_radians()).collect())
         }
@@ -226,7 +227,7 @@ fn phases(
                 return Err(src.err(table, index, "carts", format!("must be 1–64, got {n}")));
             }
             let s = match shift {
-                Some(s) => c.finite("phase_shift_deg", s)?,
+                Some(s) => c.test("phase_shift_deg", s, s.abs() <= 360.0, "within ±360°")?,
                 None if n == 1 => 0.0,
                 None => return Err(src.err(table, index, "phase_shift_deg", "missing (needed with carts > 1)")),
             };
@@ -262,8 +263,10 @@ impl CrankCase {
             torque_scale: 1.0,
         };
         drive.validate().map_err(|e| src.whole(e))?;
-        let run = run_settings(&src, &raw.run, design_speed)?;
-        let startup = startup_settings(&src, &raw.startup)?;
+        // The crank's synchronous speed: no steady state lies above it (the motor brakes there).
+        let sync = drive.motor.synchronous_speed / drive.reducer.ratio;
+        let run = run_settings(&src, &raw.run, design_speed, sync)?;
+        let startup = startup_settings(&src, &raw.startup, sync)?;
         let setups = raw
             .setup
             .iter()
@@ -272,6 +275,18 @@ impl CrankCase {
             .collect::<Result<Vec<_>>>()?;
         if setups.len() > 32 {
             return Err(src.err("setup", Some(32), "name", "at most 32 setups"));
+        }
+        // "power" scales the motor by the ratio of mean resisting moments: none without resistance.
+        if let Some(k) = setups.iter().position(|s| s.motor_scale == MotorScale::Power)
+            && drive.mechanism.mean_resisting_moment() <= 0.0
+        {
+            return Err(src.err(
+                "setup",
+                Some(k),
+                "motor_scale",
+                "\"power\" (the default) scales the motor by the ratio of mean resisting moments, and \
+                 [mechanism] has none (cart_resistance = 0): give the scale as a number",
+            ));
         }
         Ok(CrankCase {
             file: file.to_string(),
@@ -301,7 +316,12 @@ impl CrankCase {
 /// `[mechanism]`.
 fn mechanism(src: &Source, m: &RawMechanism) -> Result<Mechanism> {
     let cm = Checks::table(src, "mechanism");
-    let crank_radius = cm.pos("crank_radius", m.crank_radius)?;
+    let crank_radius = cm.test(
+        "crank_radius",
+        m.crank_radius,
+        m.crank_radius > 0.0 && m.crank_radius <= 100.0,
+        "> 0 and at most 100 m (check the units)",
+    )?;
     let rod_length = cm.test(
         "rod_length",
         m.rod_length,
@@ -360,7 +380,18 @@ fn motor(src: &Source, mo: &RawMotor) -> Result<Motor> {
             "below synchronous_speed",
         )?,
         critical_torque: cmo.pos("critical_torque", mo.critical_torque)?,
-        nominal_speed: mo.nominal_speed.map(|v| cmo.pos("nominal_speed", v)).transpose()?,
+        // A catalogue's nominal point lies on the stable branch, between ω_c and ω0.
+        nominal_speed: mo
+            .nominal_speed
+            .map(|v| {
+                cmo.test(
+                    "nominal_speed",
+                    v,
+                    v > mo.critical_speed && v < w0,
+                    "between critical_speed and synchronous_speed",
+                )
+            })
+            .transpose()?,
         nominal_torque: mo.nominal_torque.map(|v| cmo.pos("nominal_torque", v)).transpose()?,
         starting_torque: mo
             .starting_torque
@@ -382,7 +413,7 @@ fn motor(src: &Source, mo: &RawMotor) -> Result<Motor> {
 }
 
 /// `[run]`: the steady-state runs, their work bounded ([`MAX_STEADY_STEPS`]).
-fn run_settings(src: &Source, r: &RawRun, design_speed: f64) -> Result<RunSettings> {
+fn run_settings(src: &Source, r: &RawRun, design_speed: f64, sync: f64) -> Result<RunSettings> {
     let cr = Checks::table(src, "run");
     let step_deg = cr.test(
         "step_deg",
@@ -408,7 +439,14 @@ fn run_settings(src: &Source, r: &RawRun, design_speed: f64) -> Result<RunSettin
         ));
     }
     Ok(RunSettings {
-        start_speed: cr.pos("start_speed", r.start_speed.unwrap_or(design_speed))?,
+        // From far above the synchronous speed a drive coasts for many revolutions, each so
+        // like the last that the run would pass for steady.
+        start_speed: cr.test(
+            "start_speed",
+            r.start_speed.unwrap_or(design_speed),
+            r.start_speed.is_none_or(|v| v > 0.0 && v <= 2.0 * sync),
+            &format!("> 0 and at most twice the crank's synchronous speed ω0/i = {sync:.4} rad/s"),
+        )?,
         start_angle: cr
             .finite("start_angle_deg", r.start_angle_deg.unwrap_or(0.0))?
             .to_radians(),
@@ -430,7 +468,7 @@ fn run_settings(src: &Source, r: &RawRun, design_speed: f64) -> Result<RunSettin
 }
 
 /// `[startup]`: the runs from rest.
-fn startup_settings(src: &Source, s: &RawStartup) -> Result<StartupSettings> {
+fn startup_settings(src: &Source, s: &RawStartup, sync: f64) -> Result<StartupSettings> {
     let cs = Checks::table(src, "startup");
     let duration = cs.test(
         "duration",
@@ -438,7 +476,18 @@ fn startup_settings(src: &Source, s: &RawStartup) -> Result<StartupSettings> {
         s.duration.is_none_or(|v| v > 0.0 && v <= 3600.0),
         "in (0, 3600] s",
     )?;
-    let dt = cs.pos("dt", s.dt.unwrap_or(2e-3))?;
+    // The metrics of a revolution come from the samples: at least 36 a revolution (10°) at the
+    // synchronous speed, and ten in the run.
+    let dt_max = (TAU / sync / 36.0).min(duration / 10.0);
+    let dt = cs.test(
+        "dt",
+        s.dt.unwrap_or(2e-3),
+        s.dt.is_none_or(|v| v > 0.0 && v <= dt_max),
+        &format!(
+            "> 0 and at most {} s (36 samples a revolution at the synchronous speed, 10 in the run)",
+            crate::io::fmt_short(dt_max, 3)
+        ),
+    )?;
     if duration / dt > 2e6 {
         return Err(cs.err("dt", format!("too small: {} samples", duration / dt)));
     }

@@ -44,7 +44,7 @@ fn check(name: &str, v: f64, ok: bool, want: &str) -> Result<()> {
     } else {
         Err(Error::param(
             name,
-            format!("crank drive: {name} must be {want}, got {v}"),
+            format!("crank drive: {name} must be {want}, got {}", crate::io::fmt_plain(v)),
         ))
     }
 }
@@ -223,7 +223,7 @@ impl Mechanism {
         cuts.sort_by(f64::total_cmp);
         cuts.dedup_by(|a, b| (*a - *b).abs() < 1e-14);
         let (xg, wg) = crate::fe::quadrature::gauss_legendre(16);
-        let mut sum = 0.0;
+        let (mut sum, mut sum_abs) = (0.0, 0.0);
         for w in cuts.windows(2) {
             let (a, b) = (w[0], w[1]);
             if b - a <= 0.0 {
@@ -238,11 +238,15 @@ impl Mechanism {
                 );
                 let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
                 for (x, wt) in xg.iter().zip(&wg) {
-                    sum += wt * half * self.resisting_moment(mid + half * x);
+                    let m = self.resisting_moment(mid + half * x);
+                    sum += wt * half * m;
+                    sum_abs += wt * half * m.abs();
                 }
             }
         }
-        sum / TAU
+        // Without cart resistance the rods' weights average to zero: what the sum leaves then
+        // is rounding (−7e-15 N·m), not a moment.
+        if sum.abs() <= 1e-12 * sum_abs { 0.0 } else { sum / TAU }
     }
 
     /// The closed form of the mean: each cart travels 4r per revolution against F, and the rod
@@ -833,6 +837,24 @@ fn stall_message(drive: &CrankDrive, phi: f64, t: f64, w0: f64, how: &str) -> St
     }
 }
 
+/// Where a drive at speed `w` at (`phi`, `t`) (the last sample above the stall floor) comes to
+/// rest, before the next sample at `phi_next`: with the kinetic energy K = I ω² falling linearly
+/// in φ at dK/dφ = 2 (M_d − M_r) (its rate at the sample), rest comes after
+/// Δφ = I ω² / (2 (M_r − M_d)) and Δt = ∫ dφ/ω = I ω / (M_r − M_d) (a uniform deceleration).
+/// A rate that does not fall gives the next sample's angle and the time at the sample's speed.
+fn stall_point(drive: &CrankDrive, (phi, t, w): (f64, f64, f64), phi_next: f64) -> (f64, f64) {
+    let (i, _) = drive.reduced_inertia(phi);
+    let excess = drive.mechanism.resisting_moment(phi) - drive.driving_moment(w);
+    if excess > 0.0 && w > 0.0 {
+        let dphi = (i * w * w / (2.0 * excess)).min(phi_next - phi);
+        // The time of the uniform deceleration over the angle actually taken.
+        let w_end = (w * w - 2.0 * excess / i * dphi).max(0.0).sqrt();
+        (phi + dphi, t + i * (w - w_end) / excess)
+    } else {
+        (phi_next, t + (phi_next - phi) / w.max(f64::MIN_POSITIVE))
+    }
+}
+
 /// Close a revolution of a φ-domain run: record its mean speed and say whether the run is
 /// steady (two successive revolutions agree within the tolerance, after the minimum count).
 fn revolution_closed(
@@ -968,6 +990,8 @@ pub fn energy_form(drive: &CrankDrive, o: &SteadyOptions) -> Result<SteadyRun> {
     let mut converged = false;
     let mut evals = 0usize;
     let mut revs = 0usize;
+    // The last sample above the stall floor (φ, t, ω): the stall point is extrapolated from it.
+    let mut above = (o.phi_start, 0.0, o.omega_start);
     for rev in 0..o.max_revolutions {
         let phi0 = phi;
         let outs: Vec<f64> = (0..=per_rev).map(|k| phi0 + k as f64 * dphi).collect();
@@ -979,7 +1003,10 @@ pub fn energy_form(drive: &CrankDrive, o: &SteadyOptions) -> Result<SteadyRun> {
             let (i, _) = drive.reduced_inertia(*p);
             let w = (yy[0].max(0.0) / i).sqrt();
             if w < w_floor {
-                let st = stall_message(drive, *p, yy[1], drive.motor.synchronous_speed, "(energy form)");
+                // Past the stall the integrated time means nothing (ω is held at a floor there):
+                // the stall point comes from the last sample above it.
+                let (phi_s, t_s) = stall_point(drive, above, *p);
+                let st = stall_message(drive, phi_s, t_s, drive.motor.synchronous_speed, "(energy form)");
                 return Ok(SteadyRun {
                     method: "energy-form (Dormand–Prince 5(4))".into(),
                     revolutions: rev + 1,
@@ -995,6 +1022,7 @@ pub fn energy_form(drive: &CrankDrive, o: &SteadyOptions) -> Result<SteadyRun> {
             }
             let e = drive.acceleration(*p, w, drive.driving_moment(w));
             last.push(p - phi0, yy[1] - t0, w, e);
+            above = (*p, yy[1], w);
         }
         y = sol.y[sol.y.len() - 1].clone();
         phi = outs[outs.len() - 1];
