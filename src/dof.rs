@@ -101,6 +101,17 @@ pub struct Expansion {
     pub constant: f64,
 }
 
+/// Components `first..first + 3` of every one of the first `n_nodes` nodes of a full vector
+/// (`NCOMP` per node, as [`DofMap::full`] gives): the translations (`first` 0) or the
+/// rotations (`first` 3), node-major, for the result files.
+pub fn node_triplets(full: &[f64], n_nodes: usize, first: usize) -> Vec<f64> {
+    let mut out = vec![0.0; 3 * n_nodes];
+    for a in 0..n_nodes {
+        out[3 * a..3 * a + 3].copy_from_slice(&full[NCOMP * a + first..NCOMP * a + first + 3]);
+    }
+    out
+}
+
 impl DofMap {
     /// Number the free components, node-major (fixed components only).
     pub fn new(active: Vec<DofMask>, fixed: Vec<DofMask>) -> Self {

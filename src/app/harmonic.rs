@@ -1014,17 +1014,19 @@ pub fn fields(mesh: &Mesh, nodal: &[[c64; 6]]) -> Vec<(String, usize, Vec<f64>)>
 /// Write the fields of frequency `k` as VTU and/or MSH.
 pub fn write_fields(
     mesh: &Mesh,
+    cells: Option<&[crate::mesh::CellBlock]>,
     run: &HarmonicRun,
     k: usize,
     vtu: Option<&std::path::Path>,
     msh: Option<&std::path::Path>,
 ) -> Result<()> {
-    write_fields_with(mesh, run, k, vtu, msh, vec![])
+    write_fields_with(mesh, cells, run, k, vtu, msh, vec![])
 }
 
 /// [`write_fields`] with `extra` fields (name, components, node-major data) appended.
 pub fn write_fields_with(
     mesh: &Mesh,
+    cells: Option<&[crate::mesh::CellBlock]>,
     run: &HarmonicRun,
     k: usize,
     vtu: Option<&std::path::Path>,
@@ -1045,12 +1047,11 @@ pub fn write_fields_with(
             .iter()
             .map(|(name, nc, d)| crate::io::vtk::PointField::new(name.clone(), *nc, d))
             .collect();
-        crate::io::vtk::write_vtu(p, mesh, &pf)?;
+        crate::io::vtk::write_vtu_cells(p, mesh, cells, &pf)?;
     }
     if let Some(p) = msh {
         let views: Vec<crate::io::msh_out::NodeView> = f
             .iter()
-            .filter(|(name, _, _)| name != "amplitude")
             .map(|(name, nc, d)| crate::io::msh_out::NodeView {
                 name: format!("{name} at {} Hz", crate::io::fmt_sig(freq, 5)),
                 step: 0,

@@ -17,7 +17,18 @@ pub fn emit(s: &str) -> Result<()> {
     })
 }
 
-/// Refuse, before any work (named, exit 1): two outputs that are the same file, an output (file
+/// The extension of the format an output option writes (`--vtu` a VTU file), if it has one.
+fn format_extension(option: &str) -> Option<&'static str> {
+    match option {
+        "--vtu" => Some("vtu"),
+        "--msh-out" => Some("msh"),
+        "--plot" => Some("svg"),
+        _ => None,
+    }
+}
+
+/// Refuse, before any work (named, exit 1): an output file whose name ends otherwise than its
+/// format (`--vtu x.msh`), two outputs that are the same file, an output (file
 /// or folder) that is one of the inputs, and outputs that cannot be written. `files` and `dir`
 /// pair each output with the option that names it, `inputs` each input with what it is (`input
 /// mesh`, `scene file`); an input that is no existing file or folder (a generator such as
@@ -54,6 +65,28 @@ pub fn check_outputs(
                         "{oi} '{}' is the {what} ('{}'): writing it would overwrite the input; give another path",
                         pi.display(),
                         input.display()
+                    ),
+                ));
+            }
+        }
+    }
+    // A file's format follows its option, whatever its name: a VTU file named `.msh` opens in
+    // neither ParaView nor gmsh by its name, so the name must say the format. A device or a
+    // pipe (`/dev/stdout`) has no name to say it; a folder gets its own error below.
+    for &(o, p) in files {
+        if let (Some(p), Some(ext)) = (p.filter(|p| !p.exists() || p.is_file()), format_extension(o)) {
+            let given = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+            if !given.eq_ignore_ascii_case(ext) {
+                return Err(Error::option(
+                    o,
+                    format!(
+                        "{o} writes a .{ext} file, but '{}' {}: name it ….{ext}",
+                        p.display(),
+                        if given.is_empty() {
+                            "has no extension".to_string()
+                        } else {
+                            format!("ends in '.{given}'")
+                        }
                     ),
                 ));
             }

@@ -56,7 +56,31 @@ pub fn load(spec: &str, length_scale: f64) -> Result<Mesh> {
             }
         }
     }
-    crate::io::gmsh::read(path, length_scale)
+    let mut mesh = crate::io::gmsh::read(path, length_scale)?;
+    if let Some(note) = unit_hint(&mesh, length_scale) {
+        mesh.notes.push(note);
+    }
+    Ok(mesh)
+}
+
+/// Largest extent, m, of a mesh read in metres that passes for one of this tool's machines; a
+/// larger one is most often a drawing in millimetres read as metres.
+const UNIT_HINT_EXTENT: f64 = 50.0;
+
+/// A note when a file read in metres (`length_scale` 1) is more than [`UNIT_HINT_EXTENT`]
+/// across: the unit the file was drawn in is not in it, so the reader can only ask.
+fn unit_hint(mesh: &Mesh, length_scale: f64) -> Option<String> {
+    if length_scale != 1.0 || mesh.n_nodes() == 0 {
+        return None;
+    }
+    let (lo, hi) = mesh.bounding_box();
+    let extent = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+    (extent > UNIT_HINT_EXTENT).then(|| {
+        format!(
+            "the mesh is {} m across, read in metres: if it was drawn in millimetres, give --length-unit mm",
+            crate::io::fmt_short(extent, 4)
+        )
+    })
 }
 
 /// The `sandwich:` and `ibeam-*` generators; `None` for any other spec.

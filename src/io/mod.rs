@@ -24,38 +24,55 @@ pub(crate) fn fmt_f64(x: f64) -> String {
 }
 
 /// Write mode shapes (3 translation components per node, node-major, one vector per mode) as
-/// VTU point fields `mode_N` (ParaView) and/or gmsh `$NodeData` views named `mode N (f Hz)`.
-/// `None` skips a format. Returns the files written.
+/// VTU point fields `mode_N` (ParaView) on the model's `cells` (the mesh's of its highest
+/// dimension if `None`) and/or gmsh `$NodeData` views named `mode N (f Hz)`, each a view of
+/// its own at time step 0. `rotations[i]`, where given, is mode i's nodal rotations (3 per
+/// node, rad): `mode_N_rotation` and `mode N (f Hz) rotation`. `values` (named, e.g.
+/// `frequencies_hz`, or a buckling run's `load_factors`) go into the VTU's field data and the
+/// views' time values. `None` skips a format. Returns the files written.
 pub fn write_mode_shapes(
     mesh: &crate::mesh::Mesh,
+    cells: Option<&[crate::mesh::CellBlock]>,
     shapes: &[Vec<f64>],
-    frequencies_hz: &[f64],
+    rotations: &[Option<Vec<f64>>],
+    (values_name, values): (&str, &[f64]),
     vtu: Option<&std::path::Path>,
     msh: Option<&std::path::Path>,
 ) -> crate::Result<Vec<std::path::PathBuf>> {
     let mut written = Vec::new();
     if let Some(p) = vtu {
-        let fields: Vec<vtk::PointField> = shapes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| vtk::PointField::mode(i + 1, s))
-            .collect();
-        vtk::write_vtu(p, mesh, &fields)?;
+        let mut fields: Vec<vtk::PointField> = Vec::new();
+        for (i, s) in shapes.iter().enumerate() {
+            fields.push(vtk::PointField::mode(i + 1, s));
+            if let Some(Some(r)) = rotations.get(i) {
+                fields.push(vtk::PointField::new(format!("mode_{}_rotation", i + 1), 3, r));
+            }
+        }
+        vtk::write_vtu_with(p, mesh, cells, &fields, &[(values_name, values)])?;
         written.push(p.to_path_buf());
     }
     if let Some(p) = msh {
-        let views: Vec<msh_out::NodeView> = shapes
-            .iter()
-            .zip(frequencies_hz)
-            .enumerate()
-            .map(|(i, (s, &f))| msh_out::NodeView {
-                name: format!("mode {} ({} Hz)", i + 1, fmt_sig(f, 6)),
-                step: i,
-                time: f,
-                n_comp: 3,
-                data: s,
-            })
-            .collect();
+        let mut views: Vec<msh_out::NodeView> = Vec::new();
+        for (i, (s, &f)) in shapes.iter().zip(values).enumerate() {
+            // A view of its own per mode, at step 0 (at step i it had i empty steps before
+            // it, and gmsh showed the first, empty one).
+            let name = format!("mode {} ({} Hz)", i + 1, fmt_sig(f, 6));
+            let rotation = rotations.get(i).and_then(|r| r.as_deref());
+            for (name, data) in [
+                (name.clone(), Some(s.as_slice())),
+                (format!("{name} rotation"), rotation),
+            ] {
+                if let Some(data) = data {
+                    views.push(msh_out::NodeView {
+                        name,
+                        step: 0,
+                        time: f,
+                        n_comp: 3,
+                        data,
+                    });
+                }
+            }
+        }
         msh_out::write_msh_views(p, mesh, &views)?;
         written.push(p.to_path_buf());
     }

@@ -1,7 +1,8 @@
 //! VTK XML unstructured-grid writer (`.vtu`, ASCII), for ParaView.
 //!
-//! The file holds all nodes, the cells of the mesh's highest dimension (the solid cells; the
-//! 2D or 1D cells only if the mesh has no 3D cells), one point-data array per
+//! The file holds all nodes, the cells of the model ([`write_vtu_cells`]: the solids, shells
+//! and beams the analysis used, from [`crate::model::Model::cell_blocks`]) or, without a model,
+//! the cells of the mesh's highest dimension ([`write_vtu`]), one point-data array per
 //! [`PointField`] (e.g. one 3-component array per mode shape, `mode_7`, ...) and the gmsh
 //! element tag of each cell as cell data `element_tag`.
 //!
@@ -31,7 +32,7 @@ use std::io::Write as _;
 use std::path::Path;
 
 use super::fmt_f64;
-use crate::mesh::{CellKind, Mesh};
+use crate::mesh::{CellBlock, CellKind, Mesh};
 use crate::{Error, Result};
 
 /// A nodal field to write: `n_comp` values per node, node-major
@@ -130,7 +131,26 @@ pub fn gmsh_to_vtk(kind: CellKind) -> (u8, Option<&'static [usize]>) {
 /// [`Error::param`] if the mesh has no cells, [`Error::Io`] if the file cannot be created,
 /// [`Error::Output`] if it cannot be written (a full disk).
 pub fn write_vtu(path: &Path, mesh: &Mesh, point_data: &[PointField]) -> Result<()> {
-    let text = vtu_string(mesh, point_data)?;
+    write_vtu_cells(path, mesh, None, point_data)
+}
+
+/// [`write_vtu`] with the cells `cells` (on the mesh's nodes) instead of the mesh's own of its
+/// highest dimension (`None`).
+pub fn write_vtu_cells(path: &Path, mesh: &Mesh, cells: Option<&[CellBlock]>, point_data: &[PointField]) -> Result<()> {
+    write_vtu_with(path, mesh, cells, point_data, &[])
+}
+
+/// [`write_vtu_cells`] with arrays of the whole data set (`<FieldData>`, e.g. the modes'
+/// `frequencies_hz`), which ParaView shows in its *Information* panel and scripts read as
+/// `field_data`.
+pub fn write_vtu_with(
+    path: &Path,
+    mesh: &Mesh,
+    cells: Option<&[CellBlock]>,
+    point_data: &[PointField],
+    field_data: &[(&str, &[f64])],
+) -> Result<()> {
+    let text = vtu_string_cells(mesh, cells, point_data, field_data)?;
     let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
     // Created but not written (a full disk): a result lost, exit 4, not an input error.
     f.write_all(text.as_bytes())
@@ -139,7 +159,20 @@ pub fn write_vtu(path: &Path, mesh: &Mesh, point_data: &[PointField]) -> Result<
 
 /// The `.vtu` document as a string (see [`write_vtu`]).
 pub fn vtu_string(mesh: &Mesh, point_data: &[PointField]) -> Result<String> {
+    vtu_string_cells(mesh, None, point_data, &[])
+}
+
+/// The `.vtu` document of `cells` with `field_data` (see [`write_vtu_with`]).
+pub fn vtu_string_cells(
+    mesh: &Mesh,
+    cells: Option<&[CellBlock]>,
+    point_data: &[PointField],
+    field_data: &[(&str, &[f64])],
+) -> Result<String> {
     let n_nodes = mesh.n_nodes();
+    if let Some((name, _)) = field_data.iter().find(|(_, v)| v.iter().any(|x| !x.is_finite())) {
+        return Err(Error::InvalidInput(format!("field data '{name}': a non-finite value")));
+    }
     for f in point_data {
         // Stays Error::InvalidInput: tests/unit/mesh_io.rs matches on the variant.
         if f.n_comp == 0 || f.data.len() != f.n_comp * n_nodes {
@@ -162,16 +195,25 @@ pub fn vtu_string(mesh: &Mesh, point_data: &[PointField]) -> Result<String> {
             )));
         }
     }
-    // The cells of the highest dimension present.
-    let top = mesh.blocks.iter().filter(|b| !b.is_empty()).map(|b| b.kind.dim()).max();
+    // The cells given, or those of the mesh's highest dimension.
+    let all = cells.unwrap_or(&mesh.blocks);
+    let top = all.iter().filter(|b| !b.is_empty()).map(|b| b.kind.dim()).max();
     let Some(top) = top else {
         return Err(Error::param("mesh", "cannot write a VTU file of a mesh without cells"));
     };
-    let blocks: Vec<_> = mesh
-        .blocks
+    let blocks: Vec<&CellBlock> = all
         .iter()
-        .filter(|b| b.kind.dim() == top && !b.is_empty())
+        .filter(|b| !b.is_empty() && (cells.is_some() || b.kind.dim() == top))
         .collect();
+    if let Some(a) = blocks
+        .iter()
+        .flat_map(|b| b.conn.iter())
+        .find(|&&a| a as usize >= n_nodes)
+    {
+        return Err(Error::InvalidInput(format!(
+            "cell node {a} beyond the mesh's {n_nodes} nodes"
+        )));
+    }
     let n_cells: usize = blocks.iter().map(|b| b.len()).sum();
 
     // `write!` into a String cannot fail, so its results are ignored below.
@@ -181,6 +223,20 @@ pub fn vtu_string(mesh: &Mesh, point_data: &[PointField]) -> Result<String> {
         "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n",
     );
     s.push_str("<UnstructuredGrid>\n");
+    if !field_data.is_empty() {
+        s.push_str("<FieldData>\n");
+        for (name, v) in field_data {
+            let _ = writeln!(
+                s,
+                "<DataArray type=\"Float64\" Name=\"{}\" NumberOfTuples=\"{}\" format=\"ascii\">",
+                xml_escape(name),
+                v.len()
+            );
+            push_floats(&mut s, v);
+            s.push_str("</DataArray>\n");
+        }
+        s.push_str("</FieldData>\n");
+    }
     let _ = writeln!(s, "<Piece NumberOfPoints=\"{n_nodes}\" NumberOfCells=\"{n_cells}\">");
 
     if !point_data.is_empty() {

@@ -66,6 +66,64 @@ impl Model {
             .collect()
     }
 
+    /// The cells the model is made of (solids, shells, beams; not the springs and masses), as
+    /// blocks of one kind each on the mesh's nodes: what a result file should draw. A mesh's
+    /// cells of another dimension that no element uses (the bricks of a box meshed for a shell
+    /// model, the faces of a solid) are not among them. Cells on nodes beyond the mesh's (a
+    /// reference node) are left out.
+    pub fn cell_blocks(&self) -> Vec<crate::mesh::CellBlock> {
+        use crate::mesh::{CellBlock, CellKind};
+        let mut blocks: Vec<CellBlock> = Vec::new();
+        let n_mesh = self.n_mesh_nodes as u32;
+        let mut push = |kind: CellKind, cell: &[u32], tag: u64| {
+            if cell.iter().any(|&a| a >= n_mesh) {
+                return;
+            }
+            let i = match blocks.iter().position(|b| b.kind == kind) {
+                Some(i) => i,
+                None => {
+                    blocks.push(CellBlock::new(kind));
+                    blocks.len() - 1
+                }
+            };
+            blocks[i].conn.extend_from_slice(cell);
+            blocks[i].tags.push(tag);
+        };
+        for s in &self.solids {
+            let nn = s.kind.n_nodes();
+            for (cell, &tag) in s.conn.chunks(nn).zip(&s.tags) {
+                push(s.kind, cell, tag);
+            }
+        }
+        for s in &self.shells {
+            for e in 0..s.tags.len() {
+                push(s.kinds[e], &s.conn[s.ptr[e]..s.ptr[e + 1]], s.tags[e]);
+            }
+        }
+        for b in &self.beams {
+            for e in 0..b.tags.len() {
+                push(b.kinds[e], &b.conn[b.ptr[e]..b.ptr[e + 1]], b.tags[e]);
+            }
+        }
+        blocks
+    }
+
+    /// The nodal rotations (3 per mesh node, rad) of each column of `vectors` (over the free
+    /// DOFs): `None` for a column without any, as every column of a model without shells or
+    /// beams. For the result files, beside the translations.
+    pub fn node_rotations(&self, vectors: faer::MatRef<'_, f64>) -> Vec<Option<Vec<f64>>> {
+        if vectors.nrows() != self.dofs.n_free {
+            return vec![None; vectors.ncols()];
+        }
+        (0..vectors.ncols())
+            .map(|j| {
+                let col: Vec<f64> = (0..vectors.nrows()).map(|i| vectors[(i, j)]).collect();
+                let r = crate::dof::node_triplets(&self.dofs.full(&col), self.n_mesh_nodes, 3);
+                r.iter().any(|&v| v != 0.0).then_some(r)
+            })
+            .collect()
+    }
+
     /// Total volume (m³) and mass (kg) of the continuum elements (solids, shells, beams): the
     /// sums of [`ElementSet::measure`] and `measure × density` (discrete elements have measure
     /// 0 and their mass is [`Model::discrete_mass`]). Summed shells first, then beams, then

@@ -681,7 +681,8 @@ pub fn group_maxima(mesh: &Mesh, ns: &NodalStress, field: StressField) -> Result
 
 /// Per-node arrays of a [`NodalStress`], laid out for the writers.
 ///
-/// Names (each prefixed with the `prefix` given to [`StressFields::new`], e.g. `"case1_"`):
+/// Names (in the VTU each prefixed with the `prefix` given to [`StressFields::new`], e.g.
+/// `"case1_"`):
 ///
 /// | name | VTU components | gmsh view components |
 /// |---|---|---|
@@ -692,7 +693,8 @@ pub fn group_maxima(mesh: &Mesh, ns: &NodalStress, field: StressField) -> Result
 /// | `tresca` | 1 | 1 |
 ///
 /// Principal stresses are written as three scalars, not as a 3-vector that viewers would draw
-/// as arrows. Nodes without a solid element carry zeros.
+/// as arrows. Nodes without a solid element carry zeros (a model with no solids gets no
+/// stress fields). In gmsh the prefix is left out: the load cases are a view's time steps.
 #[derive(Clone, Debug)]
 pub struct StressFields {
     prefix: String,
@@ -754,10 +756,12 @@ impl StressFields {
     }
 
     /// Nodal views for [`crate::io::msh_out::write_msh_views`] (see the table above), all at
-    /// the given `step` and `time`.
+    /// the given `step` and `time`, named without the prefix: the load cases of a run are the
+    /// time steps of one view per field in gmsh, as the displacement's are (a prefixed name
+    /// per case made a view whose steps before its case were empty).
     pub fn node_views(&self, step: usize, time: f64) -> Vec<NodeView<'_>> {
         let mut v = vec![NodeView {
-            name: format!("{}stress", self.prefix),
+            name: "stress".to_string(),
             step,
             time,
             n_comp: 9,
@@ -765,7 +769,7 @@ impl StressFields {
         }];
         for (name, data) in self.scalars() {
             v.push(NodeView {
-                name: format!("{}{name}", self.prefix),
+                name: name.to_string(),
                 step,
                 time,
                 n_comp: 1,

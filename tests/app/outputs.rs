@@ -96,3 +96,126 @@ fn output_paths_are_checked_before_the_run() {
     assert_eq!(code, 0, "{out}{err}");
     assert!(f.is_file());
 }
+
+/// A result file draws the model that was solved: a shell model meshed on a box's bricks is
+/// written as its quad4 shells (the bricks were written, with the shells left out), with the
+/// shells' rotations beside the translations and the frequencies as field data; in gmsh each
+/// mode is a view of its own at time step 0 (at step k − 1, gmsh showed mode k's first, empty
+/// step). The VTU's cells are counted from the file's `types` array (VTK_QUAD = 9,
+/// VTK_HEXAHEDRON = 12).
+#[test]
+fn result_files_draw_the_model_solved() {
+    let d = tmp("model_cells");
+    let (vtu, msh) = (d.join("sh.vtu"), d.join("sh.msh"));
+    let (code, out, err) = run(&[
+        "modes",
+        "box:0.3,0.3,0.02:6,6,1:hex8",
+        "--shell",
+        "zmin=0.02",
+        "--modes",
+        "8",
+        "--vtu",
+        vtu.to_str().unwrap(),
+        "--msh-out",
+        msh.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    let types = text.split("Name=\"types\" format=\"ascii\">\n").nth(1).unwrap();
+    let types: Vec<&str> = types.split("</DataArray>").next().unwrap().split_whitespace().collect();
+    assert_eq!(types.len(), 36, "6 × 6 shells");
+    assert!(types.iter().all(|t| *t == "9"), "quads only: {types:?}");
+    assert!(text.contains("Name=\"mode_8_rotation\""), "rotations of the shells");
+    assert!(text.contains("<FieldData>") && text.contains("Name=\"frequencies_hz\" NumberOfTuples=\"8\""));
+    // Every $NodeData section: 1, name, 1, time value, 3, then the time step index (0 for
+    // every mode).
+    let msh_text = std::fs::read_to_string(&msh).unwrap();
+    let steps: Vec<&str> = msh_text
+        .split("$NodeData\n")
+        .skip(1)
+        .map(|s| s.lines().nth(5).unwrap())
+        .collect();
+    assert!(
+        steps.len() >= 8 && steps.iter().all(|s| *s == "0"),
+        "time steps {steps:?}"
+    );
+}
+
+/// A shell model has no recovered stresses: its static VTU holds displacements and rotations,
+/// not stress fields of zeros that read as an unloaded part. The harmonic msh has its
+/// `amplitude` view as documented.
+#[test]
+fn no_zero_stresses_for_shells_and_the_harmonic_amplitude_in_gmsh() {
+    let d = tmp("shell_static");
+    let vtu = d.join("s.vtu");
+    let (code, out, err) = run(&[
+        "static",
+        "box:0.3,0.05,0.002:10,2,1:hex8",
+        "--shell",
+        "zmin=0.002",
+        "--fix",
+        "xmin:all",
+        "--force",
+        "xmax=0,0,10",
+        "--vtu",
+        vtu.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    assert!(text.contains("Name=\"displacement\"") && text.contains("Name=\"rotation\""));
+    assert!(!text.contains("von_mises") && !text.contains("Name=\"stress\""));
+    let msh = d.join("h.msh");
+    let (code, out, err) = run(&[
+        "harmonic",
+        "box:0.5,0.05,0.02:10,1,1:hex20",
+        "--fix",
+        "xmin",
+        "--force",
+        "xmax=0,0,10",
+        "--freq",
+        "50",
+        "--damping",
+        "0.02",
+        "--msh-out",
+        msh.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        std::fs::read_to_string(&msh)
+            .unwrap()
+            .contains("\"amplitude at 50.000 Hz\"")
+    );
+}
+
+/// A file named otherwise than its format is refused before the run (a VTU named `.msh` was
+/// written, and gmsh could not open it); devices keep working (the /dev/full test above).
+#[test]
+fn an_output_named_for_another_format_is_refused() {
+    let d = tmp("extensions");
+    let p = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let cube = "box:0.1,0.1,0.1:2,2,2:hex8";
+    expect_error(&["modes", cube, "--vtu", &p("m.msh")], &["--vtu", "m.msh", ".vtu"]);
+    expect_error(&["modes", cube, "--msh-out", &p("m.vtu")], &["--msh-out", ".msh"]);
+    expect_error(&["modes", cube, "--vtu", &p("m")], &["has no extension"]);
+    assert!(std::fs::read_dir(&d).unwrap().next().is_none(), "nothing written");
+    let (code, out, err) = run(&["modes", cube, "--modes", "2", "--vtu", &p("M.VTU")]);
+    assert_eq!(code, 0, "{out}{err}");
+}
+
+/// `mesh-info` on a file drawn in millimetres read as metres says so (a 300 m plate of 14 Gt
+/// went without a word), and on a model of surfaces that its volume and mass count solids only.
+#[test]
+fn mesh_info_notes_units_and_surfaces() {
+    let (code, _, err) = run(&["mesh-info", "meshes/s1_plate_tet10_h30_mm.msh"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("300 m across") && err.contains("--length-unit mm"),
+        "{err}"
+    );
+    let (code, _, err) = run(&["mesh-info", "meshes/s1_plate_tet10_h30_mm.msh", "--length-unit", "mm"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("across"), "{err}");
+    let (code, _, err) = run(&["mesh-info", "sandwich:paper"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("no volume elements"), "{err}");
+}

@@ -133,8 +133,23 @@ pub fn run(a: &BucklingArgs) -> Result<i32> {
     } else {
         out!("{}", buckling_table(&run.report));
     }
+    let (cells, rotations) = match (&a.vtu, &out_vtu) {
+        (None, None) => (None, vec![]),
+        _ => {
+            let model = crate::model::Model::build(&mesh, &opts.spec, &a.mesh)?;
+            (Some(model.cell_blocks()), model.node_rotations(run.vectors.as_ref()))
+        }
+    };
     for p in [a.vtu.as_deref(), out_vtu.as_deref()].into_iter().flatten() {
-        for w in crate::io::write_mode_shapes(&mesh, &run.shapes, &run.report.load_factors, Some(p), None)? {
+        for w in crate::io::write_mode_shapes(
+            &mesh,
+            cells.as_deref(),
+            &run.shapes,
+            &rotations,
+            ("load_factors", &run.report.load_factors),
+            Some(p),
+            None,
+        )? {
             eprintln!("wrote {}", w.display());
         }
     }

@@ -238,7 +238,16 @@ pub fn harmonic_cmd(a: &HarmonicArgs) -> Result<i32> {
     }
     if a.vtu.is_some() || a.msh_out.is_some() {
         let extra = fr.as_ref().map_or(vec![], |f| h::fatigue_fields(&f.field));
-        h::write_fields_with(&mesh, &run, k, a.vtu.as_deref(), a.msh_out.as_deref(), extra)?;
+        let cells = sys.model().cell_blocks();
+        h::write_fields_with(
+            &mesh,
+            Some(&cells),
+            &run,
+            k,
+            a.vtu.as_deref(),
+            a.msh_out.as_deref(),
+            extra,
+        )?;
         if run.report.points.len() > 1 {
             eprintln!(
                 "note: fields written at {} Hz, the frequency of the largest response",

@@ -182,10 +182,21 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
         (None, false) => out!("{}", crate::app::report::modal_table(&run.report)),
         (Some(info), false) => out!("{}", lowmem::table(&run, info)),
     }
+    // The VTU draws the model's cells (a shell model on a box's bricks draws its shells),
+    // and the shells' and beams' rotations beside the translations.
+    let (cells, rotations) = match (&a.vtu, &a.msh_out) {
+        (None, None) => (None, vec![]),
+        _ => {
+            let model = crate::model::Model::build(&mesh, &opts.spec, &a.mesh)?;
+            (Some(model.cell_blocks()), model.node_rotations(run.vectors.as_ref()))
+        }
+    };
     for p in io::write_mode_shapes(
         &mesh,
+        cells.as_deref(),
         &run.shapes,
-        &run.report.frequencies_hz,
+        &rotations,
+        ("frequencies_hz", &run.report.frequencies_hz),
         a.vtu.as_deref(),
         a.msh_out.as_deref(),
     )? {

@@ -87,6 +87,12 @@ pub fn mesh_info(a: &MeshInfoArgs) -> Result<i32> {
     for n in &mesh.notes {
         eprintln!("note: {n}");
     }
+    if a.shell.is_empty() && a.beam.is_empty() && !mesh.blocks.iter().any(|b| b.kind.dim() == 3) {
+        eprintln!(
+            "note: no volume elements: the volume and mass count solids only; give --shell GROUP=THICKNESS \
+             or --beam for the surface and line parts"
+        );
+    }
     if !a.shell.is_empty() || !a.beam.is_empty() {
         // Volume and mass of the model the parts describe (shells t·A, beams A·L, solids).
         let opts = crate::input::options::ModelOptions {

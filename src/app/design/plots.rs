@@ -54,8 +54,10 @@ pub fn write_all(
     write_electromagnet_svg(dir.join("electromagnet.svg"), drive, 8, 2.0)?;
     crate::io::write_mode_shapes(
         table_mesh,
+        None,
         &table_run.shapes,
-        &table_run.report.frequencies_hz,
+        &[],
+        ("frequencies_hz", &table_run.report.frequencies_hz),
         Some(&dir.join("table_modes.vtu")),
         Some(&dir.join("table_modes.msh")),
     )?;

@@ -171,7 +171,7 @@ pub fn mesh_info(mesh: &Mesh, source: &str, mat: &Material) -> Result<MeshInfo> 
                 element: b.tags[e],
                 kind: b.kind.name(),
                 det,
-                file: None,
+                file: Some(source.to_string()),
             })?;
         }
     }
@@ -283,15 +283,7 @@ pub struct StaticReport {
 
 /// Displacements of the mesh nodes (3 per node) from a raw solution.
 pub fn mesh_displacements(run: &crate::analysis::statics::StaticRun, case: usize) -> Vec<f64> {
-    let n = run.model.n_mesh_nodes;
-    let u = &run.u[case];
-    let mut out = vec![0.0; 3 * n];
-    for a in 0..n {
-        for c in 0..3 {
-            out[3 * a + c] = u[crate::dof::NCOMP * a + c];
-        }
-    }
-    out
+    crate::dof::node_triplets(&run.u[case], run.model.n_mesh_nodes, 0)
 }
 
 /// Build the static report (stress recovery included).
@@ -414,19 +406,31 @@ pub fn write_static_fields(
     use crate::post::stress::{StressFields, nodal_stress};
     let mut disps = Vec::new();
     let mut fields = Vec::new();
+    // Stresses are recovered in the solid elements only: a model without solids (shells,
+    // beams) gets no stress fields rather than fields of zeros that read as an unloaded part.
+    let solids = !run.model.solids.is_empty();
     for ci in 0..run.cases.len() {
         let u = mesh_displacements(run, ci);
-        let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
-        fields.push(StressFields::new(
-            &ns,
-            &if run.cases.len() > 1 {
-                format!("case{}_", ci + 1)
-            } else {
-                String::new()
-            },
-        ));
+        if solids {
+            let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+            fields.push(StressFields::new(
+                &ns,
+                &if run.cases.len() > 1 {
+                    format!("case{}_", ci + 1)
+                } else {
+                    String::new()
+                },
+            ));
+        }
         disps.push(u);
     }
+    // Shells' and beams' rotations (rad), where the model has any.
+    let rots: Vec<Option<Vec<f64>>> = (0..run.cases.len())
+        .map(|ci| {
+            let r = crate::dof::node_triplets(&run.u[ci], run.model.n_mesh_nodes, 3);
+            r.iter().any(|&v| v != 0.0).then_some(r)
+        })
+        .collect();
     if let Some(p) = vtu {
         let mut pf = Vec::new();
         for (ci, u) in disps.iter().enumerate() {
@@ -435,10 +439,15 @@ pub fn write_static_fields(
             } else {
                 "displacement".into()
             };
-            pf.push(vtk::PointField::new(name, 3, u));
-            pf.extend(fields[ci].point_fields());
+            pf.push(vtk::PointField::new(name.clone(), 3, u));
+            if let Some(r) = &rots[ci] {
+                pf.push(vtk::PointField::new(name.replace("displacement", "rotation"), 3, r));
+            }
+            if let Some(f) = fields.get(ci) {
+                pf.extend(f.point_fields());
+            }
         }
-        vtk::write_vtu(p, mesh, &pf)?;
+        vtk::write_vtu_cells(p, mesh, Some(&run.model.cell_blocks()), &pf)?;
     }
     if let Some(p) = msh {
         let mut views = Vec::new();
@@ -450,7 +459,18 @@ pub fn write_static_fields(
                 n_comp: 3,
                 data: u,
             });
-            views.extend(fields[ci].node_views(ci, ci as f64));
+            if let Some(r) = &rots[ci] {
+                views.push(msh_out::NodeView {
+                    name: "rotation".into(),
+                    step: ci,
+                    time: ci as f64,
+                    n_comp: 3,
+                    data: r,
+                });
+            }
+            if let Some(f) = fields.get(ci) {
+                views.extend(f.node_views(ci, ci as f64));
+            }
         }
         msh_out::write_msh_views(p, mesh, &views)?;
     }

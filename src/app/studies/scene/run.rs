@@ -287,8 +287,10 @@ impl Run<'_> {
             let (vtu, msh) = self.field_files(out, "modes");
             for p in crate::io::write_mode_shapes(
                 &self.mesh,
+                Some(&self.sys.model().cell_blocks()),
                 &run.shapes,
-                &run.report.frequencies_hz,
+                &self.sys.model().node_rotations(run.vectors.as_ref()),
+                ("frequencies_hz", &run.report.frequencies_hz),
                 vtu.as_deref(),
                 msh.as_deref(),
             )? {
@@ -367,7 +369,14 @@ impl Run<'_> {
             let k = crate::app::harmonic::peak_index(&run.report);
             let (vtu, msh) = self.field_files(out, "harmonic");
             if vtu.is_some() || msh.is_some() {
-                crate::app::harmonic::write_fields(&self.mesh, &run, k, vtu.as_deref(), msh.as_deref())?;
+                crate::app::harmonic::write_fields(
+                    &self.mesh,
+                    Some(&self.sys.model().cell_blocks()),
+                    &run,
+                    k,
+                    vtu.as_deref(),
+                    msh.as_deref(),
+                )?;
                 self.outputs
                     .extend(vtu.iter().chain(msh.iter()).map(|p| p.display().to_string()));
             }
