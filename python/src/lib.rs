@@ -67,19 +67,32 @@ const KEYWORDS: &[(&str, &str)] = &[
     ("--group-material", "group_material"),
     ("--length-unit", "length_unit"),
     ("--point-mass", "point_mass"),
-    ("--rayleigh", "rayleigh"),
+    ("--prestress", "prestress"),
     ("--displace", "displace"),
+    ("--material", "material"),
     ("--pressure", "pressure"),
+    ("--rayleigh", "rayleigh"),
     ("--damping", "damping"),
     ("--gravity", "gravity"),
     ("--couple", "couple"),
+    ("--engine", "engine"),
+    ("--format", "format"),
+    ("--method", "method"),
     ("--spring", "spring"),
+    ("--block", "block"),
+    ("--force", "force"),
+    ("--modes", "n"),
+    ("--probe", "probe"),
+    ("--ranks", "ranks"),
     ("--shell", "shell"),
     ("--shift", "shift_hz"),
-    ("--modes", "n"),
-    ("--force", "force"),
+    ("--solid", "solid"),
+    ("--sweep", "sweep"),
     ("--band", "band"),
     ("--beam", "beam"),
+    ("--freq", "freq"),
+    ("--hex8", "hex8"),
+    ("--mass", "mass"),
     ("--fix", "fix"),
 ];
 
@@ -281,7 +294,11 @@ impl PyMesh {
             "<vibrofem Mesh '{}': {} nodes, {}; groups {}>",
             self.source,
             self.mesh.nodes.len(),
-            kinds.join(", "),
+            if kinds.is_empty() {
+                "no cells".to_string()
+            } else {
+                kinds.join(", ")
+            },
             self.mesh.group_names()
         )
     }

@@ -9,7 +9,7 @@ import subprocess
 import sys
 import time
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import pytest
@@ -154,7 +154,7 @@ def test_a_model_reads_a_millimetre_mesh_and_checks_its_groups_at_once() -> None
 def test_modes_refuses_flags_for_counts_and_text_for_a_band() -> None:
     model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
     # True was taken as one mode; '0,500' was read as a tuple of five characters.
-    with pytest.raises(vf.InputError, match="whole numbers"):
+    with pytest.raises(vf.InputError, match="whole number"):
         model.modes(True)
     with pytest.raises(vf.InputError, match="band takes"):
         model.modes(band="0,500")  # type: ignore[arg-type]
@@ -186,3 +186,60 @@ def test_messages_name_python_keywords_not_command_line_options() -> None:
     with pytest.raises(vf.InputError) as e:
         model.modes(4, shift_hz=1e300)
     assert "shift_hz" in str(e.value) and "--shift" not in str(e.value), e.value
+
+
+def test_more_messages_name_python_keywords_and_arguments() -> None:
+    """Messages from the engine, method, sweep and format checks named the command line's
+    options (``--engine``); negative counts were PyO3's ``OverflowError`` naming nothing."""
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    calls: list[tuple[Callable[[], object], str]] = [
+        (lambda: model.modes(4, engine="arpack"), "engine"),
+        (lambda: model.harmonic({"xmax": (0, 0, 1)}, sweep=(100, 5, 10), damping=0.02), "sweep"),
+        (lambda: model.harmonic({"xmax": (0, 0, 1)}, freq=50, damping=0.02, method="fast"), "method"),
+    ]
+    for call, word in calls:
+        with pytest.raises(vf.InputError) as e:
+            call()
+        assert word in str(e.value) and "--" not in str(e.value), e.value
+    counts: list[tuple[Callable[[], object], str]] = [
+        (lambda: model.modes(-1), "n"),
+        (lambda: model.modes(4, block=-1), "block"),
+        (lambda: model.modes(2**70), "n"),
+        (lambda: model.harmonic({"xmax": (0, 0, 1)}, freq=50, damping=0.02, modes=-1), "modes"),
+        (lambda: model.buckling(force={"xmax": (-1, 0, 0)}, n=0), "n"),
+    ]
+    for call, what in counts:
+        with pytest.raises(vf.InputError) as e:
+            call()
+        assert what in str(e.value) and "whole number" in str(e.value), e.value
+
+
+def test_a_group_name_that_the_text_form_would_change_is_refused() -> None:
+    """A force on a group named "zmax " (trailing space) went to the group "zmax": the dict's
+    names travel as GROUP=VALUE text, which trims and splits them. Such names are refused."""
+    base = vf.read_mesh("box:0.2,0.05,0.02:8,2,2:hex8")
+    m = base.to_meshio()
+    m.cell_sets = {("zmax " if k == "xmax" else k): v for k, v in m.cell_sets.items()}
+    model = vf.Model(vf.from_meshio(m), fix=["xmin"])
+    with pytest.raises(vf.InputError) as e:
+        model.static(force={"zmax ": (0, 0, 100)})
+    assert "'zmax '" in str(e.value) and "spaces" in str(e.value), e.value
+    with pytest.raises(vf.InputError) as e:
+        vf.Model(base, couple={"x:min": "z"})
+    assert "':'" in str(e.value), e.value
+    with pytest.raises(vf.InputError) as e:
+        vf.Model(base, spring={"2:2": (1e5,) * 6})
+    assert "spring" in str(e.value) and "':'" in str(e.value), e.value
+
+
+def test_results_print_as_a_summary() -> None:
+    """``print(modes)`` dumped the shapes array (5 kB for 4 modes)."""
+    model = vf.Model(vf.read_mesh(BAR), fix=["xmin"])
+    r = repr(model.modes(4))
+    assert r.startswith("<vibrofem Modes: 4 modes") and "complete" in r and len(r) < 200, r
+    s = repr(model.static(force={"xmax": (0, 0, 10)}))
+    assert "max displacement" in s and "MPa" in s and len(s) < 200, s
+    h = repr(model.harmonic({"xmax": (0, 0, 1)}, freq=50, damping=0.02))
+    assert h.startswith("<vibrofem Harmonic: 50 Hz") and len(h) < 200, h
+    empty = vf.Mesh.from_arrays(np.zeros((0, 3)), {})
+    assert "no cells" in repr(empty), repr(empty)

@@ -106,12 +106,30 @@ def _material(m):
     return m if isinstance(m, str) else _nums(m)
 
 
+def _group(opt, g, separators="="):
+    """A dict key as a group name for the command line's ``GROUP=VALUE`` text: a string that
+    reads back as itself. Surrounding spaces were trimmed there (a force on ``"zmax "`` went to
+    ``"zmax"``) and a separator split the name, so such names are refused here."""
+    if not isinstance(g, str):
+        raise InputError(f"{opt}: group names are strings, got {g!r}")
+    if g != g.strip() or not g:
+        raise InputError(f"{opt}: group {g!r} is empty or has surrounding spaces, which {opt}= cannot pass on: "
+                         "rename the group")
+    bad = [c for c in separators if c in g]
+    if bad:
+        raise InputError(f"{opt}: group {g!r} contains {bad[0]!r}, which separates the parts of a {opt} entry: "
+                         "rename the group")
+    return g
+
+
 def _group_values(d, opt):
     """{group: value} or [\"group=value\"] → list of 'group=value' strings."""
     if d is None:
         return []
     if isinstance(d, dict):
-        return [f"{g}={_nums(v)}" for g, v in d.items()]
+        # A spring joins two groups as A:B, so its group names cannot hold ':'.
+        seps = "=:" if opt == "spring" else "="
+        return [f"{_group(opt, g, seps)}={_nums(v)}" for g, v in d.items()]
     if isinstance(d, str):
         return [d]
     out = list(d)
@@ -121,17 +139,18 @@ def _group_values(d, opt):
     return out
 
 
-def _group_entries(d, entry):
+def _group_entries(d, entry, opt):
     """``fix=``/``couple=`` as the command line's entries: a string or a list of them as they
     are, a dict {group: value} with ``True``/``None``/``""`` the bare group, ``False`` left out
-    and any other value written by ``entry(group, value)``."""
+    and any other value written by ``entry(group, value)``; the dict's group names must read
+    back as themselves (no ``:`` or ``@``, which start a component list or a point)."""
     if d is None:
         return []
     if isinstance(d, str):
         return [d]
     if isinstance(d, dict):
         return [g if v is None or v is True or (isinstance(v, str) and v == "") else entry(g, v)
-                for g, v in d.items() if v is not False]
+                for g, v in ((_group(opt, g, ":@"), v) for g, v in d.items()) if v is not False]
     return list(d)
 
 
@@ -157,11 +176,27 @@ def _couple_entry(g, v):
 
 
 def _fixes(d):
-    return _group_entries(d, _fix_entry)
+    return _group_entries(d, _fix_entry, "fix")
 
 
 def _couplings(d):
-    return _group_entries(d, _couple_entry)
+    return _group_entries(d, _couple_entry, "couple")
+
+
+def _whole(what, v, least):
+    """``v`` as a whole number ≥ ``least`` (a negative one was PyO3's ``OverflowError``, naming
+    nothing); ``None`` as is."""
+    if v is None:
+        return None
+    if isinstance(v, bool):
+        raise InputError(f"{what} is a whole number, not {v}")
+    try:
+        v = _operator.index(v)
+    except TypeError:
+        raise InputError(f"{what} must be a whole number, got {v!r}") from None
+    if v < least or v > 2**63 - 1:
+        raise InputError(f"{what} must be a whole number ≥ {least}, got {v}")
+    return v
 
 
 def _path(p, what):
@@ -410,6 +445,12 @@ class Modes:
     def notes(self):
         return self.report.get("notes", [])
 
+    def __repr__(self):
+        f = self.frequencies_hz
+        span = f"{f[0]:.6g}–{f[-1]:.6g} Hz" if len(f) else "none"
+        return (f"<vibrofem Modes: {len(f)} modes, {span}, {'complete' if self.complete else 'INCOMPLETE'}, "
+                f"{'accurate' if self.accurate else 'NOT ACCURATE'} (max residual {_np.max(self.residuals, initial=0):.2e})>")
+
     def to_meshio(self):
         """The mesh with a point array per mode (``mode_1`` … translations n × 3, and
         ``mode_1_rotation`` … where rotations are nonzero); ``field_data``: ``frequencies_hz``,
@@ -440,6 +481,11 @@ class Static:
     report: dict = _field(repr=False)
     #: The mesh the fields live on.
     mesh: "Mesh | None" = _field(default=None, repr=False)
+
+    def __repr__(self):
+        u = _np.linalg.norm(self.displacement[:, :3], axis=1) if len(self.displacement) else _np.zeros(1)
+        return (f"<vibrofem Static: max displacement {u.max():.4g} m, max von Mises "
+                f"{_np.max(self.von_mises, initial=0) / 1e6:.4g} MPa, {len(self.reactions)} support(s)>")
 
     def to_meshio(self):
         """The mesh with point arrays ``displacement`` (n × 3), ``rotation`` (where nonzero) and
@@ -485,7 +531,7 @@ class Model:
         self._mesh = mesh
         gm = group_material
         if isinstance(gm, dict):
-            gm = [f"{g}={_material(m)}" for g, m in gm.items()]
+            gm = [f"{_group('group_material', g)}={_material(m)}" for g, m in gm.items()]
         self._core = _core.Model(
             mesh._core,
             material=_material(material),
@@ -554,8 +600,7 @@ class Model:
         line then exits 2); check them. ``prestress=dict(force=..., pressure=..., gravity=...,
         displace=...)`` (as :meth:`static`) gives the modes of the structure preloaded by that
         static case, (K + K_σ)x = λMx (native engine)."""
-        if isinstance(n, bool) or isinstance(block, bool) or isinstance(ranks, bool):
-            raise InputError("modes: n, block and ranks are whole numbers, not True/False")
+        n, block, ranks = _whole("modes: n", n, 1), _whole("modes: block", block, 1), _whole("modes: ranks", ranks, 1)
         if isinstance(band, (str, bytes)):
             raise InputError(f"modes: band takes (f_lo, f_hi) in Hz, got {band!r}")
         pre = None
@@ -604,7 +649,7 @@ class Model:
                         f"harmonic: force for group '{g}': give (Fx, Fy, Fz) or (Fx, Fy, Fz, phase_deg), got {v!r}")
                 v = tuple(v)
                 phase = v[3] if len(v) > 3 else 0.0
-                forces.append(f"{g}={_nums(v[:3])}@{_num(phase)}")
+                forces.append(f"{_group('force', g)}={_nums(v[:3])}@{_num(phase)}")
         else:
             forces = _group_values(force, "force")
         if (freq is None) == (sweep is None):
@@ -616,7 +661,7 @@ class Model:
             damping=None if damping is None else float(damping),
             rayleigh=None if rayleigh is None else _rayleigh(rayleigh),
             method=method,
-            modes=modes,
+            modes=_whole("harmonic: modes", modes, 1),
             probe=[] if probe is None else _names(probe),
         )
         return Harmonic(frequencies_hz=freqs, displacement=re + 1j * im, report=_json.loads(rep), mesh=self.mesh)
@@ -628,7 +673,7 @@ class Model:
         disp = []
         if isinstance(displace, dict):
             for g, v in displace.items():
-                disp.append(f"{g}=" + ",".join("-" if a is None else _num(a) for a in v))
+                disp.append(f"{_group('displace', g)}=" + ",".join("-" if a is None else _num(a) for a in v))
         elif displace is not None:
             disp = _names(displace)
         return (
@@ -648,7 +693,7 @@ class Model:
         import types
 
         f, p, g, d = self._loads(force, pressure, gravity, displace)
-        rep, lam, shapes = self._core.buckling(n=n, force=f, pressure=p, gravity=g, displace=d)
+        rep, lam, shapes = self._core.buckling(n=_whole("buckling: n", n, 1), force=f, pressure=p, gravity=g, displace=d)
         r = _json.loads(rep)
         return types.SimpleNamespace(
             load_factors=_np.asarray(lam),
@@ -667,7 +712,7 @@ class Model:
         disp = []
         if isinstance(displace, dict):
             for g, v in displace.items():
-                disp.append(f"{g}=" + ",".join("-" if a is None else _num(a) for a in v))
+                disp.append(f"{_group('displace', g)}=" + ",".join("-" if a is None else _num(a) for a in v))
         elif displace is not None:
             disp = _names(displace)
         rep, u, vm = self._core.static_analysis(
@@ -711,6 +756,12 @@ class Harmonic:
     report: dict = _field(repr=False)
     #: The mesh the displacements live on.
     mesh: "Mesh | None" = _field(default=None, repr=False)
+
+    def __repr__(self):
+        f = self.frequencies_hz
+        span = f"{f[0]:.6g} Hz" if len(f) == 1 else f"{len(f)} frequencies, {f[0]:.6g}–{f[-1]:.6g} Hz"
+        peak = _np.abs(self.displacement).max(initial=0)
+        return f"<vibrofem Harmonic: {span}, largest amplitude {peak:.4g} m>"
 
     def to_meshio(self):
         """The mesh with point arrays per frequency: ``real_1``, ``imag_1`` (n × 3, m) and

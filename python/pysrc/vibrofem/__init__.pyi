@@ -3,7 +3,7 @@
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, SupportsIndex, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -148,23 +148,23 @@ class Model:
     def notes(self) -> List[str]: ...
     def modes(
         self,
-        n: Optional[int] = None,
-        band: Optional[Tuple[float, float]] = None,
+        n: Optional[SupportsIndex] = None,
+        band: Union[Tuple[float, float], Sequence[float], npt.NDArray[np.floating[Any]], None] = None,
         shift_hz: Optional[float] = None,
-        block: int = 6,
+        block: SupportsIndex = 6,
         engine: str = "native",
-        ranks: int = 1,
+        ranks: SupportsIndex = 1,
         prestress: Optional[Mapping[str, Any]] = None,
     ) -> Modes: ...
     def harmonic(
         self,
-        force: Union[Mapping[str, Sequence[float]], Sequence[str], str],
+        force: Union[Mapping[str, Union[Sequence[float], npt.NDArray[np.floating[Any]]]], Sequence[str], str],
         freq: Optional[float] = None,
         sweep: Optional[Tuple[float, float, float]] = None,
         damping: Optional[float] = None,
         rayleigh: Optional[Tuple[float, float]] = None,
         method: str = "modal",
-        modes: Optional[int] = None,
+        modes: Optional[SupportsIndex] = None,
         probe: Union[str, Sequence[str], None] = None,
     ) -> Harmonic: ...
     def static(
@@ -172,15 +172,19 @@ class Model:
         force: _GroupValues = None,
         pressure: _GroupValues = None,
         gravity: Union[_Numbers, str, None] = None,
-        displace: Union[Mapping[str, Sequence[Optional[float]]], Sequence[str], str, None] = None,
+        displace: Union[
+            Mapping[str, Union[Sequence[Optional[float]], npt.NDArray[np.floating[Any]]]], Sequence[str], str, None
+        ] = None,
     ) -> Static: ...
     def buckling(
         self,
         force: _GroupValues = None,
         pressure: _GroupValues = None,
         gravity: Union[_Numbers, str, None] = None,
-        displace: Union[Mapping[str, Sequence[Optional[float]]], Sequence[str], str, None] = None,
-        n: int = 4,
+        displace: Union[
+            Mapping[str, Union[Sequence[Optional[float]], npt.NDArray[np.floating[Any]]]], Sequence[str], str, None
+        ] = None,
+        n: SupportsIndex = 4,
     ) -> Any: ...
     def export(self, dir: _PathArg, format: str = "both") -> List[str]: ...
 

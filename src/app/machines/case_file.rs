@@ -164,6 +164,29 @@ impl<'a, 'b> Checks<'a, 'b> {
         }
     }
 
+    /// A recording step `dt` (s): `default` when not given, else > 0 and at most `dt_max` (the
+    /// samples the bound keeps said by `why`, as metrics read from samples need them); at most
+    /// 2e6 samples over `duration` either way.
+    pub fn recording_step(
+        &self,
+        given: Option<f64>,
+        default: f64,
+        dt_max: f64,
+        why: &str,
+        duration: f64,
+    ) -> Result<f64> {
+        let dt = self.test(
+            "dt",
+            given.unwrap_or(default),
+            given.is_none_or(|v| v > 0.0 && v <= dt_max),
+            &format!("> 0 and at most {} s ({why})", crate::io::fmt_short(dt_max, 3)),
+        )?;
+        if duration / dt > 2e6 {
+            return Err(self.err("dt", format!("too small: {} samples", duration / dt)));
+        }
+        Ok(dt)
+    }
+
     /// `v` if > 0.
     pub fn pos(&self, key: &str, v: f64) -> Result<f64> {
         self.test(key, v, v > 0.0, "> 0")

@@ -477,19 +477,13 @@ fn runup_settings(src: &Source, u: &RawRunup, g: &Grinder) -> Result<RunupSettin
     check_revolutions(&Checks::table(src, "disc"), "speed_rpm", g.speed, rdur, "the run-up")?;
     // The vibration's amplitude is read from the samples: at least 20 a revolution at the
     // operating speed (a sinusoid's peak then within 1.3 %).
-    let dt_max = TAU / g.speed / 20.0;
-    let dt = cu.test(
-        "dt",
-        u.dt.unwrap_or(2e-4),
-        u.dt.is_none_or(|v| v > 0.0 && v <= dt_max),
-        &format!(
-            "> 0 and at most {} s (20 samples a revolution at the operating speed)",
-            crate::io::fmt_short(dt_max, 3)
-        ),
+    let dt = cu.recording_step(
+        u.dt,
+        2e-4,
+        TAU / g.speed / 20.0,
+        "20 samples a revolution at the operating speed",
+        rdur,
     )?;
-    if rdur / dt > 2e6 {
-        return Err(cu.err("dt", format!("too small: {} samples", rdur / dt)));
-    }
     Ok(RunupSettings {
         ramp_time,
         duration: rdur,

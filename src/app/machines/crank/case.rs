@@ -478,19 +478,13 @@ fn startup_settings(src: &Source, s: &RawStartup, sync: f64) -> Result<StartupSe
     )?;
     // The metrics of a revolution come from the samples: at least 36 a revolution (10°) at the
     // synchronous speed, and ten in the run.
-    let dt_max = (TAU / sync / 36.0).min(duration / 10.0);
-    let dt = cs.test(
-        "dt",
-        s.dt.unwrap_or(2e-3),
-        s.dt.is_none_or(|v| v > 0.0 && v <= dt_max),
-        &format!(
-            "> 0 and at most {} s (36 samples a revolution at the synchronous speed, 10 in the run)",
-            crate::io::fmt_short(dt_max, 3)
-        ),
+    let dt = cs.recording_step(
+        s.dt,
+        2e-3,
+        (TAU / sync / 36.0).min(duration / 10.0),
+        "36 samples a revolution at the synchronous speed, 10 in the run",
+        duration,
     )?;
-    if duration / dt > 2e6 {
-        return Err(cs.err("dt", format!("too small: {} samples", duration / dt)));
-    }
     Ok(StartupSettings {
         ramp_time: s.ramp_time.map(|v| cs.pos("ramp_time", v)).transpose()?,
         duration,
