@@ -109,16 +109,28 @@ impl Model {
     }
 
     /// The nodal rotations (3 per mesh node, rad) of each column of `vectors` (over the free
-    /// DOFs): `None` for a column without any, as every column of a model without shells or
+    /// DOFs), scaled as `shapes[j]` (the column's translations as written: a buckling shape is
+    /// scaled to a largest translation of 1, its vector is not, and its sign may differ):
+    /// `None` for a column without rotations, as every column of a model without shells or
     /// beams. For the result files, beside the translations.
-    pub fn node_rotations(&self, vectors: faer::MatRef<'_, f64>) -> Vec<Option<Vec<f64>>> {
+    pub fn node_rotations(&self, vectors: faer::MatRef<'_, f64>, shapes: &[Vec<f64>]) -> Vec<Option<Vec<f64>>> {
         if vectors.nrows() != self.dofs.n_free {
             return vec![None; vectors.ncols()];
         }
         (0..vectors.ncols())
             .map(|j| {
                 let col: Vec<f64> = (0..vectors.nrows()).map(|i| vectors[(i, j)]).collect();
-                let r = crate::dof::node_triplets(&self.dofs.full(&col), self.n_mesh_nodes, 3);
+                let full = self.dofs.full(&col);
+                let mut r = crate::dof::node_triplets(&full, self.n_mesh_nodes, 3);
+                // The factor that takes the vector's translations to the shape's (least squares:
+                // exact when one is a multiple of the other).
+                let t = crate::dof::node_triplets(&full, self.n_mesh_nodes, 0);
+                let tt: f64 = t.iter().map(|v| v * v).sum();
+                let st: f64 = shapes
+                    .get(j)
+                    .map_or(0.0, |s| s.iter().zip(&t).map(|(a, b)| a * b).sum());
+                let scale = if tt > 0.0 { st / tt } else { 1.0 };
+                r.iter_mut().for_each(|v| *v *= scale);
                 r.iter().any(|&v| v != 0.0).then_some(r)
             })
             .collect()

@@ -219,3 +219,61 @@ fn mesh_info_notes_units_and_surfaces() {
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("no volume elements"), "{err}");
 }
+
+/// The floats of the VTU array that follows `marker` (e.g. `Name="mode_1"`).
+fn vtu_array(text: &str, marker: &str) -> Vec<f64> {
+    let body = text.split(marker).nth(1).unwrap();
+    let body = &body[body.find('>').unwrap() + 1..];
+    body.split("</DataArray>")
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect()
+}
+
+/// A buckling shape's rotations are scaled and signed as its translations (they came from the
+/// solver's vector as it was, 208 times too small and of the other sign at the tip of a shell
+/// strip). Kirchhoff kinematics: u_z = −x·r_y, so along a strip bent in its x–z plane the
+/// nodal r_y equals −∂u_z/∂x; at the tip of 20 elements the one-sided difference of the last
+/// element agrees within 10 % (its error is half the element's change of slope).
+#[test]
+fn buckling_rotations_are_scaled_as_the_translations() {
+    let d = tmp("buckling_rotations");
+    let vtu = d.join("b.vtu");
+    let (code, out, err) = run(&[
+        "buckling",
+        "box:0.5,0.1,0.01:20,4,1:hex8",
+        "--shell",
+        "zmin=0.01",
+        "--fix",
+        "xmin:ux,uy,uz,rx,ry,rz",
+        "--force",
+        "xmax=-1,0,0",
+        "--modes",
+        "1",
+        "--vtu",
+        vtu.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    let (x, u, r) = (
+        vtu_array(&text, "<Points>"),
+        vtu_array(&text, "Name=\"mode_1\""),
+        vtu_array(&text, "Name=\"mode_1_rotation\""),
+    );
+    // The node at the tip's mid-width on the shell plane (z = 0) and its neighbour along x.
+    let node = |px: f64| {
+        (0..x.len() / 3)
+            .find(|&a| (x[3 * a] - px).abs() < 1e-9 && (x[3 * a + 1] - 0.05).abs() < 1e-9 && x[3 * a + 2].abs() < 1e-9)
+            .unwrap()
+    };
+    let (tip, before) = (node(0.5), node(0.475));
+    let slope = (u[3 * tip + 2] - u[3 * before + 2]) / 0.025;
+    let ry = r[3 * tip + 1];
+    assert!(
+        (ry + slope).abs() < 0.1 * slope.abs(),
+        "r_y {ry} against −∂u_z/∂x {}",
+        -slope
+    );
+}

@@ -198,6 +198,29 @@ fn run_cli_writes_summary_and_fields() {
     assert!(js["static"]["cases"][0]["references"][0]["stiffness"].as_f64().unwrap() > 4e6);
     assert!(out.join("static.vtu").is_file());
 
+    // The same folder again, the scene now without result files: the earlier static.vtu (of
+    // another run) would sit beside a summary listing none; it is removed, with a note.
+    let quiet = out.join("quiet.toml");
+    let text = std::fs::read_to_string(root().join("scenes/s3_leaf_stress.toml")).unwrap();
+    let meshes = root().join("meshes");
+    let text = text
+        .replace("vtu = true", "vtu = false")
+        .replace("file = \"../meshes", &format!("file = \"{}", meshes.display()));
+    std::fs::write(&quiet, &text).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_vibrofem"))
+        .arg("run")
+        .arg(&quiet)
+        .arg("-o")
+        .arg(&out)
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!out.join("static.vtu").exists(), "a stale static.vtu left behind");
+    let js: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(js["notes"].to_string().contains("left by an earlier run"), "{js}");
+
     let o = Command::new(env!("CARGO_BIN_EXE_vibrofem"))
         .args(["run", "tests/scenes/bad/missing_young.toml", "-o"])
         .arg(&out)

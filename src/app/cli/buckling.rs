@@ -137,7 +137,10 @@ pub fn run(a: &BucklingArgs) -> Result<i32> {
         (None, None) => (None, vec![]),
         _ => {
             let model = crate::model::Model::build(&mesh, &opts.spec, &a.mesh)?;
-            (Some(model.cell_blocks()), model.node_rotations(run.vectors.as_ref()))
+            (
+                Some(model.cell_blocks()),
+                model.node_rotations(run.vectors.as_ref(), &run.shapes),
+            )
         }
     };
     for p in [a.vtu.as_deref(), out_vtu.as_deref()].into_iter().flatten() {

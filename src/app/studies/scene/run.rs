@@ -171,6 +171,9 @@ impl Scene {
             None => None,
             Some(req) => Some(run.harmonic(req, out)?),
         };
+        if let Some((dir, prefix)) = out {
+            remove_stale_outputs(dir, prefix, &run.outputs, &mut run.notes);
+        }
         run.notes.dedup();
         Ok(SceneReport {
             scene: self.path.display().to_string(),
@@ -289,7 +292,7 @@ impl Run<'_> {
                 &self.mesh,
                 Some(&self.sys.model().cell_blocks()),
                 &run.shapes,
-                &self.sys.model().node_rotations(run.vectors.as_ref()),
+                &self.sys.model().node_rotations(run.vectors.as_ref(), &run.shapes),
                 ("frequencies_hz", &run.report.frequencies_hz),
                 vtu.as_deref(),
                 msh.as_deref(),
@@ -406,4 +409,37 @@ pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
         ));
     }
     crate::input::source::load(spec, length_scale)
+}
+
+/// The result files a scene run may write (after its prefix).
+const RESULT_FILES: [&str; 7] = [
+    "modes.vtu",
+    "modes.msh",
+    "static.vtu",
+    "static.msh",
+    "harmonic.vtu",
+    "harmonic.msh",
+    "frf.svg",
+];
+
+/// Remove the result files of an earlier run in `dir` (with this `prefix`) that this run did
+/// not write (`written`), each with a note: a `static.vtu` of another scene beside a summary that
+/// lists no files read as this run's result. What cannot be removed is said, not an error.
+fn remove_stale_outputs(dir: &Path, prefix: &str, written: &[String], notes: &mut Vec<String>) {
+    for name in RESULT_FILES {
+        let p = dir.join(format!("{prefix}{name}"));
+        if !p.is_file() || written.iter().any(|w| Path::new(w) == p) {
+            continue;
+        }
+        notes.push(match std::fs::remove_file(&p) {
+            Ok(()) => format!(
+                "removed {} left by an earlier run (this run does not write it)",
+                p.display()
+            ),
+            Err(e) => format!(
+                "{} is left from an earlier run and could not be removed: {e}",
+                p.display()
+            ),
+        });
+    }
 }
