@@ -97,6 +97,32 @@ fn scene_buckling_and_prestress_match_the_library() {
     assert!((u2 / u1 / 1000.0 - 1.0).abs() < 1e-9, "{u1} {u2}");
 }
 
+/// With `[output] vtu = true` a scene's buckling shapes are written as `buckling.vtu`, with the
+/// load factors as field data equal to the report's (the shapes were in no file).
+#[test]
+fn scene_buckling_shapes_are_written() {
+    let dir = std::env::temp_dir().join(format!("vibrofem_scene_buckling_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = Scene::parse(Path::new("column.toml"), &format!("{SCENE}\n[output]\nvtu = true\n")).unwrap();
+    let r = scene.run(Some((&dir, ""))).unwrap();
+    let vtu = dir.join("buckling.vtu");
+    assert!(r.outputs.iter().any(|o| Path::new(o) == vtu), "{:?}", r.outputs);
+    let text = std::fs::read_to_string(&vtu).unwrap();
+    let lf = &r.buckling.as_ref().unwrap().load_factors;
+    let field = text.split("Name=\"load_factors\"").nth(1).unwrap();
+    let field: Vec<f64> = field[field.find('>').unwrap() + 1..]
+        .split("</DataArray>")
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(&field, lf);
+    assert!(text.contains("Name=\"mode_2\""));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn scene_case_numbers_are_checked_by_line() {
     let bad = SCENE.replace("prestress = 2", "prestress = 3");

@@ -161,7 +161,7 @@ impl Scene {
         };
         let buckling = match self.buckling {
             None => None,
-            Some((case, modes)) => Some(run.buckling(case, modes)?),
+            Some((case, modes)) => Some(run.buckling(case, modes, out)?),
         };
         let statics = match &self.static_cases {
             None => None,
@@ -309,7 +309,7 @@ impl Run<'_> {
     }
 
     /// Linear buckling under load case `case` (0-based): the `modes` lowest positive factors.
-    fn buckling(&mut self, case: usize, modes: usize) -> Result<crate::analysis::buckling::BucklingReport> {
+    fn buckling(&mut self, case: usize, modes: usize, out: Out) -> Result<crate::analysis::buckling::BucklingReport> {
         let loads = self
             .scene
             .static_cases
@@ -325,6 +325,22 @@ impl Run<'_> {
         let run =
             crate::analysis::buckling::solve(&self.sys, &self.mesh, &loads, &opts, self.read_time, self.model_time)?;
         self.notes.extend(run.report.notes.iter().cloned());
+        // The shapes as `buckling.vtu` (largest translation 1, load factors as field data), as
+        // `vibrofem buckling --vtu` writes them; gmsh views are not written for buckling.
+        if let (Some(vtu), _) = self.field_files(out, "buckling") {
+            let model = self.sys.model();
+            for p in crate::io::write_mode_shapes(
+                &self.mesh,
+                Some(&model.cell_blocks()),
+                &run.shapes,
+                &model.node_rotations(run.vectors.as_ref(), &run.shapes),
+                ("load_factors", &run.report.load_factors),
+                Some(&vtu),
+                None,
+            )? {
+                self.outputs.push(p.display().to_string());
+            }
+        }
         Ok(run.report)
     }
 
@@ -412,7 +428,8 @@ pub fn generate(spec: &str, length_scale: f64) -> Result<Mesh> {
 }
 
 /// The result files a scene run may write (after its prefix).
-const RESULT_FILES: [&str; 7] = [
+const RESULT_FILES: [&str; 8] = [
+    "buckling.vtu",
     "modes.vtu",
     "modes.msh",
     "static.vtu",
