@@ -206,6 +206,8 @@ pub struct BucklingRun {
     pub shapes: Vec<Vec<f64>>,
     /// The shapes over the free DOFs, K-normalised (φᵀKφ = 1).
     pub vectors: Mat<f64>,
+    /// The model solved (for the result files: its cells and the vectors' rotations).
+    pub model: Arc<Model>,
 }
 
 /// The verified solution of the pencil.
@@ -1150,6 +1152,7 @@ pub fn solve(
         report,
         shapes,
         vectors: sol.vectors,
+        model: sys.model_arc().clone(),
     })
 }
 

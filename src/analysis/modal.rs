@@ -217,6 +217,9 @@ pub struct ModalRun {
     /// M-normalised eigenvectors over the free DOFs (one column per mode; see
     /// [`crate::dof::DofMap`] for the DOF of each row).
     pub vectors: faer::Mat<f64>,
+    /// The model solved (for the result files: its cells and the vectors' rotations); `None`
+    /// for a run made without one (the design's reduced basis).
+    pub model: Option<std::sync::Arc<Model>>,
 }
 
 pub use crate::system::check_memory;
@@ -553,6 +556,7 @@ fn finish_with(
         shapes,
         lambda: sol.lambda,
         vectors: sol.vectors,
+        model: Some(sys.model_arc().clone()),
     })
 }
 

@@ -139,3 +139,23 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
     false
 }
+
+/// Mode or buckling shapes (`shapes`, with their `vectors` over the free DOFs) as VTU and/or
+/// gmsh files ([`crate::io::write_mode_shapes`]) drawn on the solved `model`'s cells, with the
+/// shells' and beams' rotations beside the translations; without a model, on the mesh's cells of
+/// its highest dimension and translations only. Returns the files written.
+pub fn write_shapes(
+    mesh: &crate::mesh::Mesh,
+    model: Option<&crate::model::Model>,
+    (shapes, vectors): (&[Vec<f64>], faer::MatRef<'_, f64>),
+    values: (&str, &[f64]),
+    vtu: Option<&Path>,
+    msh: Option<&Path>,
+) -> Result<Vec<PathBuf>> {
+    if vtu.is_none() && msh.is_none() {
+        return Ok(vec![]);
+    }
+    let cells = model.map(|m| m.cell_blocks());
+    let rotations = model.map_or(vec![], |m| m.node_rotations(vectors, shapes));
+    crate::io::write_mode_shapes(mesh, cells.as_deref(), shapes, &rotations, values, vtu, msh)
+}

@@ -30,6 +30,24 @@ fn assert_invalid<T: std::fmt::Debug>(r: vibrofem::Result<T>, needles: &[&str]) 
     }
 }
 
+/// Each case (`from`, `to`, key, words): `good` with `from` replaced by `to` once must be refused
+/// by `parse` naming `to`'s line, the key, the words and `also`.
+fn refused_at_their_keys<T: std::fmt::Debug>(
+    good: &str,
+    parse: impl Fn(&str) -> vibrofem::Result<T>,
+    cases: &[(&str, &str, &str, &str)],
+    also: &[&str],
+) {
+    for &(from, to, key, said) in cases {
+        let t = good.replacen(from, to, 1);
+        let l = t.lines().position(|l| l.contains(to.trim())).unwrap() + 1;
+        let line = format!("line {l}");
+        let mut needles = vec![line.as_str(), key, said];
+        needles.extend_from_slice(also);
+        assert_invalid(parse(&t), &needles);
+    }
+}
+
 // =============================================================================================
 // A. Crank drives
 
@@ -387,7 +405,7 @@ fn crank_file_errors_name_file_line_and_key() {
     // Values no drive of the family has (a start speed 1e5 × the synchronous one passed for a
     // steady run while the drive coasted; a recording step of 100 s gave δ = 1.03 instead of
     // 0.085), named by key with the bound.
-    for (from, to, key, said) in [
+    let cases = [
         (
             "start_speed = 10.5 ",
             "start_speed = 1e6 ",
@@ -420,11 +438,8 @@ fn crank_file_errors_name_file_line_and_key() {
             "mechanism.crank_radius",
             "check the units",
         ),
-    ] {
-        let t = good.replacen(from, to, 1);
-        let l = line_of(&t, to.trim());
-        assert_invalid(CrankCase::parse("x.toml", &t), &[&format!("line {l}"), key, said]);
-    }
+    ];
+    refused_at_their_keys(good, |t| CrankCase::parse("x.toml", t), &cases, &[]);
     // "power" scaling of the setups' motors needs a resisting moment to scale by.
     let t = good.replace("cart_resistance = 3562.0", "cart_resistance = 0.0");
     assert_invalid(
@@ -659,7 +674,7 @@ fn autobalancer_file_errors_name_file_line_and_key() {
     // A frequency that sets an infinite hinge stiffness is named by its own key (the message
     // named `stiffness`, a key not in the file); a cutting moment turning the rocker by 88 rad
     // and a recording step of 10 s (a peak of 2.5e-10 µm for 599 µm) are refused.
-    for (from, to, key, said) in [
+    let cases = [
         (
             "natural_frequency_hz = ",
             "natural_frequency_hz = 1e300 #",
@@ -668,14 +683,8 @@ fn autobalancer_file_errors_name_file_line_and_key() {
         ),
         ("moment = 4.5 ", "moment = 1e6 ", "cutting.moment", "small"),
         ("dt = 2e-4 ", "dt = 10.0 ", "runup.dt", "20 samples a revolution"),
-    ] {
-        let t = good.replacen(from, to, 1);
-        let l = line_of(&t, to.trim());
-        assert_invalid(
-            AutobalancerCase::parse("g.toml", &t),
-            &["g.toml", &format!("line {l}"), key, said],
-        );
-    }
+    ];
+    refused_at_their_keys(good, |t| AutobalancerCase::parse("g.toml", t), &cases, &["g.toml"]);
 }
 
 /// Whether balls can cancel the imbalance at all: their vectors m_i R_i and m_0 R_0 must close

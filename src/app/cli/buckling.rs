@@ -133,22 +133,11 @@ pub fn run(a: &BucklingArgs) -> Result<i32> {
     } else {
         out!("{}", buckling_table(&run.report));
     }
-    let (cells, rotations) = match (&a.vtu, &out_vtu) {
-        (None, None) => (None, vec![]),
-        _ => {
-            let model = crate::model::Model::build(&mesh, &opts.spec, &a.mesh)?;
-            (
-                Some(model.cell_blocks()),
-                model.node_rotations(run.vectors.as_ref(), &run.shapes),
-            )
-        }
-    };
     for p in [a.vtu.as_deref(), out_vtu.as_deref()].into_iter().flatten() {
-        for w in crate::io::write_mode_shapes(
+        for w in crate::app::output::write_shapes(
             &mesh,
-            cells.as_deref(),
-            &run.shapes,
-            &rotations,
+            Some(&run.model),
+            (&run.shapes, run.vectors.as_ref()),
             ("load_factors", &run.report.load_factors),
             Some(p),
             None,

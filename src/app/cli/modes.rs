@@ -5,7 +5,6 @@ use crate::analysis::modal::{ModalOptions, ModalTarget};
 use crate::analysis::statics::Load;
 use crate::app::cli::args::{LoadArgs, ModelArgs, length_scale};
 use crate::app::engines::{Engine, LowMemOptions, SlepcOptions, Solver, lowmem};
-use crate::io;
 use crate::{Error, Result};
 use std::path::PathBuf;
 
@@ -184,21 +183,10 @@ pub fn run(a: &ModesArgs) -> Result<i32> {
     }
     // The VTU draws the model's cells (a shell model on a box's bricks draws its shells),
     // and the shells' and beams' rotations beside the translations.
-    let (cells, rotations) = match (&a.vtu, &a.msh_out) {
-        (None, None) => (None, vec![]),
-        _ => {
-            let model = crate::model::Model::build(&mesh, &opts.spec, &a.mesh)?;
-            (
-                Some(model.cell_blocks()),
-                model.node_rotations(run.vectors.as_ref(), &run.shapes),
-            )
-        }
-    };
-    for p in io::write_mode_shapes(
+    for p in crate::app::output::write_shapes(
         &mesh,
-        cells.as_deref(),
-        &run.shapes,
-        &rotations,
+        run.model.as_deref(),
+        (&run.shapes, run.vectors.as_ref()),
         ("frequencies_hz", &run.report.frequencies_hz),
         a.vtu.as_deref(),
         a.msh_out.as_deref(),

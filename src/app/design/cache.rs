@@ -116,5 +116,6 @@ pub fn clone_run(r: &crate::analysis::modal::ModalRun) -> crate::analysis::modal
         shapes: r.shapes.clone(),
         lambda: r.lambda.clone(),
         vectors: r.vectors.clone(),
+        model: r.model.clone(),
     }
 }

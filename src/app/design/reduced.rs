@@ -354,6 +354,7 @@ pub fn run_in(
         shapes: vec![],
         lambda: lam[..want].to_vec(),
         vectors: x,
+        model: None,
     };
     Ok(Ok(ReducedRun {
         run,

@@ -288,11 +288,10 @@ impl Run<'_> {
         );
         if out.is_some() {
             let (vtu, msh) = self.field_files(out, "modes");
-            for p in crate::io::write_mode_shapes(
+            for p in crate::app::output::write_shapes(
                 &self.mesh,
-                Some(&self.sys.model().cell_blocks()),
-                &run.shapes,
-                &self.sys.model().node_rotations(run.vectors.as_ref(), &run.shapes),
+                Some(self.sys.model()),
+                (&run.shapes, run.vectors.as_ref()),
                 ("frequencies_hz", &run.report.frequencies_hz),
                 vtu.as_deref(),
                 msh.as_deref(),
@@ -328,12 +327,10 @@ impl Run<'_> {
         // The shapes as `buckling.vtu` (largest translation 1, load factors as field data), as
         // `vibrofem buckling --vtu` writes them; gmsh views are not written for buckling.
         if let (Some(vtu), _) = self.field_files(out, "buckling") {
-            let model = self.sys.model();
-            for p in crate::io::write_mode_shapes(
+            for p in crate::app::output::write_shapes(
                 &self.mesh,
-                Some(&model.cell_blocks()),
-                &run.shapes,
-                &model.node_rotations(run.vectors.as_ref(), &run.shapes),
+                Some(self.sys.model()),
+                (&run.shapes, run.vectors.as_ref()),
                 ("load_factors", &run.report.load_factors),
                 Some(&vtu),
                 None,
