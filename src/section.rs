@@ -84,6 +84,21 @@ pub struct BeamSection {
     /// Request the warping degree of freedom (7 per node, Vlasov torsion with `E Cw`); see
     /// [`crate::element::beam`]. Off by default; [`with_warping`](Self::with_warping) sets it.
     pub warping: bool,
+    /// Where the section's extreme fibres are, for the normal stress of its resultants
+    /// ([`BeamSection::extreme_normal_stress`]); [`Fibres::Unknown`] for custom properties.
+    pub fibres: Fibres,
+}
+
+/// The extreme fibres of a beam section, relative to the centroid in local `(y, z)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fibres {
+    /// The vertices of the section's convex hull, where a stress linear over the section is
+    /// largest and smallest (a rectangle's, an I-section's flange tips, a channel's corners).
+    Corners([[f64; 2]; 4]),
+    /// A circle or tube of this outer radius about the centroid.
+    Round(f64),
+    /// Not known (a section given by its properties).
+    Unknown,
 }
 
 /// Cowper's shear factor of a solid rectangle, `10(1+ν)/(12+11ν)`.
@@ -137,6 +152,12 @@ fn energy_web_shear_factor(hf: f64, tw: f64, nseg: f64, l: f64, tf: f64) -> f64 
 /// `n_free` free short ends, `(a c³/3)(1 − 0.315 n_free c/a)`: Roark Table 10.7 case 4 gives
 /// `a c³ (1/3 − 0.21 c/a)` for both ends free, i.e. `0.105 c⁴` lost per free end. Ends joined
 /// to another wall lose nothing (the junction gain of El Darwish and Johnston is ignored).
+/// The corners of a `b × h` box about its centre (a rectangle's, an I-section's flange tips).
+fn box_corners(b: f64, h: f64) -> Fibres {
+    let (y, z) = (0.5 * b, 0.5 * h);
+    Fibres::Corners([[-y, -z], [y, -z], [y, z], [-y, z]])
+}
+
 fn thin_rect_j(a: f64, c: f64, n_free: f64) -> f64 {
     a * c.powi(3) / 3.0 * (1.0 - 0.315 * n_free * c / a)
 }
@@ -156,6 +177,57 @@ impl BeamSection {
             cw,
             shear_centre: [0.0, 0.0],
             warping: false,
+            fibres: Fibres::Unknown,
+        }
+    }
+
+    /// The same section with its extreme fibres ([`Fibres`]).
+    pub fn with_fibres(self, fibres: Fibres) -> BeamSection {
+        BeamSection { fibres, ..self }
+    }
+
+    /// The largest magnitude of the normal stress `σ = N/A + M_y z/I_y − M_z y/I_z` (Pa) over
+    /// the section's extreme fibres for the resultants `[N, Q_y, Q_z, T, M_y, M_z]` of
+    /// [`crate::element::geometric::beam_resultants`] (the flexure formula with the axial
+    /// stress; shear and torsion stresses are not included); `None` when the fibres are
+    /// [`Fibres::Unknown`]. Local `y`, `z` are taken as principal axes, as the element does.
+    ///
+    /// ```
+    /// use vibrofem::section::BeamSection;
+    /// // 20 × 40 mm, M_y = 100 N·m: σ = M c / I = 100 · 0.02 / (0.02 · 0.04³ / 12) = 18.75 MPa.
+    /// let s = BeamSection::rectangle(0.02, 0.04);
+    /// let sigma = s.extreme_normal_stress(&[0.0, 0.0, 0.0, 0.0, 100.0, 0.0]).unwrap();
+    /// assert!((sigma - 18.75e6).abs() < 1e-6);
+    /// ```
+    pub fn extreme_normal_stress(&self, r: &[f64; 6]) -> Option<f64> {
+        let axial = r[0] / self.area;
+        match self.fibres {
+            Fibres::Corners(points) => Some(
+                points
+                    .iter()
+                    .map(|&[y, z]| (axial + r[4] * z / self.iy - r[5] * y / self.iz).abs())
+                    .fold(0.0, f64::max),
+            ),
+            // Bending about any axis: the moment's magnitude over I (Iy = Iz for a round section).
+            Fibres::Round(ro) => Some(axial.abs() + r[4].hypot(r[5]) * ro / self.iy.max(self.iz)),
+            Fibres::Unknown => None,
+        }
+    }
+
+    /// The largest shear stress of the torque `t` (N·m) for a round section, `|T| r / J` at its
+    /// outer radius (exact for circles and tubes, Saint-Venant); `None` for other sections,
+    /// whose torsion stresses depend on their shape beyond `J`.
+    ///
+    /// ```
+    /// use vibrofem::section::BeamSection;
+    /// // d = 20 mm, T = 40 N·m: τ = 16 T/(π d³) = 25.46 MPa.
+    /// let tau = BeamSection::circle(0.02).torsion_shear(40.0).unwrap();
+    /// assert!((tau - 16.0 * 40.0 / (std::f64::consts::PI * 0.02f64.powi(3))).abs() < 1e-6);
+    /// ```
+    pub fn torsion_shear(&self, t: f64) -> Option<f64> {
+        match self.fibres {
+            Fibres::Round(ro) => Some(t.abs() * ro / self.j),
+            _ => None,
         }
     }
 
@@ -171,6 +243,7 @@ impl BeamSection {
         let j = a * c.powi(3) * (1.0 / 3.0 - 0.21 * (c / a) * (1.0 - c.powi(4) / (12.0 * a.powi(4))));
         let k = cowper_rectangle(COWPER_POISSON);
         BeamSection::custom(b * h, b * h.powi(3) / 12.0, h * b.powi(3) / 12.0, j, k, k, 0.0)
+            .with_fibres(box_corners(b, h))
     }
 
     /// Solid circle of diameter `d`: `A = πd²/4`, `I = πd⁴/64`, `J = πd⁴/32`, Cowper's
@@ -179,7 +252,7 @@ impl BeamSection {
         let pi = std::f64::consts::PI;
         let i = pi * d.powi(4) / 64.0;
         let k = cowper_tube(COWPER_POISSON, 0.0);
-        BeamSection::custom(pi * d * d / 4.0, i, i, 2.0 * i, k, k, 0.0)
+        BeamSection::custom(pi * d * d / 4.0, i, i, 2.0 * i, k, k, 0.0).with_fibres(Fibres::Round(0.5 * d))
     }
 
     /// Circular tube of outer diameter `d` and wall thickness `wall` (`0 < wall ≤ d/2`):
@@ -191,7 +264,7 @@ impl BeamSection {
         let ri = (ro - wall).max(0.0);
         let i = pi * (ro.powi(4) - ri.powi(4)) / 4.0;
         let k = cowper_tube(COWPER_POISSON, ri / ro);
-        BeamSection::custom(pi * (ro * ro - ri * ri), i, i, 2.0 * i, k, k, 0.0)
+        BeamSection::custom(pi * (ro * ro - ri * ri), i, i, 2.0 * i, k, k, 0.0).with_fibres(Fibres::Round(ro))
     }
 
     /// I / double-T section by dimensions: depth `h` (along local `z`), flange width `b`
@@ -215,7 +288,7 @@ impl BeamSection {
         let cw = t * b.powi(3) * hf * hf / 24.0;
         let kz = cowper_i_web(COWPER_POISSON, b, t, hf, s);
         let ky = (5.0 / 6.0 * 2.0 * b * t / area).min(1.0);
-        BeamSection::custom(area, iy, iz, j, ky, kz, cw)
+        BeamSection::custom(area, iy, iz, j, ky, kz, cw).with_fibres(box_corners(b, h))
     }
 
     /// Channel (U) section by dimensions: depth `h` (along local `z`), flange width `b`
@@ -251,6 +324,7 @@ impl BeamSection {
         let ky = (5.0 / 6.0 * 2.0 * b * t / area).min(1.0);
         BeamSection {
             shear_centre: [0.5 * s - e - yc, 0.0],
+            fibres: Fibres::Corners([[-yc, -0.5 * h], [b - yc, -0.5 * h], [b - yc, 0.5 * h], [-yc, 0.5 * h]]),
             ..BeamSection::custom(area, iy, iz, j, ky, kz, cw)
         }
     }

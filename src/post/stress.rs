@@ -414,10 +414,7 @@ pub fn nodal_stress_with<S: ElementSet>(
     recovery: Recovery,
 ) -> Result<NodalStress> {
     check_displacements(n_nodes, u)?;
-    let mut sum = vec![[0.0; 6]; n_nodes];
-    let mut count = vec![0u32; n_nodes];
-    let mut vm_max = vec![0.0f64; n_nodes];
-    let mut max_element = vec![0u64; n_nodes];
+    let mut sums = Sums::new(n_nodes);
     let mut ue = [0.0; 3 * MAX_NODES];
     let mut node_stress = [[0.0; 6]; MAX_NODES];
     let mut point_stress = [[0.0; 6]; MAX_NODES];
@@ -476,45 +473,329 @@ pub fn nodal_stress_with<S: ElementSet>(
                 }
             }
             for (a, &g) in set.nodes(e).iter().enumerate() {
-                let g = g as usize;
-                let s = &node_stress[a];
-                for c in 0..6 {
-                    sum[g][c] += s[c];
-                }
-                count[g] += 1;
-                let vm = von_mises(s);
-                if count[g] == 1 || vm > vm_max[g] {
-                    vm_max[g] = vm;
-                    max_element[g] = set.tag(e).unwrap_or(e as u64);
-                }
+                sums.add(g as usize, &node_stress[a], set.tag(e).unwrap_or(e as u64));
             }
         }
     }
-    let stress: Vec<[f64; 6]> = sum
-        .iter()
-        .zip(&count)
-        .map(|(s, &c)| {
-            if c == 0 {
-                [0.0; 6]
-            } else {
-                let k = 1.0 / c as f64;
-                s.map(|v| v * k)
+    Ok(sums.averaged(recovery))
+}
+
+/// Per-node sums of the element stresses at the node, before averaging.
+struct Sums {
+    sum: Vec<[f64; 6]>,
+    count: Vec<u32>,
+    vm_max: Vec<f64>,
+    max_element: Vec<u64>,
+}
+
+impl Sums {
+    fn new(n_nodes: usize) -> Sums {
+        Sums {
+            sum: vec![[0.0; 6]; n_nodes],
+            count: vec![0; n_nodes],
+            vm_max: vec![0.0; n_nodes],
+            max_element: vec![0; n_nodes],
+        }
+    }
+
+    /// Adds element `tag`'s stress `s` at node `g`.
+    fn add(&mut self, g: usize, s: &[f64; 6], tag: u64) {
+        for c in 0..6 {
+            self.sum[g][c] += s[c];
+        }
+        self.count[g] += 1;
+        let vm = von_mises(s);
+        if self.count[g] == 1 || vm > self.vm_max[g] {
+            self.vm_max[g] = vm;
+            self.max_element[g] = tag;
+        }
+    }
+
+    /// The simple average at every node, with its equivalent stresses.
+    fn averaged(self, recovery: Recovery) -> NodalStress {
+        let stress: Vec<[f64; 6]> = self
+            .sum
+            .iter()
+            .zip(&self.count)
+            .map(|(s, &c)| {
+                if c == 0 {
+                    [0.0; 6]
+                } else {
+                    let k = 1.0 / c as f64;
+                    s.map(|v| v * k)
+                }
+            })
+            .collect();
+        let von_mises_avg = stress.iter().map(von_mises).collect();
+        let principal_avg: Vec<[f64; 3]> = stress.iter().map(principal).collect();
+        let tresca_avg = principal_avg.iter().map(|p| p[0] - p[2]).collect();
+        NodalStress {
+            recovery,
+            stress,
+            von_mises: von_mises_avg,
+            principal: principal_avg,
+            tresca: tresca_avg,
+            von_mises_max_unaveraged: self.vm_max,
+            max_element: self.max_element,
+            count: self.count,
+        }
+    }
+}
+
+/// The largest stress of one kind in one beam set ([`beam_stress`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct BeamMax {
+    /// The beam set's group; `"(all)"` for the largest over every set.
+    pub group: String,
+    /// The stress (Pa).
+    pub value: f64,
+    /// gmsh tag of the element where it occurs.
+    pub element: u64,
+    /// File tag of the element's end node where it occurs.
+    pub node: u64,
+    /// Coordinates of that node (m).
+    pub coords: [f64; 3],
+    /// The element's resultants at that end, local axes: `[N, Q_y, Q_z, T, M_y, M_z]` (N, N·m).
+    pub resultants: [f64; 6],
+}
+
+/// Beam stresses of a static solution ([`beam_stress`]).
+#[derive(Clone, Debug)]
+pub struct BeamStress {
+    /// Per node, the largest extreme-fibre normal stress of the beam elements ending there
+    /// (Pa; zero at nodes of no beam with recovered stresses).
+    pub normal: Vec<f64>,
+    /// Per node, the largest torsion shear stress `T r / J` of the round-section beams ending
+    /// there (Pa; zero elsewhere).
+    pub torsion: Vec<f64>,
+    /// The largest normal stress per beam set, after the largest over all sets (`"(all)"`).
+    pub normal_max: Vec<BeamMax>,
+    /// The same for the torsion shear of round sections.
+    pub torsion_max: Vec<BeamMax>,
+    /// Sets whose stresses are not recovered, with the reason.
+    pub notes: Vec<String>,
+}
+
+/// The resultants `[N, Q_y, Q_z, T, M_y, M_z]` at the two ends of element `e` of `set` (nodes
+/// at `x`, displacements `ue`), local axes: the end forces `f = K_e u_e`, `−f` at the first
+/// node and `+f` at the second (the sign convention of
+/// [`crate::element::geometric::beam_resultants`], which gives them for two-node elements).
+/// For a three-node element the axes at each end follow the tangent there (gmsh's order: the
+/// ends, then the midside node, whose force is the load applied there). With loads at the
+/// nodes only, the end forces are the section's resultants at the ends (the element's
+/// equilibrium; exact where the structure is statically determinate).
+fn end_resultants(set: &crate::model::BeamSet, e: usize, x: &[[f64; 3]], ue: &[f64]) -> Result<[[f64; 6]; 2]> {
+    use crate::element::{beam, geometric};
+    let (kind, orient, sec, mat) = (set.kinds[e], set.orient[e], &set.section, &set.material);
+    if kind != CellKind::Line3 {
+        return geometric::beam_resultants(kind, x, orient, sec, mat, ue);
+    }
+    let nd = beam::dofs_per_node(sec);
+    let n = 3 * nd;
+    let mut ke = vec![0.0; n * n];
+    beam::stiffness(kind, x, orient, sec, mat, &mut ke)?;
+    let comb = |c: [f64; 3]| std::array::from_fn(|i| c[0] * x[0][i] + c[1] * x[1][i] + c[2] * x[2][i]);
+    // dx/dξ at ξ = −1 and +1 of the quadratic line (nodes at ξ = −1, +1, 0).
+    let tangents: [[f64; 3]; 2] = [comb([-1.5, -0.5, 2.0]), comb([0.5, 1.5, -2.0])];
+    let mut out = [[0.0; 6]; 2];
+    for (a, sign) in [(0, -1.0), (1, 1.0)] {
+        let r = beam::local_axes(tangents[a], orient)?;
+        let f: [f64; 6] = std::array::from_fn(|i| (0..n).map(|j| ke[(a * nd + i) * n + j] * ue[j]).sum());
+        for i in 0..3 {
+            out[a][i] = sign * (0..3).map(|k| r[i][k] * f[k]).sum::<f64>();
+            out[a][3 + i] = sign * (0..3).map(|k| r[i][k] * f[3 + k]).sum::<f64>();
+        }
+    }
+    Ok(out)
+}
+
+/// The largest of `(value, candidate)` pairs of one beam set, kept as a [`BeamMax`].
+fn keep_max(best: &mut Option<BeamMax>, value: f64, candidate: impl FnOnce() -> BeamMax) {
+    if best.as_ref().is_none_or(|b| value > b.value) {
+        *best = Some(BeamMax { value, ..candidate() });
+    }
+}
+
+/// `maxima` with the largest of them first again, as group `"(all)"`.
+fn with_overall(mut maxima: Vec<BeamMax>) -> Vec<BeamMax> {
+    if let Some(top) = maxima.iter().max_by(|a, b| a.value.total_cmp(&b.value)) {
+        let all = BeamMax {
+            group: "(all)".into(),
+            ..top.clone()
+        };
+        maxima.insert(0, all);
+    }
+    maxima
+}
+
+/// Stresses of the beam elements of `beams` at both ends of every element, from their
+/// resultants there ([`end_resultants`]) for displacements and rotations `u`
+/// ([`crate::dof::NCOMP`] per node): the normal stress at the section's extreme fibres
+/// ([`crate::section::BeamSection::extreme_normal_stress`]: the axial force and both bending
+/// moments, the flexure formula) and, for round sections, the torsion shear `τ = T r / J`
+/// ([`crate::section::BeamSection::torsion_shear`]; the transverse shear is left out). Sections
+/// given by their properties (no fibres) are left out with a note. `mesh` names the nodes.
+/// `None` without beams.
+///
+/// # Errors
+/// [`Error::InvalidInput`] if `u` is shorter than the nodes; an element's error from its
+/// stiffness (a zero length).
+pub fn beam_stress(beams: &[crate::model::BeamSet], mesh: &Mesh, u: &[f64]) -> Result<Option<BeamStress>> {
+    use crate::dof::NCOMP;
+    use crate::section::Fibres;
+    if beams.iter().all(|b| b.len() == 0) {
+        return Ok(None);
+    }
+    let n_nodes = mesh.n_nodes();
+    let mut out = BeamStress {
+        normal: vec![0.0; n_nodes],
+        torsion: vec![0.0; n_nodes],
+        normal_max: Vec::new(),
+        torsion_max: Vec::new(),
+        notes: Vec::new(),
+    };
+    for set in beams {
+        if set.section.fibres == Fibres::Unknown {
+            out.notes.push(format!(
+                "beam '{}': stresses not recovered (a section given by its properties has no extreme fibres; name its shape)",
+                set.group
+            ));
+            continue;
+        }
+        let nd = set.dofs_per_node();
+        let (mut normal, mut torsion) = (None, None);
+        for e in 0..set.len() {
+            let nodes = set.nodes(e);
+            let mut ue = [0.0; 21];
+            for (l, &a) in nodes.iter().enumerate() {
+                let a = a as usize;
+                if NCOMP * (a + 1) > u.len() || a >= n_nodes {
+                    return Err(Error::InvalidInput(format!(
+                        "beam stresses: element {} uses node index {a} beyond the {} displacements",
+                        set.tags[e],
+                        u.len() / NCOMP
+                    )));
+                }
+                ue[nd * l..nd * l + nd].copy_from_slice(&u[NCOMP * a..NCOMP * a + nd]);
             }
-        })
-        .collect();
-    let von_mises_avg = stress.iter().map(von_mises).collect();
-    let principal_avg: Vec<[f64; 3]> = stress.iter().map(principal).collect();
-    let tresca_avg = principal_avg.iter().map(|p| p[0] - p[2]).collect();
-    Ok(NodalStress {
-        recovery,
-        stress,
-        von_mises: von_mises_avg,
-        principal: principal_avg,
-        tresca: tresca_avg,
-        von_mises_max_unaveraged: vm_max,
-        max_element,
-        count,
-    })
+            let x: Vec<[f64; 3]> = nodes.iter().map(|&a| set.nodes[a as usize]).collect();
+            let res = end_resultants(set, e, &x, &ue[..nd * nodes.len()])
+                .map_err(|err| Error::element(set.tags[e], format!("beam '{}': {err}", set.group)))?;
+            for (end, r) in res.iter().enumerate() {
+                let a = nodes[end] as usize;
+                let at = || BeamMax {
+                    group: set.group.clone(),
+                    value: 0.0,
+                    element: set.tags[e],
+                    node: mesh.node_tags.get(a).copied().unwrap_or(a as u64 + 1),
+                    coords: x[end],
+                    resultants: *r,
+                };
+                if let Some(sigma) = set.section.extreme_normal_stress(r) {
+                    out.normal[a] = out.normal[a].max(sigma);
+                    keep_max(&mut normal, sigma, at);
+                }
+                if let Some(tau) = set.section.torsion_shear(r[3]) {
+                    out.torsion[a] = out.torsion[a].max(tau);
+                    keep_max(&mut torsion, tau, at);
+                }
+            }
+        }
+        out.normal_max.extend(normal);
+        out.torsion_max.extend(torsion);
+    }
+    out.normal_max = with_overall(out.normal_max);
+    out.torsion_max = with_overall(out.torsion_max);
+    Ok(Some(out))
+}
+
+/// Stresses on the two faces of the shell elements, averaged at the nodes
+/// ([`shell_face_stress`]).
+#[derive(Clone, Debug)]
+pub struct ShellFaces {
+    /// On the face on the side of [`ShellFaces::normal`] (`z = +t/2`).
+    pub top: NodalStress,
+    /// On the opposite face (`z = −t/2`).
+    pub bottom: NodalStress,
+    /// Unit normal per node (3 per node; zero at nodes of no shell element): the normal of the
+    /// first shell element at the node, in the order of the model's shell sets.
+    pub normal: Vec<f64>,
+}
+
+/// Nodal stresses on the top and bottom faces of the shell elements of `shells` (global axes,
+/// Pa), for displacements and rotations `u` ([`crate::dof::NCOMP`] components per node; only
+/// the first `n_nodes` nodes are read): each element's stresses evaluated at its nodes (the
+/// element's own through-thickness model, [`crate::element::shell::stress_at`]), then averaged
+/// over the shell elements sharing a node as [`nodal_stress`] does for solids. Elements whose
+/// normal points away from the node's [`ShellFaces::normal`] (a surface meshed with mixed
+/// orientations) contribute their faces swapped, so that "top" is one side of the surface at
+/// every node. `None` when there are no shell elements.
+///
+/// # Errors
+/// [`Error::InvalidInput`] if `u` is shorter than `n_nodes` nodes, [`Error::param`] for a
+/// value that is not finite, [`Error::InvertedElement`] for a degenerate element.
+pub fn shell_face_stress(shells: &[crate::model::ShellSet], n_nodes: usize, u: &[f64]) -> Result<Option<ShellFaces>> {
+    use crate::dof::NCOMP;
+    use crate::element::shell;
+    if shells.iter().all(|s| s.len() == 0) {
+        return Ok(None);
+    }
+    if u.len() < NCOMP * n_nodes {
+        return Err(Error::InvalidInput(format!(
+            "shell stresses: {} values for {n_nodes} nodes of {NCOMP} components",
+            u.len()
+        )));
+    }
+    if let Some(i) = u[..NCOMP * n_nodes].iter().position(|v| !v.is_finite()) {
+        return Err(Error::param(
+            "u",
+            format!("value {} at node index {} is not finite", u[i], i / NCOMP),
+        ));
+    }
+    let (mut top, mut bottom) = (Sums::new(n_nodes), Sums::new(n_nodes));
+    let mut normal = vec![0.0; 3 * n_nodes];
+    for set in shells {
+        for e in 0..set.len() {
+            let (kind, nodes, tag) = (set.kinds[e], set.nodes(e), set.tags[e]);
+            let bad = |det: f64| Error::InvertedElement {
+                element: tag,
+                kind: kind.name(),
+                det,
+                file: None,
+            };
+            let x: Vec<[f64; 3]> = nodes.iter().map(|&a| set.nodes[a as usize]).collect();
+            let mut ue = [0.0; 6 * 4];
+            for (l, &a) in nodes.iter().enumerate() {
+                let a = a as usize;
+                if a >= n_nodes {
+                    return Err(Error::param(
+                        "shells",
+                        format!("element {tag} uses node index {a} of {n_nodes}"),
+                    ));
+                }
+                ue[6 * l..6 * l + 6].copy_from_slice(&u[NCOMP * a..NCOMP * a + 6]);
+            }
+            let ue = &ue[..6 * nodes.len()];
+            let n_e = shell::local_frame(kind, &x).map_err(bad)?[2];
+            for (&a, &xi) in nodes.iter().zip(shape::reference_nodes(kind)) {
+                let g = a as usize;
+                let s = shell::stress_at(kind, &x, &set.section, &set.material, ue, xi).map_err(bad)?;
+                let nref = &mut normal[3 * g..3 * g + 3];
+                if nref.iter().all(|&v| v == 0.0) {
+                    nref.copy_from_slice(&n_e);
+                }
+                let flipped = (0..3).map(|i| nref[i] * n_e[i]).sum::<f64>() < 0.0;
+                let (t, b) = if flipped { (s.bottom, s.top) } else { (s.top, s.bottom) };
+                top.add(g, &t, tag);
+                bottom.add(g, &b, tag);
+            }
+        }
+    }
+    Ok(Some(ShellFaces {
+        top: top.averaged(Recovery::Direct),
+        bottom: bottom.averaged(Recovery::Direct),
+        normal,
+    }))
 }
 
 /// Stresses at the integration points of the stiffness rule of every element (see the module
@@ -760,16 +1041,22 @@ impl StressFields {
     /// time steps of one view per field in gmsh, as the displacement's are (a prefixed name
     /// per case made a view whose steps before its case were empty).
     pub fn node_views(&self, step: usize, time: f64) -> Vec<NodeView<'_>> {
+        self.node_views_named("", step, time)
+    }
+
+    /// [`StressFields::node_views`] with `name` in front of every view's name (the shells'
+    /// `shell_top_` and `shell_bottom_` beside the solids' unprefixed views).
+    pub fn node_views_named(&self, name: &str, step: usize, time: f64) -> Vec<NodeView<'_>> {
         let mut v = vec![NodeView {
-            name: "stress".to_string(),
+            name: format!("{name}stress"),
             step,
             time,
             n_comp: 9,
             data: &self.stress_tensor9,
         }];
-        for (name, data) in self.scalars() {
+        for (field, data) in self.scalars() {
             v.push(NodeView {
-                name: name.to_string(),
+                name: format!("{name}{field}"),
                 step,
                 time,
                 n_comp: 1,

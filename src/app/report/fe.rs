@@ -262,6 +262,20 @@ pub struct StressSummary {
     pub tresca: Vec<crate::post::stress::GroupMax>,
     /// Maximum shear stress (Tresca/2) per group and overall.
     pub max_shear: Vec<crate::post::stress::GroupMax>,
+    /// Shells: maximum von Mises (averaged nodal) on the top face (the side of the normal),
+    /// per group and overall; absent without shells.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub shell_von_mises_top: Vec<crate::post::stress::GroupMax>,
+    /// Shells: the same on the bottom face.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub shell_von_mises_bottom: Vec<crate::post::stress::GroupMax>,
+    /// Beams: the largest normal stress at the extreme fibres, overall (`"(all)"`) and per
+    /// beam group, with the element's resultants there; absent without beam stresses.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub beam_normal_stress: Vec<crate::post::stress::BeamMax>,
+    /// Beams of round section: the largest torsion shear stress `T r / J`, in the same form.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub beam_torsion_shear: Vec<crate::post::stress::BeamMax>,
 }
 
 /// The `--json` document of `vibrofem static`.
@@ -288,12 +302,29 @@ pub fn mesh_displacements(run: &crate::analysis::statics::StaticRun, case: usize
 
 /// Build the static report (stress recovery included).
 pub fn static_report(mesh: &Mesh, source: &str, run: &crate::analysis::statics::StaticRun) -> Result<StaticReport> {
-    use crate::post::stress::{StressField, group_maxima, nodal_stress};
+    use crate::post::stress::{StressField, beam_stress, group_maxima, nodal_stress, shell_face_stress};
     let mut stress = Vec::new();
+    let mut notes = run.model.notes.clone();
     for ci in 0..run.cases.len() {
         let u = mesh_displacements(run, ci);
         let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
+        let (shell_von_mises_top, shell_von_mises_bottom) =
+            match shell_face_stress(&run.model.shells, run.model.n_mesh_nodes, &run.u[ci])? {
+                Some(f) => (
+                    group_maxima(mesh, &f.top, StressField::VonMises)?,
+                    group_maxima(mesh, &f.bottom, StressField::VonMises)?,
+                ),
+                None => (Vec::new(), Vec::new()),
+            };
+        let beams = beam_stress(&run.model.beams, mesh, &run.u[ci])?;
+        if ci == 0 {
+            notes.extend(beams.iter().flat_map(|b| b.notes.iter().cloned()));
+        }
         stress.push(StressSummary {
+            shell_von_mises_top,
+            shell_von_mises_bottom,
+            beam_normal_stress: beams.as_ref().map(|b| b.normal_max.clone()).unwrap_or_default(),
+            beam_torsion_shear: beams.map(|b| b.torsion_max).unwrap_or_default(),
             von_mises: group_maxima(mesh, &ns, StressField::VonMises)?,
             von_mises_unaveraged: group_maxima(mesh, &ns, StressField::VonMisesMaxUnaveraged)?
                 .into_iter()
@@ -309,7 +340,7 @@ pub fn static_report(mesh: &Mesh, source: &str, run: &crate::analysis::statics::
         cases: run.cases.clone(),
         stress,
         timings_s: run.timings,
-        notes: run.model.notes.clone(),
+        notes,
     })
 }
 
@@ -384,6 +415,41 @@ pub fn static_text(r: &StaticReport) -> String {
                     g.node.unwrap_or(0)
                 );
             }
+            let beams = [
+                ("normal stress", &st.beam_normal_stress),
+                ("torsion shear", &st.beam_torsion_shear),
+            ];
+            for (what, maxima) in beams {
+                for b in maxima {
+                    // Resultants at rounding level (−1e-14 N of an unloaded direction) print as 0.
+                    let scale = b.resultants.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    let r = b.resultants.map(|v| if v.abs() <= 1e-9 * scale { 0.0 } else { v });
+                    let _ = writeln!(
+                        s,
+                        "  beam {what} max {:<12} {:>10} MPa in element {} at node {} (N = {} N, T = {} N·m, M_y = {} N·m, M_z = {} N·m)",
+                        b.group,
+                        fmt_fixed(b.value / 1e6, 3),
+                        b.element,
+                        b.node,
+                        crate::io::fmt_sig(r[0], 4),
+                        crate::io::fmt_sig(r[3], 4),
+                        crate::io::fmt_sig(r[4], 4),
+                        crate::io::fmt_sig(r[5], 4)
+                    );
+                }
+            }
+            for (face, maxima) in [("top", &st.shell_von_mises_top), ("bottom", &st.shell_von_mises_bottom)] {
+                for g in maxima {
+                    let _ = writeln!(
+                        s,
+                        "  shell {face:<6} von Mises max {:<16} {:>10} MPa at node {} ({}) m",
+                        g.group,
+                        fmt_fixed(g.value / 1e6, 3),
+                        g.node.unwrap_or(0),
+                        fixed3(g.coords, 4)
+                    );
+                }
+            }
         }
     }
     let t = r.timings_s;
@@ -403,24 +469,45 @@ pub fn write_static_fields(
     msh: Option<&std::path::Path>,
 ) -> Result<()> {
     use crate::io::{msh_out, vtk};
-    use crate::post::stress::{StressFields, nodal_stress};
+    use crate::post::stress::{StressFields, beam_stress, nodal_stress, shell_face_stress};
     let mut disps = Vec::new();
     let mut fields = Vec::new();
-    // Stresses are recovered in the solid elements only: a model without solids (shells,
-    // beams) gets no stress fields rather than fields of zeros that read as an unloaded part.
+    // Shells: the stresses on their two faces and the normal that says which face is the top.
+    let mut shell_fields = Vec::new();
+    let mut shell_normal = None;
+    // Beams: per case, the largest normal stress at the extreme fibres and (round sections)
+    // torsion shear of the elements at each node.
+    let mut beam_fields = Vec::new();
+    // The solids' stress fields: a model without solids gets none rather than fields of zeros
+    // that read as an unloaded part.
     let solids = !run.model.solids.is_empty();
     for ci in 0..run.cases.len() {
         let u = mesh_displacements(run, ci);
+        let case = if run.cases.len() > 1 {
+            format!("case{}_", ci + 1)
+        } else {
+            String::new()
+        };
+        if let Some(f) = shell_face_stress(&run.model.shells, run.model.n_mesh_nodes, &run.u[ci])? {
+            shell_fields.push([
+                StressFields::new(&f.top, &format!("{case}shell_top_")),
+                StressFields::new(&f.bottom, &format!("{case}shell_bottom_")),
+            ]);
+            shell_normal = Some(f.normal);
+        }
+        if let Some(b) = beam_stress(&run.model.beams, mesh, &run.u[ci])? {
+            let mut f = Vec::new();
+            if !b.normal_max.is_empty() {
+                f.push(("beam_normal_stress", b.normal));
+            }
+            if !b.torsion_max.is_empty() {
+                f.push(("beam_torsion_shear", b.torsion));
+            }
+            beam_fields.push((case.clone(), f));
+        }
         if solids {
             let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
-            fields.push(StressFields::new(
-                &ns,
-                &if run.cases.len() > 1 {
-                    format!("case{}_", ci + 1)
-                } else {
-                    String::new()
-                },
-            ));
+            fields.push(StressFields::new(&ns, &case));
         }
         disps.push(u);
     }
@@ -446,6 +533,17 @@ pub fn write_static_fields(
             if let Some(f) = fields.get(ci) {
                 pf.extend(f.point_fields());
             }
+            for f in shell_fields.get(ci).into_iter().flatten() {
+                pf.extend(f.point_fields());
+            }
+            if let Some((case, f)) = beam_fields.get(ci) {
+                for (name, data) in f {
+                    pf.push(vtk::PointField::new(format!("{case}{name}"), 1, data));
+                }
+            }
+        }
+        if let Some(nrm) = &shell_normal {
+            pf.push(vtk::PointField::new("shell_normal", 3, nrm));
         }
         vtk::write_vtu_cells(p, mesh, Some(&run.model.cell_blocks()), &pf)?;
     }
@@ -471,6 +569,28 @@ pub fn write_static_fields(
             if let Some(f) = fields.get(ci) {
                 views.extend(f.node_views(ci, ci as f64));
             }
+            if let Some([top, bottom]) = shell_fields.get(ci) {
+                views.extend(top.node_views_named("shell_top_", ci, ci as f64));
+                views.extend(bottom.node_views_named("shell_bottom_", ci, ci as f64));
+            }
+            for (name, data) in beam_fields.get(ci).map_or(&[][..], |(_, f)| &f[..]) {
+                views.push(msh_out::NodeView {
+                    name: name.to_string(),
+                    step: ci,
+                    time: ci as f64,
+                    n_comp: 1,
+                    data,
+                });
+            }
+        }
+        if let Some(nrm) = &shell_normal {
+            views.push(msh_out::NodeView {
+                name: "shell_normal".into(),
+                step: 0,
+                time: 0.0,
+                n_comp: 3,
+                data: nrm,
+            });
         }
         msh_out::write_msh_views(p, mesh, &views)?;
     }
