@@ -5,7 +5,7 @@
 //! Each entry is keyed by the serialized inputs the part reads (nothing else), so a hit returns
 //! exactly what the computation would: a corner run with memoised parts equals a run from
 //! scratch. The memo is process-wide and bounded ([`MAX_ENTRIES`]; when full it starts over);
-//! [`clear`] empties it and [`stats`] counts hits and misses.
+//! [`clear`] empties it and [`stats`] counts the parts reused and computed.
 //!
 //! The 3D machine's assembled model without its leaves and magnets (one per geometry and load,
 //! tens of megabytes each) is kept in a second, smaller memo ([`get_or_large`], at most
@@ -22,8 +22,13 @@ pub const MAX_ENTRIES: usize = 64;
 #[derive(Default)]
 struct Memo {
     map: HashMap<String, Arc<dyn Any + Send + Sync>>,
-    hits: usize,
-    misses: usize,
+    /// Requests, and entries stored. Two threads may compute the same entry at once (neither
+    /// waits for the other: a thread of the pool blocked on another's entry could be the one
+    /// that entry's computation waits for); only the first stores it, so `stored` counts the
+    /// distinct parts, and `requests − stored` the ones reused, the same from run to run
+    /// whatever the threads' timing (they varied by one or two when each computation counted).
+    requests: usize,
+    stored: usize,
 }
 
 /// Entries kept at most in the memo of large models ([`get_or_large`]).
@@ -73,20 +78,24 @@ where
 {
     {
         let mut m = memo.lock().unwrap_or_else(|e| e.into_inner());
+        m.requests += 1;
         if let Some(v) = m.map.get(&key).cloned() {
             if let Ok(v) = v.downcast::<T>() {
-                m.hits += 1;
                 return Ok(v);
             }
         }
-        m.misses += 1;
     }
     let v = Arc::new(compute()?);
     let mut m = memo.lock().unwrap_or_else(|e| e.into_inner());
+    if m.map.get(&key).is_some_and(|e| e.is::<T>()) {
+        // Another thread stored it meanwhile (the same value: the same inputs).
+        return Ok(v);
+    }
     if m.map.len() >= max {
         m.map.clear();
     }
     m.map.insert(key, v.clone());
+    m.stored += 1;
     Ok(v)
 }
 
@@ -97,16 +106,19 @@ pub fn clear() {
     }
 }
 
-/// (hits, misses) since the process started.
+/// (parts reused, parts computed and stored) since the process started ([`Memo`]).
 pub fn stats() -> (usize, usize) {
-    let m = memo().lock().unwrap_or_else(|e| e.into_inner());
-    (m.hits, m.misses)
+    counts(memo())
 }
 
-/// (hits, misses) of the memo of large models since the process started.
+/// The same for the memo of large models.
 pub fn large_stats() -> (usize, usize) {
-    let m = large().lock().unwrap_or_else(|e| e.into_inner());
-    (m.hits, m.misses)
+    counts(large())
+}
+
+fn counts(memo: &Mutex<Memo>) -> (usize, usize) {
+    let m = memo.lock().unwrap_or_else(|e| e.into_inner());
+    (m.requests.saturating_sub(m.stored), m.stored)
 }
 
 /// A copy of a modal run (its fields are all data).
@@ -117,5 +129,36 @@ pub fn clone_run(r: &crate::analysis::modal::ModalRun) -> crate::analysis::modal
         lambda: r.lambda.clone(),
         vectors: r.vectors.clone(),
         model: r.model.clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two threads asking for the same part at once both compute it (neither waits), but it is
+    /// stored and counted once: one computed, one further request, whatever the timing (each
+    /// computation counted as a miss before, so the envelope's counts varied from run to run).
+    #[test]
+    fn a_part_computed_twice_at_once_counts_once() {
+        let memo = Mutex::new(Memo::default());
+        let barrier = std::sync::Barrier::new(2);
+        let values: Vec<f64> = std::thread::scope(|s| {
+            let ask = || {
+                *get_or_in(&memo, MAX_ENTRIES, "part".into(), || {
+                    // Both threads are inside the computation before either stores it.
+                    barrier.wait();
+                    Ok(2.5f64)
+                })
+                .unwrap()
+            };
+            let (a, b) = (s.spawn(ask), s.spawn(ask));
+            vec![a.join().unwrap(), b.join().unwrap()]
+        });
+        assert_eq!(values, [2.5, 2.5]);
+        assert_eq!(counts(&memo), (1, 1));
+        let again = get_or_in(&memo, MAX_ENTRIES, "part".into(), || Ok(0.0f64)).unwrap();
+        assert_eq!(*again, 2.5);
+        assert_eq!(counts(&memo), (2, 1));
     }
 }

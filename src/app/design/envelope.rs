@@ -418,9 +418,10 @@ pub struct EnvelopeResult {
     pub tolerance_order: Vec<String>,
     /// Wall time of the envelope, s.
     pub seconds: f64,
-    /// Memo hits and misses of the FE parts during the envelope.
+    /// Requests for FE parts during the envelope served by a part already computed (or being
+    /// computed by another thread at the time).
     pub memo_hits: usize,
-    /// Misses.
+    /// Distinct FE parts computed during the envelope.
     pub memo_misses: usize,
     /// 3D machine runs of the points (the nominal one aside) made in the reduced basis.
     pub reduced_runs: usize,
@@ -870,12 +871,12 @@ pub fn sections(e: &EnvelopeResult) -> Vec<Section> {
         blocks: vec![],
     };
     env.blocks.push(Block::Text(format!(
-        "load cases: {}; {}; {:.1} s (FE parts memoised: {} reused, {} computed); {}",
+        "load cases: {}; {}; {:.1} s (FE parts: {} computed, {} further requests of the same parts); {}",
         e.load_cases.join(", "),
         e.method,
         e.seconds,
-        e.memo_hits,
         e.memo_misses,
+        e.memo_hits,
         reduced_words(e)
     )));
     env.blocks.push(Block::Table(Table {
