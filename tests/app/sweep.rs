@@ -104,6 +104,46 @@ fn out_of_range_values_fail_before_meshing_naming_the_key() {
     assert!(e.contains("table.web_thickness = 0.2"), "{e}");
 }
 
+/// A value out of range beside the base table may be in range beside another swept value: a
+/// 0.3 m bottom plate under the base's 0.3 m web span put its webs at its edges, and the
+/// sweep was refused though the combination with a 0.2 m span is a valid table (the same
+/// values in `[table]` run). Such a value is kept; a combination that is no table is a failed
+/// design named by all its values, the others run; a value no combination takes is refused
+/// by its key as before.
+#[test]
+fn values_are_checked_in_combination() {
+    let mut s = study(BASE, "combined");
+    s.set("table.bottom_width", vec![0.3]);
+    s.set("table.long_web_span", vec![0.2]);
+    let d = s.designs().unwrap();
+    assert_eq!(d.len(), 1);
+    assert!(d[0].1.is_ok(), "{:?}", d[0].1.as_ref().err());
+    s.set("table.long_web_span", vec![0.2, 0.3]);
+    let o = sweep::run_sweep(
+        &s,
+        &SweepOptions {
+            out: None,
+            jobs: 1,
+            progress: false,
+            yes: false,
+        },
+    )
+    .unwrap();
+    assert_eq!(o.rows.len(), 1);
+    assert_eq!(o.rows[0].values, vec![0.3, 0.2]);
+    assert_eq!(o.failed.len(), 1, "{:?}", o.failed);
+    let f = &o.failed[0];
+    assert_eq!((f.case, f.stage), (2, "design"));
+    assert!(
+        f.error.contains("table.bottom_width = 0.3") && f.error.contains("table.long_web_span = 0.3"),
+        "{}",
+        f.error
+    );
+    s.set("table.long_web_span", vec![0.3, 0.35]);
+    let e = s.designs().unwrap_err().to_string();
+    assert!(e.contains("table.bottom_width = 0.3"), "{e}");
+}
+
 #[test]
 fn pareto_front_is_non_dominated() {
     let pts = [

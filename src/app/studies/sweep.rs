@@ -567,12 +567,32 @@ impl Study {
         }
     }
 
-    /// Each swept value alone on the base table, so that a message names the one bad key.
+    /// Each swept value on the base table, so that a message names the one bad key. A value
+    /// out of range there may be in range beside another swept key's value (a web span with
+    /// a wider plate): it is refused only when no combination of the sweep takes it (the
+    /// combinations that do not are failed designs of the run, [`Study::designs`]).
     pub fn check_values(&self) -> Result<()> {
-        self.each_swept_value(|k, v, t| {
-            t.params().map_err(|e| bad_key(k, format!("{k} = {v}: {}", strip(e))))?;
-            Ok(())
-        })
+        let mut usable: Option<Vec<bool>> = None;
+        for (j, (k, vals)) in self.sweep.iter().enumerate() {
+            for &v in vals {
+                let mut t = self.table.clone();
+                t.set(k, v)?;
+                let Err(e) = t.params() else {
+                    continue;
+                };
+                let ok = match &usable {
+                    Some(u) => u,
+                    None => usable.insert(match self.count() {
+                        Ok(n) => (0..n).map(|i| self.design(i).is_ok()).collect(),
+                        Err(_) => Vec::new(),
+                    }),
+                };
+                if !ok.iter().enumerate().any(|(i, &ok)| ok && self.values(i)[j] == v) {
+                    return Err(bad_key(k, format!("{k} = {v}: {}", strip(e))));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// `f(key, value, table)` for each swept value alone on the base table.
@@ -612,14 +632,20 @@ impl Study {
         ))
     }
 
-    /// Design `i` (0-based; the first key varies slowest): its values and validated parameters.
-    pub fn design(&self, i: usize) -> Result<(Vec<f64>, TableSpec, SandwichParams)> {
+    /// The swept values of design `i` (0-based; the first key varies slowest).
+    fn values(&self, i: usize) -> Vec<f64> {
         let mut rem = i;
         let mut vals = vec![0.0; self.sweep.len()];
         for (j, (_, v)) in self.sweep.iter().enumerate().rev() {
             vals[j] = v[rem % v.len()];
             rem /= v.len();
         }
+        vals
+    }
+
+    /// Design `i` (0-based; the first key varies slowest): its values and validated parameters.
+    pub fn design(&self, i: usize) -> Result<(Vec<f64>, TableSpec, SandwichParams)> {
+        let vals = self.values(i);
         let mut t = self.table.clone();
         for ((k, _), v) in self.sweep.iter().zip(&vals) {
             t.set(k, *v)?;
@@ -636,15 +662,26 @@ impl Study {
         Ok((vals, t, p))
     }
 
-    /// Every combination (the first key varies slowest) as its values and validated parameters.
-    /// Nothing is meshed: an out-of-range value is reported with its key before any analysis,
-    /// and the combinations are counted ([`Study::count`]) before any is built.
-    pub fn designs(&self) -> Result<Vec<(Vec<f64>, TableSpec, SandwichParams)>> {
+    /// Every combination (the first key varies slowest) as its values and validated parameters,
+    /// or the reason the combination is no table (a failed design of the run, named by all its
+    /// values). Nothing is meshed: a value no combination takes is reported with its key before
+    /// any analysis ([`Study::check_values`]), and the combinations are counted
+    /// ([`Study::count`]) before any is built.
+    pub fn designs(&self) -> Result<Vec<Design>> {
         self.check_values()?;
         let n = self.count()?;
-        (0..n).map(|i| self.design(i)).collect()
+        Ok((0..n)
+            .map(|i| match self.design(i) {
+                Ok((vals, t, p)) => (vals, Ok((t, p))),
+                Err(e) => (self.values(i), Err(strip(e))),
+            })
+            .collect())
     }
 }
+
+/// One combination of a study ([`Study::designs`]): its values, then its table and validated
+/// parameters or why it is no table.
+pub type Design = (Vec<f64>, std::result::Result<(TableSpec, SandwichParams), String>);
 
 /// The most combinations a study may have ([`Study::count`]).
 pub const MAX_DESIGNS: usize = 100_000;
@@ -869,9 +906,12 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     let total = study.count()?;
     study.check_sizes()?;
     let solid = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size);
+    let designs = study.designs()?;
     if total > LARGE_SWEEP && !opts.yes {
         // The size of one design's model, from its mesh (no analysis).
-        let p = study.design(0)?.2;
+        let Some(p) = designs.iter().find_map(|(_, d)| d.as_ref().ok().map(|(_, p)| p.clone())) else {
+            return Err(study.design(0).err().unwrap_or_else(|| Error::param("sweep", "no valid design")));
+        };
         let dofs = match solid {
             None => 6 * sandwich_table(&p)?.n_nodes(),
             Some(h) => 3 * sandwich_table_solid(&p, h, CellKind::Hex20)?.n_nodes(),
@@ -884,10 +924,13 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
             ),
         ));
     }
-    let designs = study.designs()?;
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let one = |(i, (vals, _t, p)): (usize, &(Vec<f64>, TableSpec, SandwichParams))| -> std::result::Result<SweepRow, FailedCase> {
-        let r = analyse(p, study.material, solid);
+    let one = |(i, (vals, d)): (usize, &Design)| -> std::result::Result<SweepRow, FailedCase> {
+        let r = match d {
+            Ok((_, p)) => analyse(p, study.material, solid),
+            Err(msg) => Err(Error::param("sweep", msg.clone())),
+        };
+        let p = d.as_ref().map_or(None, |(_, p)| Some(p));
         let k = done.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
         let r = r.map_err(|e| {
             if opts.progress {
@@ -900,6 +943,9 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
                 error: e.to_string(),
             }
         })?;
+        let Some(p) = p else {
+            unreachable!("a combination that is no table failed above");
+        };
         let mass = p.mass(study.material.density);
         if opts.progress {
             eprintln!(
@@ -943,7 +989,10 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     let mut checks = Vec::new();
     if study.check.designs > 0 {
         for r in best(&rows, study.check.designs) {
-            match check_design(study, &designs[r.case - 1].2, r) {
+            let Ok((_, p)) = &designs[r.case - 1].1 else {
+                continue;
+            };
+            match check_design(study, p, r) {
                 Ok(c) => {
                     if opts.progress {
                         eprintln!(
