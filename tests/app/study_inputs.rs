@@ -191,6 +191,23 @@ fn study_file_values_are_refused_at_their_key_when_read() {
     let (line, e) = at("check", "[check]\ndesigns = 1\nsolid_size = 1e-6\n");
     assert_eq!(line, Some(8), "{e}");
     assert!(e.contains("'check.solid_size'") && e.contains("more than 2000"), "{e}");
+    // A constraint no design can be compared with (every design was "infeasible" against NaN).
+    let (line, e) = at("nan", "[constraints]\nmin_f1_hz = nan\n");
+    assert_eq!(line, Some(7), "{e}");
+    assert!(e.contains("'constraints.min_f1_hz'") && e.contains("finite frequency"), "{e}");
+    let (line, e) = at("mass", "[constraints]\nmax_mass_kg = -100.0\n");
+    assert_eq!(line, Some(7), "{e}");
+    assert!(e.contains("'constraints.max_mass_kg'"), "{e}");
+    assert!(Study::load(&study_file("nolimit", &format!("{BASE}[constraints]\nmax_mass_kg = inf\n"))).is_ok());
+    let study = study_file("cli", BASE);
+    let out = tmp("cli-out");
+    for (opt, v) in [("--min-f1", "nan"), ("--max-mass=-100", "")] {
+        let mut args = vec!["sweep", study.to_str().unwrap(), "--out", out.to_str().unwrap(), opt];
+        if !v.is_empty() {
+            args.push(v);
+        }
+        super::support::expect_error(&args, &[opt.split('=').next().unwrap()]);
+    }
     // Without designs to check, the [check] size is not used and not refused.
     assert!(Study::load(&study_file("unused", &format!("{BASE}[check]\nsolid_size = 1e-6\n"))).is_ok());
 }

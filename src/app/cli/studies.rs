@@ -177,6 +177,10 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
     if let Some(m) = a.max_mass {
         study.constraints.max_mass_kg = m;
     }
+    if let Some((field, msg)) = study.constraints.invalid() {
+        let option = if field == "min_f1_hz" { "--min-f1" } else { "--max-mass" };
+        return Err(Error::option(option, format!("{option} {msg}")));
+    }
     if let Some(n) = a.check {
         study.check.designs = n;
     }

@@ -289,6 +289,24 @@ pub struct Constraints {
     pub max_mass_kg: f64,
 }
 
+impl Constraints {
+    /// The field (`min_f1_hz`, `max_mass_kg`) whose value no design could be compared with, and
+    /// why: not a number, or below zero (`max_mass_kg = inf` and `min_f1_hz = 0` set no limit).
+    pub fn invalid(&self) -> Option<(&'static str, String)> {
+        let bad = |v: f64| v.is_nan() || v < 0.0 || v == f64::NEG_INFINITY;
+        if bad(self.min_f1_hz) || self.min_f1_hz.is_infinite() {
+            return Some(("min_f1_hz", format!("{} Hz: must be a finite frequency ≥ 0", self.min_f1_hz)));
+        }
+        if bad(self.max_mass_kg) {
+            return Some((
+                "max_mass_kg",
+                format!("{} kg: must be a mass ≥ 0 (inf for no limit)", self.max_mass_kg),
+            ));
+        }
+        None
+    }
+}
+
 impl Default for Constraints {
     fn default() -> Self {
         Constraints {
@@ -484,6 +502,9 @@ impl Study {
     fn check_file(&self, path: &Path, text: &str) -> Result<()> {
         if let Some((field, msg)) = self.material.invalid() {
             return Err(toml_file::key_error(path, text, &format!("material.{field}"), msg));
+        }
+        if let Some((field, msg)) = self.constraints.invalid() {
+            return Err(toml_file::key_error(path, text, &format!("constraints.{field}"), msg));
         }
         // A [sweep] entry is named as written there ("table.n_long_webs"), at its line.
         let located = |e: Error, section: &str| match toml_file::param_as_key(e, |n| {
