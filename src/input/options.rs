@@ -40,8 +40,9 @@ pub struct ModelOptions {
     pub hex8: String,
     /// Analyse only these volume groups as solids (default: every volume cell).
     pub solid: Vec<String>,
-    /// Shell part: `GROUP=t` or `GROUP=t,offset` (m; the offset moves the mid-surface from the
-    /// nodes along the normal, e.g. −t/2 for a plate meshed on its bottom face).
+    /// Shell part: `GROUP=t` or `GROUP=t,offset` (m; the offset is the nodes' signed distance
+    /// from the mid-surface along the normal, which puts the mid-surface at x − offset·n: −t/2
+    /// for a plate meshed on its bottom face, the plate on the side its normal points to).
     pub shell: Vec<String>,
     /// Beam part: `GROUP=SECTION@ORIENT`. SECTION: `rect:b,h`, `circle:d`, `tube:d,wall`,
     /// `i:h,b,s,t`, `channel:h,b,s,t`, `gost8239-10`, `gost8240-10`,

@@ -7,7 +7,7 @@
 mod build;
 mod coarse;
 pub mod load;
-mod orient;
+pub(crate) mod orient;
 pub mod sets;
 pub mod spec;
 

@@ -25,19 +25,27 @@ use super::sets::ShellSet;
 use crate::element::ElementSet;
 use crate::{Error, Result};
 
-/// Reverse the node order of the shell cells that disagree with their region (see the module
-/// docs); one note per part with reversed cells. `Err` naming elements when a region with an
-/// offset is one-sided.
-pub(crate) fn orient_shells(shells: &mut [ShellSet]) -> Result<Vec<String>> {
+/// How the shell cells of a model are oriented within their regions (see the module docs).
+pub(crate) struct Orientation {
+    /// Every shell cell as (set, element), sets in order.
+    pub cells: Vec<(usize, usize)>,
+    /// Per cell: +1 when it agrees with the majority of its region, −1 when it runs the other
+    /// way round (its normal points to the other side of the surface).
+    pub sign: Vec<i8>,
+    /// The linked regions: their cells, and two cells where the walk met itself reversed (a
+    /// one-sided surface), if it did.
+    regions: Vec<(Vec<usize>, Option<(usize, usize)>)>,
+}
+
+/// The orientation of every shell cell within its region, by a breadth-first walk across the
+/// manifold edges, the majority's way kept (the module docs); nothing is changed.
+pub(crate) fn orientation(shells: &[ShellSet]) -> Orientation {
     // Global cell numbering: (set, element).
     let cells: Vec<(usize, usize)> = shells
         .iter()
         .enumerate()
         .flat_map(|(s, set)| (0..set.len()).map(move |e| (s, e)))
         .collect();
-    if !shells.iter().any(|s| s.section.offset != 0.0) {
-        return Ok(vec![]);
-    }
     // Undirected edge → (cell, +1 if the cell runs from the smaller node to the larger).
     let mut edges: HashMap<(u32, u32), Vec<(usize, i8)>> = HashMap::new();
     for (c, &(s, e)) in cells.iter().enumerate() {
@@ -58,7 +66,7 @@ pub(crate) fn orient_shells(shells: &mut [ShellSet]) -> Result<Vec<String>> {
         }
     }
     let mut orient = vec![0i8; cells.len()];
-    let mut flipped = vec![0usize; shells.len()];
+    let mut regions = Vec::new();
     for start in 0..cells.len() {
         if orient[start] != 0 {
             continue;
@@ -79,6 +87,30 @@ pub(crate) fn orient_shells(shells: &mut [ShellSet]) -> Result<Vec<String>> {
                 }
             }
         }
+        let negative = region.iter().filter(|&&c| orient[c] < 0).count();
+        let keep = if 2 * negative > region.len() { -1 } else { 1 };
+        for &c in &region {
+            orient[c] *= keep;
+        }
+        regions.push((region, conflict));
+    }
+    Orientation {
+        cells,
+        sign: orient,
+        regions,
+    }
+}
+
+/// Reverse the node order of the shell cells that disagree with their region (see the module
+/// docs); one note per part with reversed cells. `Err` naming elements when a region with an
+/// offset is one-sided.
+pub(crate) fn orient_shells(shells: &mut [ShellSet]) -> Result<Vec<String>> {
+    if !shells.iter().any(|s| s.section.offset != 0.0) {
+        return Ok(vec![]);
+    }
+    let Orientation { cells, sign, regions } = orientation(shells);
+    let mut flipped = vec![0usize; shells.len()];
+    for (region, conflict) in regions {
         if !region.iter().any(|&c| shells[cells[c].0].section.offset != 0.0) {
             continue;
         }
@@ -99,10 +131,8 @@ pub(crate) fn orient_shells(shells: &mut [ShellSet]) -> Result<Vec<String>> {
                 ),
             ));
         }
-        let negative = region.iter().filter(|&&c| orient[c] < 0).count();
-        let keep = if 2 * negative > region.len() { -1 } else { 1 };
         for &c in &region {
-            if orient[c] != keep {
+            if sign[c] < 0 {
                 let (s, e) = cells[c];
                 let set = &mut shells[s];
                 let r = set.ptr[e]..set.ptr[e + 1];

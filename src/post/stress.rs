@@ -595,8 +595,12 @@ fn end_resultants(set: &crate::model::BeamSet, e: usize, x: &[[f64; 3]], ue: &[f
     let mut ke = vec![0.0; n * n];
     beam::stiffness(kind, x, orient, sec, mat, &mut ke)?;
     let comb = |c: [f64; 3]| std::array::from_fn(|i| c[0] * x[0][i] + c[1] * x[1][i] + c[2] * x[2][i]);
-    // dx/dξ at ξ = −1 and +1 of the quadratic line (nodes at ξ = −1, +1, 0).
-    let tangents: [[f64; 3]; 2] = [comb([-1.5, -0.5, 2.0]), comb([0.5, 1.5, -2.0])];
+    // dx/dξ at ξ = −1 and +1 of the quadratic line (nodes at ξ = −1, +1, 0); the chord where it
+    // vanishes (a midside node at a quarter point, valid at the integration points).
+    let chord: [f64; 3] = comb([-1.0, 1.0, 0.0]);
+    let norm = |v: &[f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
+    let tangents = [comb([-1.5, -0.5, 2.0]), comb([0.5, 1.5, -2.0])]
+        .map(|t: [f64; 3]| if norm(&t) > 1e-6 * norm(&chord) { t } else { chord });
     let mut out = [[0.0; 6]; 2];
     for (a, sign) in [(0, -1.0), (1, 1.0)] {
         let r = beam::local_axes(tangents[a], orient)?;
@@ -607,6 +611,13 @@ fn end_resultants(set: &crate::model::BeamSet, e: usize, x: &[[f64; 3]], ue: &[f
         }
     }
     Ok(out)
+}
+
+/// The torque `t` of the resultants `r`, or 0 when it is rounding beside their moments
+/// (1e-14 N·m of a beam bent in a plane).
+fn significant(t: f64, r: &[f64; 6]) -> f64 {
+    let m = r[3].abs().max(r[4].abs()).max(r[5].abs());
+    if t.abs() <= 1e-9 * m { 0.0 } else { t }
 }
 
 /// The largest of `(value, candidate)` pairs of one beam set, kept as a [`BeamMax`].
@@ -662,8 +673,16 @@ pub fn beam_stress(beams: &[crate::model::BeamSet], mesh: &Mesh, u: &[f64]) -> R
             ));
             continue;
         }
+        if set.section.warping {
+            out.notes.push(format!(
+                "beam '{}': the normal stress of its warping (bimoment) is not included in its stresses",
+                set.group
+            ));
+        }
         let nd = set.dofs_per_node();
         let (mut normal, mut torsion) = (None, None);
+        // The largest torque of a section without a torsion stress, against its moments.
+        let (mut torque, mut moment) = (0.0f64, 0.0f64);
         for e in 0..set.len() {
             let nodes = set.nodes(e);
             let mut ue = [0.0; 21];
@@ -679,8 +698,28 @@ pub fn beam_stress(beams: &[crate::model::BeamSet], mesh: &Mesh, u: &[f64]) -> R
                 ue[nd * l..nd * l + nd].copy_from_slice(&u[NCOMP * a..NCOMP * a + nd]);
             }
             let x: Vec<[f64; 3]> = nodes.iter().map(|&a| set.nodes[a as usize]).collect();
-            let res = end_resultants(set, e, &x, &ue[..nd * nodes.len()])
-                .map_err(|err| Error::element(set.tags[e], format!("beam '{}': {err}", set.group)))?;
+            let res = end_resultants(set, e, &x, &ue[..nd * nodes.len()]).map_err(|err| {
+                Error::element(
+                    set.tags[e],
+                    format!("beam '{}', element {}: {err}", set.group, set.tags[e]),
+                )
+            })?;
+            for r in &res {
+                torque = torque.max(r[3].abs());
+                moment = moment.max(r[3].abs()).max(r[4].abs()).max(r[5].abs());
+            }
+            // A three-node element's midside node: the mean of its ends' resultants (the
+            // resultants are linear between the ends of an element loaded at its ends).
+            if let Some(&m) = nodes.get(2) {
+                let r: [f64; 6] = std::array::from_fn(|i| 0.5 * (res[0][i] + res[1][i]));
+                let m = m as usize;
+                if let Some(sigma) = set.section.extreme_normal_stress(&r) {
+                    out.normal[m] = out.normal[m].max(sigma);
+                }
+                if let Some(tau) = set.section.torsion_shear(significant(r[3], &r)) {
+                    out.torsion[m] = out.torsion[m].max(tau);
+                }
+            }
             for (end, r) in res.iter().enumerate() {
                 let a = nodes[end] as usize;
                 let at = || BeamMax {
@@ -695,14 +734,22 @@ pub fn beam_stress(beams: &[crate::model::BeamSet], mesh: &Mesh, u: &[f64]) -> R
                     out.normal[a] = out.normal[a].max(sigma);
                     keep_max(&mut normal, sigma, at);
                 }
-                if let Some(tau) = set.section.torsion_shear(r[3]) {
+                if let Some(tau) = set.section.torsion_shear(significant(r[3], r)) {
                     out.torsion[a] = out.torsion[a].max(tau);
                     keep_max(&mut torsion, tau, at);
                 }
             }
         }
         out.normal_max.extend(normal);
-        out.torsion_max.extend(torsion);
+        // A round section without torque has no torsion stress to report.
+        out.torsion_max.extend(torsion.filter(|t| t.value > 0.0));
+        if set.section.torsion_shear(1.0).is_none() && significant(torque, &[0.0, 0.0, 0.0, moment, 0.0, 0.0]) > 0.0 {
+            out.notes.push(format!(
+                "beam '{}': torsion shear is recovered for round sections only (torque up to {} N·m here)",
+                set.group,
+                crate::io::fmt_sig(torque, 4)
+            ));
+        }
     }
     out.normal_max = with_overall(out.normal_max);
     out.torsion_max = with_overall(out.torsion_max);
@@ -718,7 +765,8 @@ pub struct ShellFaces {
     /// On the opposite face (`z = −t/2`).
     pub bottom: NodalStress,
     /// Unit normal per node (3 per node; zero at nodes of no shell element): the normal of the
-    /// first shell element at the node, in the order of the model's shell sets.
+    /// connected surface through the node, the way most of its cells point (the first such
+    /// surface at a node where several meet, in the order of the model's shell sets).
     pub normal: Vec<f64>,
 }
 
@@ -726,10 +774,12 @@ pub struct ShellFaces {
 /// Pa), for displacements and rotations `u` ([`crate::dof::NCOMP`] components per node; only
 /// the first `n_nodes` nodes are read): each element's stresses evaluated at its nodes (the
 /// element's own through-thickness model, [`crate::element::shell::stress_at`]), then averaged
-/// over the shell elements sharing a node as [`nodal_stress`] does for solids. Elements whose
-/// normal points away from the node's [`ShellFaces::normal`] (a surface meshed with mixed
-/// orientations) contribute their faces swapped, so that "top" is one side of the surface at
-/// every node. `None` when there are no shell elements.
+/// over the shell elements sharing a node as [`nodal_stress`] does for solids. Each connected
+/// surface has one top side, the side most of its cells' normals point to (the walk of
+/// [`crate::model::orient`], which reorients the cells of surfaces with an offset; without an
+/// offset a mesh's cells may point either way): a cell meshed the other way round contributes
+/// its faces swapped and its normal reversed, as does one whose normal points away from the
+/// node's [`ShellFaces::normal`] where surfaces meet. `None` when there are no shell elements.
 ///
 /// # Errors
 /// [`Error::InvalidInput`] if `u` is shorter than `n_nodes` nodes, [`Error::param`] for a
@@ -754,8 +804,11 @@ pub fn shell_face_stress(shells: &[crate::model::ShellSet], n_nodes: usize, u: &
     }
     let (mut top, mut bottom) = (Sums::new(n_nodes), Sums::new(n_nodes));
     let mut normal = vec![0.0; 3 * n_nodes];
+    let orientation = crate::model::orient::orientation(shells);
+    let mut sign = orientation.sign.iter();
     for set in shells {
         for e in 0..set.len() {
+            let agrees = sign.next().is_none_or(|&s| s > 0);
             let (kind, nodes, tag) = (set.kinds[e], set.nodes(e), set.tags[e]);
             let bad = |det: f64| Error::InvertedElement {
                 element: tag,
@@ -776,15 +829,30 @@ pub fn shell_face_stress(shells: &[crate::model::ShellSet], n_nodes: usize, u: &
                 ue[6 * l..6 * l + 6].copy_from_slice(&u[NCOMP * a..NCOMP * a + 6]);
             }
             let ue = &ue[..6 * nodes.len()];
-            let n_e = shell::local_frame(kind, &x).map_err(bad)?[2];
-            for (&a, &xi) in nodes.iter().zip(shape::reference_nodes(kind)) {
+            let n_e = shell::local_frame(kind, &x).map_err(bad)?[2].map(|v| if agrees { v } else { -v });
+            let at = |xi: [f64; 3]| shell::stress_at(kind, &x, &set.section, &set.material, ue, xi);
+            let corners = shape::reference_nodes(kind);
+            // A corner whose Jacobian vanishes (a straight angle where a quad meets two
+            // neighbours, valid at the integration points): the element's stress at its
+            // centre for every node, as analysis accepted it.
+            let stresses: Vec<shell::ShellStress> = match corners.iter().map(|&xi| at(xi)).collect() {
+                Ok(s) => s,
+                Err(_) => {
+                    let centre = if nodes.len() == 3 {
+                        [1.0 / 3.0, 1.0 / 3.0, 0.0]
+                    } else {
+                        [0.0; 3]
+                    };
+                    vec![at(centre).map_err(bad)?; nodes.len()]
+                }
+            };
+            for (&a, s) in nodes.iter().zip(stresses) {
                 let g = a as usize;
-                let s = shell::stress_at(kind, &x, &set.section, &set.material, ue, xi).map_err(bad)?;
                 let nref = &mut normal[3 * g..3 * g + 3];
                 if nref.iter().all(|&v| v == 0.0) {
                     nref.copy_from_slice(&n_e);
                 }
-                let flipped = (0..3).map(|i| nref[i] * n_e[i]).sum::<f64>() < 0.0;
+                let flipped = ((0..3).map(|i| nref[i] * n_e[i]).sum::<f64>() < 0.0) == agrees;
                 let (t, b) = if flipped { (s.bottom, s.top) } else { (s.top, s.bottom) };
                 top.add(g, &t, tag);
                 bottom.add(g, &b, tag);

@@ -194,11 +194,20 @@ fn study_file_values_are_refused_at_their_key_when_read() {
     // A constraint no design can be compared with (every design was "infeasible" against NaN).
     let (line, e) = at("nan", "[constraints]\nmin_f1_hz = nan\n");
     assert_eq!(line, Some(7), "{e}");
-    assert!(e.contains("'constraints.min_f1_hz'") && e.contains("finite frequency"), "{e}");
+    assert!(
+        e.contains("'constraints.min_f1_hz'") && e.contains("finite frequency"),
+        "{e}"
+    );
     let (line, e) = at("mass", "[constraints]\nmax_mass_kg = -100.0\n");
     assert_eq!(line, Some(7), "{e}");
     assert!(e.contains("'constraints.max_mass_kg'"), "{e}");
-    assert!(Study::load(&study_file("nolimit", &format!("{BASE}[constraints]\nmax_mass_kg = inf\n"))).is_ok());
+    assert!(
+        Study::load(&study_file(
+            "nolimit",
+            &format!("{BASE}[constraints]\nmax_mass_kg = inf\n")
+        ))
+        .is_ok()
+    );
     let study = study_file("cli", BASE);
     let out = tmp("cli-out");
     for (opt, v) in [("--min-f1", "nan"), ("--max-mass=-100", "")] {

@@ -51,7 +51,8 @@ pub fn static_cmd(a: &StaticArgs) -> Result<i32> {
     if a.vtu.is_some() || a.msh_out.is_some() {
         crate::app::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
     }
-    for n in &run.model.notes {
+    // The model's notes and the stress recovery's (beams whose stresses are not recovered).
+    for n in &report.notes {
         eprintln!("note: {n}");
     }
     Ok(0)

@@ -295,7 +295,10 @@ impl Constraints {
     pub fn invalid(&self) -> Option<(&'static str, String)> {
         let bad = |v: f64| v.is_nan() || v < 0.0 || v == f64::NEG_INFINITY;
         if bad(self.min_f1_hz) || self.min_f1_hz.is_infinite() {
-            return Some(("min_f1_hz", format!("{} Hz: must be a finite frequency ≥ 0", self.min_f1_hz)));
+            return Some((
+                "min_f1_hz",
+                format!("{} Hz: must be a finite frequency ≥ 0", self.min_f1_hz),
+            ));
         }
         if bad(self.max_mass_kg) {
             return Some((
@@ -930,8 +933,14 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     let designs = study.designs()?;
     if total > LARGE_SWEEP && !opts.yes {
         // The size of one design's model, from its mesh (no analysis).
-        let Some(p) = designs.iter().find_map(|(_, d)| d.as_ref().ok().map(|(_, p)| p.clone())) else {
-            return Err(study.design(0).err().unwrap_or_else(|| Error::param("sweep", "no valid design")));
+        let Some(p) = designs
+            .iter()
+            .find_map(|(_, d)| d.as_ref().ok().map(|(_, p)| p.clone()))
+        else {
+            return Err(study
+                .design(0)
+                .err()
+                .unwrap_or_else(|| Error::param("sweep", "no valid design")));
         };
         let dofs = match solid {
             None => 6 * sandwich_table(&p)?.n_nodes(),
