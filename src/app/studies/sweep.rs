@@ -407,11 +407,52 @@ impl Study {
         }
     }
 
-    /// A scene on `sandwich:paper[,SIZE]`: the paper's table at that size, the scene's material,
-    /// nothing swept yet.
+    /// A scene on `sandwich:paper[,SIZE]`: the paper's table at that size with the thicknesses
+    /// of the scene's shell parts, the scene's material, nothing swept yet. What the sweep's
+    /// free–free table cannot carry (a part of its own material or with an offset, supports,
+    /// couplings, masses, springs, solid or beam parts) is refused, named, rather than dropped.
     fn from_scene(path: &Path, text: &str) -> Result<Study> {
         let scene = Scene::parse(path, text)?;
         let mut table = TableSpec::default();
+        let refuse = |what: String| {
+            Err(toml_file::file_error(
+                path.display().to_string(),
+                None,
+                format!(
+                    "{what}: a sweep of a scene analyses the free table in the scene's material, with its \
+                     parts' thicknesses; write a study file ([study], docs/sweeps.md) for anything else"
+                ),
+            ))
+        };
+        for part in &scene.spec.shells {
+            let t = part.section.thickness;
+            match part.group.as_str() {
+                "top_plate" => table.top_thickness = t,
+                "bottom_plate" => table.bottom_thickness = t,
+                "webs_long" => table.long_web_thickness = t,
+                "webs_trans" => table.trans_web_thickness = t,
+                g => return refuse(format!("part '{g}' is not a part of the sandwich table")),
+            }
+            if part.material.is_some_and(|m| m != scene.spec.material) {
+                return refuse(format!("part '{}' has a material of its own", part.group));
+            }
+            if part.section.offset != 0.0 {
+                return refuse(format!("part '{}' has an offset", part.group));
+            }
+        }
+        let s = &scene.spec;
+        let extra = [
+            (!s.fixes.is_empty(), "supports"),
+            (!s.couplings.is_empty(), "couplings"),
+            (!s.prescribed.is_empty(), "prescribed motion"),
+            (!s.point_masses.is_empty(), "point masses"),
+            (!(s.springs.is_empty() && s.spring_matrices.is_empty()), "springs"),
+            (!s.beams.is_empty() || s.solid_groups.as_ref().is_some_and(|g| !g.is_empty()), "solid or beam parts"),
+            (!s.group_materials.is_empty(), "materials of groups"),
+        ];
+        if let Some((_, what)) = extra.iter().find(|(has, _)| *has) {
+            return refuse(format!("the scene has {what}"));
+        }
         let generator = match &scene.mesh {
             MeshSource::Generator(g) if g.starts_with("sandwich:paper") => g,
             _ => {
