@@ -222,22 +222,25 @@ fn study_file_values_are_refused_at_their_key_when_read() {
 }
 
 /// Refinement levels are built from the source grammar's types: `box:` divisions doubled (a
-/// single hex8 layer stays one), `helix:` elements per turn doubled, `sandwich:` size halved.
+/// single hex8 layer carrying shells stays one; a solid one is refined through its thickness,
+/// where it kept one layer and converged to its own locked value), `helix:` elements per turn
+/// doubled, `sandwich:` size halved.
 #[test]
 fn converge_refines_generators_by_their_grammar() {
     use converge::Refinable;
     let b = Refinable::parse("box:0.3,0.3,0.02:4,4,1:hex8").unwrap();
-    assert_eq!(b.level(0), "box:0.3,0.3,0.02:4,4,1:hex8");
-    assert_eq!(b.level(2), "box:0.3,0.3,0.02:16,16,1:hex8");
+    assert_eq!(b.level(0, true), "box:0.3,0.3,0.02:4,4,1:hex8");
+    assert_eq!(b.level(2, true), "box:0.3,0.3,0.02:16,16,1:hex8");
+    assert_eq!(b.level(2, false), "box:0.3,0.3,0.02:16,16,4:hex8");
     let b = Refinable::parse("box:0.3,0.3,0.02:4,4,1:hex20").unwrap();
-    assert_eq!(b.level(1), "box:0.3,0.3,0.02:8,8,2:hex20");
+    assert_eq!(b.level(1, false), "box:0.3,0.3,0.02:8,8,2:hex20");
     let h = Refinable::parse("helix:0.032,0.01,6,12").unwrap();
-    assert_eq!(h.level(1), "helix:0.032,0.01,6,24");
+    assert_eq!(h.level(1, false), "helix:0.032,0.01,6,24");
     let h = Refinable::parse("helix:0.032,0.01,6,12,line3").unwrap();
-    assert_eq!(h.level(2), "helix:0.032,0.01,6,48,line3");
+    assert_eq!(h.level(2, false), "helix:0.032,0.01,6,48,line3");
     let s = Refinable::parse("sandwich:paper").unwrap();
-    assert_eq!(s.level(0), "sandwich:paper,0.025");
-    assert_eq!(s.level(1), "sandwich:paper,0.0125");
+    assert_eq!(s.level(0, true), "sandwich:paper,0.025");
+    assert_eq!(s.level(1, true), "sandwich:paper,0.0125");
     assert!(Refinable::parse("ibeam-line:1,10").is_none());
     assert!(Refinable::parse("box:1,1:2,2,2:hex8").is_none());
 }

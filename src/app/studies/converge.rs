@@ -369,7 +369,8 @@ pub const MAX_LEVELS: usize = 6;
 /// A mesh generator a scene study can refine: the source grammar's specs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Refinable {
-    /// `box:`: divisions doubled per level (a single hex8 layer through the thickness stays one).
+    /// `box:`: divisions doubled per level (a single hex8 layer through the thickness stays one
+    /// when the box carries shells on its faces).
     Box(BoxSpec),
     /// `helix:`: elements per turn doubled per level.
     Helix(HelixSpec),
@@ -394,13 +395,15 @@ impl Refinable {
     }
 
     /// The generator spec of refinement level `k` (0: as given, each level halves the element
-    /// size).
-    pub fn level(&self, k: u32) -> String {
+    /// size). `shells`: the mesh carries shell parts, so a one-cell-thick hex8 box is a surface
+    /// to mesh on and keeps its one layer (a solid box is refined through its thickness too: a
+    /// solid plate of one hex8 layer kept one and converged to a locked +1.4 %).
+    pub fn level(&self, k: u32, shells: bool) -> String {
         let f = 1usize << k;
         match *self {
             Refinable::Box(mut b) => {
                 let [nx, ny, nz] = b.divisions;
-                let nz = if nz == 1 && b.kind == CellKind::Hex8 { 1 } else { nz * f };
+                let nz = if shells && nz == 1 && b.kind == CellKind::Hex8 { 1 } else { nz * f };
                 b.divisions = [nx * f, ny * f, nz];
                 b.to_string()
             }
@@ -466,7 +469,7 @@ pub fn from_scene(path: &Path, levels: usize) -> Result<Case> {
         .unwrap_or_else(|| "model".into());
     let levels = (0..levels as u32)
         .map(|k| {
-            let spec = refinable.level(k);
+            let spec = refinable.level(k, !scene.spec.shells.is_empty());
             let mut s = scene.clone();
             s.mesh = MeshSource::Generator(spec.clone());
             LevelSpec {
