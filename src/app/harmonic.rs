@@ -251,10 +251,46 @@ pub fn frequency_problem(f: f64) -> Option<String> {
     None
 }
 
-/// Refuse damping that leaves a resonance infinite (ζ = 0, or α = β = 0) besides what
+/// The smallest damping ratio taken as damping: below it the amplification at a resonance,
+/// 1/(2ζ), is above 5e8 and K − ω²M + iωC is singular to the rounding of its entries (a ζ of
+/// 1e-300 gave 94 km by modes and 8.6e11 mm by the direct solve, both silently).
+pub const MIN_DAMPING_RATIO: f64 = 1e-9;
+
+/// Refuse damping that leaves a resonance infinite (ζ = 0, or α = β = 0, or a ratio below
+/// [`MIN_DAMPING_RATIO`], for Rayleigh damping at every frequency of `freqs_hz`) besides what
 /// [`Damping::validate`] refuses; `ratio` and `rayleigh` name the options (or keys) that set them.
-pub fn check_damping(d: &Damping, ratio: &str, rayleigh: &str) -> Result<()> {
+pub fn check_damping(d: &Damping, ratio: &str, rayleigh: &str, freqs_hz: &[f64]) -> Result<()> {
     d.validate()?;
+    if let Damping::Ratio(z) = *d
+        && z > 0.0
+        && z < MIN_DAMPING_RATIO
+    {
+        return Err(Error::option(
+            ratio,
+            format!(
+                "{ratio} {z}: a damping ratio below {MIN_DAMPING_RATIO:e} is no damping in double precision (the \
+                 response at a resonance, 1/(2ζ) times the static one, would be above 5e8 of it): give a ratio of \
+                 a structure (0.001–0.05)"
+            ),
+        ));
+    }
+    if let Damping::Rayleigh { alpha, beta } = *d {
+        let zeta = |f: f64| {
+            let w = 2.0 * std::f64::consts::PI * f;
+            if w > 0.0 { alpha / (2.0 * w) + beta * w / 2.0 } else { f64::INFINITY }
+        };
+        let largest = freqs_hz.iter().map(|&f| zeta(f)).fold(0.0f64, f64::max);
+        if (alpha > 0.0 || beta > 0.0) && !freqs_hz.is_empty() && largest < MIN_DAMPING_RATIO {
+            return Err(Error::option(
+                rayleigh,
+                format!(
+                    "{rayleigh} {alpha},{beta}: a damping ratio of at most {largest:.1e} at the frequencies asked, \
+                     below {MIN_DAMPING_RATIO:e}: no damping in double precision; give α and β of a structure (e.g. \
+                     0,1e-5)"
+                ),
+            ));
+        }
+    }
     match *d {
         Damping::Ratio(z) if z == 0.0 => Err(Error::option(
             ratio,
@@ -438,7 +474,7 @@ fn disagreement_note(points: &[Point], notes: &mut Vec<String>) {
 /// Refuse a request without forces or frequencies, with a frequency out of range, without
 /// damping or with `modes = 0`; the groups reported otherwise (the loaded ones by default).
 fn check_request(req: &HarmonicRequest) -> Result<Vec<String>> {
-    check_damping(&req.damping, "damping", "rayleigh")?;
+    check_damping(&req.damping, "damping", "rayleigh", &req.freqs_hz)?;
     if req.forces.is_empty() {
         return Err(Error::param(
             "forces",

@@ -142,10 +142,14 @@ fn harmonic_free_body_at_0_hz_is_refused() {
 
 #[test]
 fn harmonic_without_damping_is_refused() {
-    // Issue 28, item 2: `--damping 0` and `--rayleigh 0,0` were accepted (607 km at resonance).
+    // Issue 28, item 2: `--damping 0` and `--rayleigh 0,0` were accepted (607 km at resonance);
+    // a ratio of 1e-300 was too (94 km by modes, 8.6e11 mm by the direct solve): no damping in
+    // double precision either.
     for (damping, option) in [
         (&["--damping", "0"][..], "--damping"),
         (&["--rayleigh", "0,0"][..], "--rayleigh"),
+        (&["--damping", "1e-300"][..], "--damping"),
+        (&["--rayleigh", "1e-300,0"][..], "--rayleigh"),
     ] {
         let mut args = vec![
             "harmonic",
@@ -162,20 +166,13 @@ fn harmonic_without_damping_is_refused() {
         assert_eq!(code, 1, "{damping:?}: {out}{err}");
         assert!(err.contains(option) && err.contains("no damping"), "{damping:?}: {err}");
     }
-    // One of α, β is enough.
-    let (code, _, err) = run(&[
-        "harmonic",
-        BAR,
-        "--fix",
-        "xmin",
-        "--force",
-        "xmax=0,0,10",
-        "--freq",
-        "50",
-        "--rayleigh",
-        "0,1e-5",
-    ]);
-    assert_eq!(code, 0, "{err}");
+    // One of α, β is enough; a lightly damped structure is damping.
+    for damping in [["--rayleigh", "0,1e-5"], ["--damping", "1e-6"]] {
+        let mut args = vec!["harmonic", BAR, "--fix", "xmin", "--force", "xmax=0,0,10", "--freq", "50"];
+        args.extend_from_slice(&damping);
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 0, "{damping:?}: {err}");
+    }
 }
 
 /// The paper's table with only its top plate analysed: the group `table` also holds the

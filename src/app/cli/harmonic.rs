@@ -328,7 +328,7 @@ fn request(a: &HarmonicArgs) -> Result<crate::app::harmonic::HarmonicRequest> {
             ));
         }
     };
-    h::check_damping(&damping, "--damping", "--rayleigh")?;
+    h::check_damping(&damping, "--damping", "--rayleigh", &freqs)?;
     if a.plot.is_some() && freqs.len() < 2 {
         return Err(Error::option("--plot", "--plot draws an FRF: it needs --sweep"));
     }
