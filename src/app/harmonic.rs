@@ -277,7 +277,11 @@ pub fn check_damping(d: &Damping, ratio: &str, rayleigh: &str, freqs_hz: &[f64])
     if let Damping::Rayleigh { alpha, beta } = *d {
         let zeta = |f: f64| {
             let w = 2.0 * std::f64::consts::PI * f;
-            if w > 0.0 { alpha / (2.0 * w) + beta * w / 2.0 } else { f64::INFINITY }
+            if w > 0.0 {
+                alpha / (2.0 * w) + beta * w / 2.0
+            } else {
+                f64::INFINITY
+            }
         };
         let largest = freqs_hz.iter().map(|&f| zeta(f)).fold(0.0f64, f64::max);
         if (alpha > 0.0 || beta > 0.0) && !freqs_hz.is_empty() && largest < MIN_DAMPING_RATIO {

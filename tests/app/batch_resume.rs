@@ -92,3 +92,28 @@ fn colliding_result_names_and_summary_get_their_own_files() {
     cases.sort();
     assert_eq!(cases.len(), 4, "{cases:?}");
 }
+
+/// A batch whose template asks for a harmonic response only reports each case's DOFs in the
+/// summary (the column was empty: only the modal and static reports were read).
+#[test]
+fn a_harmonic_batch_reports_its_dofs() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let d = tmp("harmonic_batch");
+    std::fs::create_dir_all(d.join("m")).unwrap();
+    std::fs::copy(root.join("meshes/s3_leaf_hex20_10x6x1.msh"), d.join("m/leaf.msh")).unwrap();
+    let tpl = std::fs::read_to_string(root.join("scenes/s3_leaf_harmonic.toml"))
+        .unwrap()
+        .replace("sweep_hz = [5.0, 120.0, 116]", "sweep_hz = [5.0, 10.0, 2]")
+        .replace("vtu = true", "vtu = false");
+    std::fs::write(d.join("t.toml"), tpl).unwrap();
+    let o = bin()
+        .current_dir(&d)
+        .args(["batch", "m/*.msh", "--scene", "t.toml", "-o", "out"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("out/summary.json")).unwrap()).unwrap();
+    let dofs = json["rows"][0]["dofs"].as_u64();
+    assert!(dofs.is_some_and(|n| n > 100), "{}", json["rows"][0]);
+}

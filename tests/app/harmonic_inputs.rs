@@ -168,7 +168,16 @@ fn harmonic_without_damping_is_refused() {
     }
     // One of α, β is enough; a lightly damped structure is damping.
     for damping in [["--rayleigh", "0,1e-5"], ["--damping", "1e-6"]] {
-        let mut args = vec!["harmonic", BAR, "--fix", "xmin", "--force", "xmax=0,0,10", "--freq", "50"];
+        let mut args = vec![
+            "harmonic",
+            BAR,
+            "--fix",
+            "xmin",
+            "--force",
+            "xmax=0,0,10",
+            "--freq",
+            "50",
+        ];
         args.extend_from_slice(&damping);
         let (code, _, err) = run(&args);
         assert_eq!(code, 0, "{damping:?}: {err}");

@@ -217,6 +217,16 @@ fn study_file_values_are_refused_at_their_key_when_read() {
         }
         super::support::expect_error(&args, &[opt.split('=').next().unwrap()]);
     }
+    // A hex20 size for a shell sweep sized nothing (the check's size is [check] solid_size).
+    let args = [
+        "sweep",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--solid-size",
+        "0.05",
+    ];
+    super::support::expect_error(&args, &["--solid-size", "--formulation solid"]);
     // Without designs to check, the [check] size is not used and not refused.
     assert!(Study::load(&study_file("unused", &format!("{BASE}[check]\nsolid_size = 1e-6\n"))).is_ok());
 }

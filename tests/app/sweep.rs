@@ -164,7 +164,11 @@ fn a_scene_sweep_takes_the_scene_parts_or_refuses_them() {
     std::fs::write(&p, scene("")).unwrap();
     let s = Study::load(&p).unwrap();
     assert_eq!(
-        (s.table.top_thickness, s.table.bottom_thickness, s.table.long_web_thickness),
+        (
+            s.table.top_thickness,
+            s.table.bottom_thickness,
+            s.table.long_web_thickness
+        ),
         (0.015, 0.006, 0.005)
     );
     std::fs::write(&p, scene("material = \"alu\"\n")).unwrap();

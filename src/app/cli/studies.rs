@@ -169,6 +169,15 @@ pub fn sweep_cmd(a: &SweepArgs) -> Result<i32> {
         }
     }
     if let Some(h) = a.solid_size {
+        // It sizes the solid formulation's elements only (the check's hex20 size is the study
+        // file's [check] solid_size): given for a shell sweep it would be dropped unseen.
+        if study.formulation != sweep::SweepFormulation::Solid {
+            return Err(Error::option(
+                "--solid-size",
+                "--solid-size sizes the hex20 elements of --formulation solid; this sweep is of shells (give \
+                 --formulation solid, or the check's size as [check] solid_size in a study file)",
+            ));
+        }
         study.solid_size = h;
     }
     if let Some(f) = a.min_f1 {

@@ -164,7 +164,13 @@ impl BatchRow {
             file: file.to_string(),
             status: if r.verified() { "ok" } else { "unverified" }.into(),
             error: (!r.verified()).then(|| "the modal solution failed its Sturm or residual check".to_string()),
-            dofs: r.modal.as_ref().map(|m| m.dofs).or(r.statics.as_ref().map(|s| s.dofs)),
+            dofs: r
+                .modal
+                .as_ref()
+                .map(|m| m.dofs)
+                .or(r.statics.as_ref().map(|s| s.dofs))
+                .or(r.harmonic.as_ref().map(|h| h.dofs))
+                .or(r.buckling.as_ref().map(|b| b.dofs)),
             mass_kg: r.modal.as_ref().map(|m| m.mass_kg),
             frequencies_hz: r.modal.as_ref().map(|m| m.frequencies_hz.clone()).unwrap_or_default(),
             first_elastic_hz: r.modal.as_ref().and_then(|m| m.elastic_frequencies().first().copied()),

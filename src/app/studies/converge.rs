@@ -403,7 +403,11 @@ impl Refinable {
         match *self {
             Refinable::Box(mut b) => {
                 let [nx, ny, nz] = b.divisions;
-                let nz = if shells && nz == 1 && b.kind == CellKind::Hex8 { 1 } else { nz * f };
+                let nz = if shells && nz == 1 && b.kind == CellKind::Hex8 {
+                    1
+                } else {
+                    nz * f
+                };
                 b.divisions = [nx * f, ny * f, nz];
                 b.to_string()
             }

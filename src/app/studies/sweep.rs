@@ -447,7 +447,10 @@ impl Study {
             (!s.prescribed.is_empty(), "prescribed motion"),
             (!s.point_masses.is_empty(), "point masses"),
             (!(s.springs.is_empty() && s.spring_matrices.is_empty()), "springs"),
-            (!s.beams.is_empty() || s.solid_groups.as_ref().is_some_and(|g| !g.is_empty()), "solid or beam parts"),
+            (
+                !s.beams.is_empty() || s.solid_groups.as_ref().is_some_and(|g| !g.is_empty()),
+                "solid or beam parts",
+            ),
             (!s.group_materials.is_empty(), "materials of groups"),
         ];
         if let Some((_, what)) = extra.iter().find(|(has, _)| *has) {
@@ -990,8 +993,9 @@ pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
         return Err(Error::option(
             "--yes",
             format!(
-                "the study has {total} designs (more than {LARGE_SWEEP}) of about {dofs} DOFs each: that is hours of \
-                 work; rerun with --yes to start it, or narrow the ranges (--set)"
+                "the study has {total} designs (more than {LARGE_SWEEP}) of about {dofs} DOFs each (each a modal \
+                 solve: from hundredths of a second at a few thousand DOFs to seconds at a hundred thousand): rerun \
+                 with --yes to start it, or narrow the ranges (--set)"
             ),
         ));
     }
