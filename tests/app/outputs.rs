@@ -315,6 +315,24 @@ fn beam_stresses_follow_the_flexure_formula() {
     assert!(out.contains("has no extreme fibres"), "{out}");
 }
 
+/// The `static --json` report of the beams of `mesh` (`--beam` part `beam`) clamped at the
+/// group `clamp` with 100 N along z on the group `tip`.
+fn cantilever_json(mesh: &std::path::Path, beam: &str) -> serde_json::Value {
+    let (code, out, err) = run(&[
+        "static",
+        mesh.to_str().unwrap(),
+        "--beam",
+        beam,
+        "--fix",
+        "clamp:all",
+        "--force",
+        "tip=0,0,100",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
 /// Three-node beams and the torsion of round sections against statics: an L-shaped frame of
 /// line3 elements (a 1 m arm along x clamped at the origin, a 0.4 m lever along y at its end,
 /// a 20 mm round bar) with 100 N along z at the lever's tip. Statically determinate: at the
@@ -333,19 +351,7 @@ fn three_node_beams_and_torsion_follow_statics() {
          $EndNodes\n$Elements\n5\n1 15 2 2 1 1\n2 15 2 3 2 7\n3 8 2 1 1 1 3 2\n4 8 2 1 1 3 5 4\n5 8 2 1 1 5 7 6\n$EndElements\n",
     )
     .unwrap();
-    let (code, out, err) = run(&[
-        "static",
-        mesh.to_str().unwrap(),
-        "--beam",
-        "frame=circle:0.02@0,0,1",
-        "--fix",
-        "clamp:all",
-        "--force",
-        "tip=0,0,100",
-        "--json",
-    ]);
-    assert_eq!(code, 0, "{out}{err}");
-    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let report = cantilever_json(&mesh, "frame=circle:0.02@0,0,1");
     let pi = std::f64::consts::PI;
     let (r, i) = (0.01, pi * 0.02f64.powi(4) / 64.0);
     for (key, expected) in [
@@ -529,19 +535,7 @@ fn beam_stress_notes_and_a_quarter_point_line3() {
         msh22(&[(0, 1, "clamp"), (0, 2, "tip"), (1, 3, "beam")], &nodes, &elements),
     )
     .unwrap();
-    let (code, out, err) = run(&[
-        "static",
-        line3.to_str().unwrap(),
-        "--beam",
-        "beam=rect:0.02,0.04@0,1,0",
-        "--fix",
-        "clamp:all",
-        "--force",
-        "tip=0,0,100",
-        "--json",
-    ]);
-    assert_eq!(code, 0, "{out}{err}");
-    let report: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let report = cantilever_json(&line3, "beam=rect:0.02,0.04@0,1,0");
     let value = report["stress"][0]["beam_normal_stress"][0]["value"].as_f64().unwrap();
     assert!((value / 37.5e6 - 1.0).abs() < 1e-9, "{value}");
 }

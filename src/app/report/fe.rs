@@ -397,15 +397,23 @@ pub fn static_text(r: &StaticReport) -> String {
         let _ = writeln!(s, "  equilibrium     |ΣR + ΣF| / |F| = {:.2e}", c.equilibrium_error);
         let _ = writeln!(s, "  solve residual  {:.2e}", c.rel_residual);
         if let Some(st) = r.stress.get(ci) {
-            for g in &st.von_mises {
-                let _ = writeln!(
-                    s,
-                    "  von Mises max {:<16} {:>10} MPa at node {} ({}) m",
-                    g.group,
-                    fmt_fixed(g.value / 1e6, 3),
-                    g.node.unwrap_or(0),
-                    fixed3(g.coords, 4)
-                );
+            // The solids' nodal von Mises, then the shells' on each face.
+            let faces = [
+                ("", &st.von_mises),
+                ("shell top    ", &st.shell_von_mises_top),
+                ("shell bottom ", &st.shell_von_mises_bottom),
+            ];
+            for (what, maxima) in faces {
+                for g in maxima {
+                    let _ = writeln!(
+                        s,
+                        "  {what}von Mises max {:<16} {:>10} MPa at node {} ({}) m",
+                        g.group,
+                        fmt_fixed(g.value / 1e6, 3),
+                        g.node.unwrap_or(0),
+                        fixed3(g.coords, 4)
+                    );
+                }
             }
             for g in st.max_shear.iter().filter(|g| g.group == "(all)") {
                 let _ = writeln!(
@@ -435,18 +443,6 @@ pub fn static_text(r: &StaticReport) -> String {
                         crate::io::fmt_sig(r[3], 4),
                         crate::io::fmt_sig(r[4], 4),
                         crate::io::fmt_sig(r[5], 4)
-                    );
-                }
-            }
-            for (face, maxima) in [("top", &st.shell_von_mises_top), ("bottom", &st.shell_von_mises_bottom)] {
-                for g in maxima {
-                    let _ = writeln!(
-                        s,
-                        "  shell {face:<6} von Mises max {:<16} {:>10} MPa at node {} ({}) m",
-                        g.group,
-                        fmt_fixed(g.value / 1e6, 3),
-                        g.node.unwrap_or(0),
-                        fixed3(g.coords, 4)
                     );
                 }
             }
