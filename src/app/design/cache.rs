@@ -25,8 +25,9 @@ struct Memo {
     /// Requests, and entries stored. Two threads may compute the same entry at once (neither
     /// waits for the other: a thread of the pool blocked on another's entry could be the one
     /// that entry's computation waits for); only the first stores it, so `stored` counts the
-    /// distinct parts, and `requests − stored` the ones reused, the same from run to run
-    /// whatever the threads' timing (they varied by one or two when each computation counted).
+    /// distinct parts and `requests − stored` the further requests, whatever the threads'
+    /// timing (each computation counted before). The counts are process-wide: work running
+    /// alongside (the design search beside the envelope) adds its own.
     requests: usize,
     stored: usize,
 }
