@@ -534,16 +534,17 @@ fn static_out(
             cases: vec![case],
         },
     )?;
-    let report = vibrofem::app::report::static_report(mesh, source, &run)?;
+    let mut stresses = vibrofem::app::report::case_stresses(mesh, &run)?;
+    let report = vibrofem::app::report::static_report(mesh, source, &run, &stresses)?;
     let json = serde_json::to_string(&report).map_err(json_output)?;
     let n = run.model.n_mesh_nodes;
     let mut u6 = vec![0.0; 6 * n];
     for a in 0..n {
         u6[6 * a..6 * a + 6].copy_from_slice(&run.u[0][NCOMP * a..NCOMP * a + 6]);
     }
-    let u3 = vibrofem::app::report::mesh_displacements(&run, 0);
-    let ns = vibrofem::post::stress::nodal_stress(&run.model.solids, n, &u3)?;
-    Ok((json, u6, ns.von_mises))
+    // The solids' nodal von Mises of the one load case, recovered with the report.
+    let von_mises = std::mem::take(&mut stresses[0].solids.von_mises);
+    Ok((json, u6, von_mises))
 }
 
 /// A harmonic run's report and the real and imaginary displacements (frequencies × n_nodes ×

@@ -364,30 +364,58 @@ pub fn beam_resultants(
     ue: &[f64],
 ) -> Result<[[f64; 6]; 2]> {
     match kind {
-        CellKind::Line2 => {
-            let nd = beam::dofs_per_node(sec);
-            let n = 2 * nd;
-            let mut ke = [0.0; 14 * 14];
-            beam::stiffness(kind, x, orientation, sec, mat, &mut ke[..n * n])?;
-            let r = beam::local_axes(sub(x[1], x[0]), orientation)?;
-            let mut out = [[0.0; 6]; 2];
-            for (a, sign) in [(0, -1.0), (1, 1.0)] {
-                let mut f = [0.0; 6];
-                for (i, fi) in f.iter_mut().enumerate() {
-                    *fi = (0..n).map(|j| ke[(a * nd + i) * n + j] * ue[j]).sum();
-                }
-                for i in 0..3 {
-                    out[a][i] = sign * dot(r[i], [f[0], f[1], f[2]]);
-                    out[a][3 + i] = sign * dot(r[i], [f[3], f[4], f[5]]);
-                }
-            }
-            Ok(out)
-        }
+        CellKind::Line2 => beam_end_resultants(kind, x, orientation, sec, mat, ue),
         _ => {
             let n = beam_axial_forces(kind, x, sec, mat, ue)?;
             Ok([[n[0], 0.0, 0.0, 0.0, 0.0, 0.0], [n[1], 0.0, 0.0, 0.0, 0.0, 0.0]])
         }
     }
+}
+
+/// The resultants `[N, Q_y, Q_z, T, M_y, M_z]` at the two ends of a `Line2` or `Line3` beam
+/// element, local axes, from its end forces `f = K_e u_e`: `−f` at the first node and `+f` at
+/// the second (the convention of [`beam_resultants`], whose `Line2` resultants these are). A
+/// `Line3`'s axes at each end follow its tangent there (gmsh's order: the ends, then the
+/// midside node, whose force is the load applied there), the chord where the tangent vanishes
+/// (a midside node at a quarter point, valid at the integration points). With loads at the
+/// nodes only, the end forces are the section's resultants at the ends (the element's
+/// equilibrium; exact where the structure is statically determinate).
+///
+/// Errors as for [`beam::stiffness`].
+pub fn beam_end_resultants(
+    kind: CellKind,
+    x: &[[f64; 3]],
+    orientation: [f64; 3],
+    sec: &BeamSection,
+    mat: &Material,
+    ue: &[f64],
+) -> Result<[[f64; 6]; 2]> {
+    let nd = beam::dofs_per_node(sec);
+    let n = x.len() * nd;
+    let mut ke = [0.0; 21 * 21];
+    beam::stiffness(kind, x, orientation, sec, mat, &mut ke[..n * n])?;
+    let chord = sub(x[1], x[0]);
+    let tangents = if kind == CellKind::Line3 {
+        let comb = |c: [f64; 3]| std::array::from_fn(|i| c[0] * x[0][i] + c[1] * x[1][i] + c[2] * x[2][i]);
+        // dx/dξ at ξ = −1 and +1 of the quadratic line (nodes at ξ = −1, +1, 0).
+        let norm = |v: [f64; 3]| dot(v, v).sqrt();
+        [comb([-1.5, -0.5, 2.0]), comb([0.5, 1.5, -2.0])].map(|t| if norm(t) > 1e-6 * norm(chord) { t } else { chord })
+    } else {
+        [chord, chord]
+    };
+    let mut out = [[0.0; 6]; 2];
+    for (a, sign) in [(0, -1.0), (1, 1.0)] {
+        let r = beam::local_axes(tangents[a], orientation)?;
+        let mut f = [0.0; 6];
+        for (i, fi) in f.iter_mut().enumerate() {
+            *fi = (0..n).map(|j| ke[(a * nd + i) * n + j] * ue[j]).sum();
+        }
+        for i in 0..3 {
+            out[a][i] = sign * dot(r[i], [f[0], f[1], f[2]]);
+            out[a][3 + i] = sign * dot(r[i], [f[3], f[4], f[5]]);
+        }
+    }
+    Ok(out)
 }
 
 /// Rotation functions `ψ` of the exact two-node Timoshenko element (Friedman and Kosmatka

@@ -576,43 +576,6 @@ pub struct BeamStress {
     pub notes: Vec<String>,
 }
 
-/// The resultants `[N, Q_y, Q_z, T, M_y, M_z]` at the two ends of element `e` of `set` (nodes
-/// at `x`, displacements `ue`), local axes: the end forces `f = K_e u_e`, `−f` at the first
-/// node and `+f` at the second (the sign convention of
-/// [`crate::element::geometric::beam_resultants`], which gives them for two-node elements).
-/// For a three-node element the axes at each end follow the tangent there (gmsh's order: the
-/// ends, then the midside node, whose force is the load applied there). With loads at the
-/// nodes only, the end forces are the section's resultants at the ends (the element's
-/// equilibrium; exact where the structure is statically determinate).
-fn end_resultants(set: &crate::model::BeamSet, e: usize, x: &[[f64; 3]], ue: &[f64]) -> Result<[[f64; 6]; 2]> {
-    use crate::element::{beam, geometric};
-    let (kind, orient, sec, mat) = (set.kinds[e], set.orient[e], &set.section, &set.material);
-    if kind != CellKind::Line3 {
-        return geometric::beam_resultants(kind, x, orient, sec, mat, ue);
-    }
-    let nd = beam::dofs_per_node(sec);
-    let n = 3 * nd;
-    let mut ke = vec![0.0; n * n];
-    beam::stiffness(kind, x, orient, sec, mat, &mut ke)?;
-    let comb = |c: [f64; 3]| std::array::from_fn(|i| c[0] * x[0][i] + c[1] * x[1][i] + c[2] * x[2][i]);
-    // dx/dξ at ξ = −1 and +1 of the quadratic line (nodes at ξ = −1, +1, 0); the chord where it
-    // vanishes (a midside node at a quarter point, valid at the integration points).
-    let chord: [f64; 3] = comb([-1.0, 1.0, 0.0]);
-    let norm = |v: &[f64; 3]| v.iter().map(|c| c * c).sum::<f64>().sqrt();
-    let tangents = [comb([-1.5, -0.5, 2.0]), comb([0.5, 1.5, -2.0])]
-        .map(|t: [f64; 3]| if norm(&t) > 1e-6 * norm(&chord) { t } else { chord });
-    let mut out = [[0.0; 6]; 2];
-    for (a, sign) in [(0, -1.0), (1, 1.0)] {
-        let r = beam::local_axes(tangents[a], orient)?;
-        let f: [f64; 6] = std::array::from_fn(|i| (0..n).map(|j| ke[(a * nd + i) * n + j] * ue[j]).sum());
-        for i in 0..3 {
-            out[a][i] = sign * (0..3).map(|k| r[i][k] * f[k]).sum::<f64>();
-            out[a][3 + i] = sign * (0..3).map(|k| r[i][k] * f[3 + k]).sum::<f64>();
-        }
-    }
-    Ok(out)
-}
-
 /// The torque `t` of the resultants `r`, or 0 when it is rounding beside their moments
 /// (1e-14 N·m of a beam bent in a plane).
 fn significant(t: f64, r: &[f64; 6]) -> f64 {
@@ -640,7 +603,7 @@ fn with_overall(mut maxima: Vec<BeamMax>) -> Vec<BeamMax> {
 }
 
 /// Stresses of the beam elements of `beams` at both ends of every element, from their
-/// resultants there ([`end_resultants`]) for displacements and rotations `u`
+/// resultants there ([`crate::element::geometric::beam_end_resultants`]) for displacements and rotations `u`
 /// ([`crate::dof::NCOMP`] per node): the normal stress at the section's extreme fibres
 /// ([`crate::section::BeamSection::extreme_normal_stress`]: the axial force and both bending
 /// moments, the flexure formula) and, for round sections, the torsion shear `τ = T r / J`
@@ -698,7 +661,16 @@ pub fn beam_stress(beams: &[crate::model::BeamSet], mesh: &Mesh, u: &[f64]) -> R
                 ue[nd * l..nd * l + nd].copy_from_slice(&u[NCOMP * a..NCOMP * a + nd]);
             }
             let x: Vec<[f64; 3]> = nodes.iter().map(|&a| set.nodes[a as usize]).collect();
-            let res = end_resultants(set, e, &x, &ue[..nd * nodes.len()]).map_err(|err| {
+            let (kind, orient) = (set.kinds[e], set.orient[e]);
+            let res = crate::element::geometric::beam_end_resultants(
+                kind,
+                &x,
+                orient,
+                &set.section,
+                &set.material,
+                &ue[..nd * nodes.len()],
+            )
+            .map_err(|err| {
                 Error::element(
                     set.tags[e],
                     format!("beam '{}', element {}: {err}", set.group, set.tags[e]),

@@ -39,7 +39,8 @@ pub fn static_cmd(a: &StaticArgs) -> Result<i32> {
         cases: vec![loads],
     };
     let run = crate::analysis::statics::run_static(&mesh, &a.mesh, &opts)?;
-    let report = crate::app::report::static_report(&mesh, &a.mesh, &run)?;
+    let stresses = crate::app::report::case_stresses(&mesh, &run)?;
+    let report = crate::app::report::static_report(&mesh, &a.mesh, &run, &stresses)?;
     if a.json {
         outln!(
             "{}",
@@ -49,7 +50,7 @@ pub fn static_cmd(a: &StaticArgs) -> Result<i32> {
         out!("{}", crate::app::report::static_text(&report));
     }
     if a.vtu.is_some() || a.msh_out.is_some() {
-        crate::app::report::write_static_fields(&mesh, &run, a.vtu.as_deref(), a.msh_out.as_deref())?;
+        crate::app::report::write_static_fields(&mesh, &run, &stresses, a.vtu.as_deref(), a.msh_out.as_deref())?;
     }
     // The model's notes and the stress recovery's (beams whose stresses are not recovered).
     for n in &report.notes {

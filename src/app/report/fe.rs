@@ -300,38 +300,66 @@ pub fn mesh_displacements(run: &crate::analysis::statics::StaticRun, case: usize
     crate::dof::node_triplets(&run.u[case], run.model.n_mesh_nodes, 0)
 }
 
-/// Build the static report (stress recovery included).
-pub fn static_report(mesh: &Mesh, source: &str, run: &crate::analysis::statics::StaticRun) -> Result<StaticReport> {
-    use crate::post::stress::{StressField, beam_stress, group_maxima, nodal_stress, shell_face_stress};
+/// The stresses of one load case of a static run, recovered once for the report and the files.
+pub struct CaseStresses {
+    /// The solids' nodal stresses (zero at nodes of no solid element).
+    pub solids: crate::post::stress::NodalStress,
+    /// The shells' on both faces, where the model has shells.
+    pub shells: Option<crate::post::stress::ShellFaces>,
+    /// The beams', where the model has beams.
+    pub beams: Option<crate::post::stress::BeamStress>,
+}
+
+/// The stresses of every load case of `run` ([`CaseStresses`]).
+pub fn case_stresses(mesh: &Mesh, run: &crate::analysis::statics::StaticRun) -> Result<Vec<CaseStresses>> {
+    use crate::post::stress::{beam_stress, nodal_stress, shell_face_stress};
+    let n = run.model.n_mesh_nodes;
+    (0..run.cases.len())
+        .map(|ci| {
+            Ok(CaseStresses {
+                solids: nodal_stress(&run.model.solids, n, &mesh_displacements(run, ci))?,
+                shells: shell_face_stress(&run.model.shells, n, &run.u[ci])?,
+                beams: beam_stress(&run.model.beams, mesh, &run.u[ci])?,
+            })
+        })
+        .collect()
+}
+
+/// Build the static report from the run and its stresses ([`case_stresses`]).
+pub fn static_report(
+    mesh: &Mesh,
+    source: &str,
+    run: &crate::analysis::statics::StaticRun,
+    stresses: &[CaseStresses],
+) -> Result<StaticReport> {
+    use crate::post::stress::{StressField, group_maxima};
     let mut stress = Vec::new();
     let mut notes = run.model.notes.clone();
-    for ci in 0..run.cases.len() {
-        let u = mesh_displacements(run, ci);
-        let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
-        let (shell_von_mises_top, shell_von_mises_bottom) =
-            match shell_face_stress(&run.model.shells, run.model.n_mesh_nodes, &run.u[ci])? {
-                Some(f) => (
-                    group_maxima(mesh, &f.top, StressField::VonMises)?,
-                    group_maxima(mesh, &f.bottom, StressField::VonMises)?,
-                ),
-                None => (Vec::new(), Vec::new()),
-            };
-        let beams = beam_stress(&run.model.beams, mesh, &run.u[ci])?;
+    for (ci, cs) in stresses.iter().enumerate() {
+        let ns = &cs.solids;
+        let (shell_von_mises_top, shell_von_mises_bottom) = match &cs.shells {
+            Some(f) => (
+                group_maxima(mesh, &f.top, StressField::VonMises)?,
+                group_maxima(mesh, &f.bottom, StressField::VonMises)?,
+            ),
+            None => (Vec::new(), Vec::new()),
+        };
+        let beams = cs.beams.as_ref();
         if ci == 0 {
             notes.extend(beams.iter().flat_map(|b| b.notes.iter().cloned()));
         }
         stress.push(StressSummary {
             shell_von_mises_top,
             shell_von_mises_bottom,
-            beam_normal_stress: beams.as_ref().map(|b| b.normal_max.clone()).unwrap_or_default(),
-            beam_torsion_shear: beams.map(|b| b.torsion_max).unwrap_or_default(),
-            von_mises: group_maxima(mesh, &ns, StressField::VonMises)?,
-            von_mises_unaveraged: group_maxima(mesh, &ns, StressField::VonMisesMaxUnaveraged)?
+            beam_normal_stress: beams.map(|b| b.normal_max.clone()).unwrap_or_default(),
+            beam_torsion_shear: beams.map(|b| b.torsion_max.clone()).unwrap_or_default(),
+            von_mises: group_maxima(mesh, ns, StressField::VonMises)?,
+            von_mises_unaveraged: group_maxima(mesh, ns, StressField::VonMisesMaxUnaveraged)?
                 .into_iter()
                 .filter(|g| g.group == "(all)")
                 .collect(),
-            tresca: group_maxima(mesh, &ns, StressField::Tresca)?,
-            max_shear: group_maxima(mesh, &ns, StressField::MaxShear)?,
+            tresca: group_maxima(mesh, ns, StressField::Tresca)?,
+            max_shear: group_maxima(mesh, ns, StressField::MaxShear)?,
         });
     }
     Ok(StaticReport {
@@ -461,11 +489,12 @@ pub fn static_text(r: &StaticReport) -> String {
 pub fn write_static_fields(
     mesh: &Mesh,
     run: &crate::analysis::statics::StaticRun,
+    stresses: &[CaseStresses],
     vtu: Option<&std::path::Path>,
     msh: Option<&std::path::Path>,
 ) -> Result<()> {
     use crate::io::{msh_out, vtk};
-    use crate::post::stress::{StressFields, beam_stress, nodal_stress, shell_face_stress};
+    use crate::post::stress::StressFields;
     let mut disps = Vec::new();
     let mut fields = Vec::new();
     // Shells: the stresses on their two faces and the normal that says which face is the top.
@@ -477,33 +506,32 @@ pub fn write_static_fields(
     // The solids' stress fields: a model without solids gets none rather than fields of zeros
     // that read as an unloaded part.
     let solids = !run.model.solids.is_empty();
-    for ci in 0..run.cases.len() {
+    for (ci, cs) in stresses.iter().enumerate() {
         let u = mesh_displacements(run, ci);
         let case = if run.cases.len() > 1 {
             format!("case{}_", ci + 1)
         } else {
             String::new()
         };
-        if let Some(f) = shell_face_stress(&run.model.shells, run.model.n_mesh_nodes, &run.u[ci])? {
+        if let Some(f) = &cs.shells {
             shell_fields.push([
                 StressFields::new(&f.top, &format!("{case}shell_top_")),
                 StressFields::new(&f.bottom, &format!("{case}shell_bottom_")),
             ]);
-            shell_normal = Some(f.normal);
+            shell_normal = Some(&f.normal);
         }
-        if let Some(b) = beam_stress(&run.model.beams, mesh, &run.u[ci])? {
-            let mut f = Vec::new();
+        if let Some(b) = &cs.beams {
+            let mut f: Vec<(&str, &[f64])> = Vec::new();
             if !b.normal_max.is_empty() {
-                f.push(("beam_normal_stress", b.normal));
+                f.push(("beam_normal_stress", &b.normal));
             }
             if !b.torsion_max.is_empty() {
-                f.push(("beam_torsion_shear", b.torsion));
+                f.push(("beam_torsion_shear", &b.torsion));
             }
             beam_fields.push((case.clone(), f));
         }
         if solids {
-            let ns = nodal_stress(&run.model.solids, run.model.n_mesh_nodes, &u)?;
-            fields.push(StressFields::new(&ns, &case));
+            fields.push(StressFields::new(&cs.solids, &case));
         }
         disps.push(u);
     }

@@ -969,12 +969,11 @@ pub const LARGE_SWEEP: usize = 1000;
 /// check the best designs (`[check] designs`), and write the outputs.
 pub fn run_sweep(study: &Study, opts: &SweepOptions) -> Result<SweepOutcome> {
     use rayon::prelude::*;
-    // Values, then the count, then the size: all before any design is built or meshed.
-    study.check_values()?;
-    let total = study.count()?;
+    // Values and the count (in `designs`), then the sizes: all before any design is meshed.
+    let designs = study.designs()?;
+    let total = designs.len();
     study.check_sizes()?;
     let solid = (study.formulation == SweepFormulation::Solid).then_some(study.solid_size);
-    let designs = study.designs()?;
     if total > LARGE_SWEEP && !opts.yes {
         // The size of one design's model, from its mesh (no analysis).
         let Some(p) = designs

@@ -361,10 +361,11 @@ impl Run<'_> {
             t.factor,
             t.solve
         );
-        let rep = crate::app::report::static_report(&self.mesh, &self.source, &run)?;
+        let stresses = crate::app::report::case_stresses(&self.mesh, &run)?;
+        let rep = crate::app::report::static_report(&self.mesh, &self.source, &run, &stresses)?;
         let (vtu, msh) = self.field_files(out, "static");
         if vtu.is_some() || msh.is_some() {
-            crate::app::report::write_static_fields(&self.mesh, &run, vtu.as_deref(), msh.as_deref())?;
+            crate::app::report::write_static_fields(&self.mesh, &run, &stresses, vtu.as_deref(), msh.as_deref())?;
             self.outputs
                 .extend(vtu.iter().chain(msh.iter()).map(|p| p.display().to_string()));
         }
