@@ -145,41 +145,32 @@ fn harmonic_without_damping_is_refused() {
     // Issue 28, item 2: `--damping 0` and `--rayleigh 0,0` were accepted (607 km at resonance);
     // a ratio of 1e-300 was too (94 km by modes, 8.6e11 mm by the direct solve): no damping in
     // double precision either.
+    let with = |damping: &[&str]| {
+        let base = [
+            "harmonic",
+            BAR,
+            "--fix",
+            "xmin",
+            "--force",
+            "xmax=0,0,10",
+            "--freq",
+            "50",
+        ];
+        run(&[&base[..], damping].concat())
+    };
     for (damping, option) in [
         (&["--damping", "0"][..], "--damping"),
         (&["--rayleigh", "0,0"][..], "--rayleigh"),
         (&["--damping", "1e-300"][..], "--damping"),
         (&["--rayleigh", "1e-300,0"][..], "--rayleigh"),
     ] {
-        let mut args = vec![
-            "harmonic",
-            BAR,
-            "--fix",
-            "xmin",
-            "--force",
-            "xmax=0,0,10",
-            "--freq",
-            "50",
-        ];
-        args.extend_from_slice(damping);
-        let (code, out, err) = run(&args);
+        let (code, out, err) = with(damping);
         assert_eq!(code, 1, "{damping:?}: {out}{err}");
         assert!(err.contains(option) && err.contains("no damping"), "{damping:?}: {err}");
     }
     // One of α, β is enough; a lightly damped structure is damping.
     for damping in [["--rayleigh", "0,1e-5"], ["--damping", "1e-6"]] {
-        let mut args = vec![
-            "harmonic",
-            BAR,
-            "--fix",
-            "xmin",
-            "--force",
-            "xmax=0,0,10",
-            "--freq",
-            "50",
-        ];
-        args.extend_from_slice(&damping);
-        let (code, _, err) = run(&args);
+        let (code, _, err) = with(&damping);
         assert_eq!(code, 0, "{damping:?}: {err}");
     }
 }
